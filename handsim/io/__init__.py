@@ -1,0 +1,77 @@
+"""Readers: one per file format, each returning handsim's plain data types in SI units.
+
+Entry points:
+
+* :func:`read_skeleton` — ``.xmlskel`` (GraspDB14) or ``.SKEL`` (+ ``.LIMITS`` …, Tzionas/Ballan).
+* :func:`read_trajectory` — GraspDB14 CyberGlove recordings (``.txt``, radians).
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+from handsim.errors import InputFileError
+from handsim.io.graspdb import read_graspdb_glove
+from handsim.io.tzionas import read_tzionas_skeleton
+from handsim.io.xmlskel import read_xmlskel
+from handsim.skeleton import Skeleton
+from handsim.trajectory import Trajectory
+
+SKELETON_SUFFIXES = {".xmlskel": "GraspDB14 skeleton", ".skel": "Tzionas/Ballan skeleton (+ .LIMITS)"}
+TRAJECTORY_SUFFIXES = {".txt": "GraspDB14 CyberGlove recording (radians)"}
+
+
+def _suffix_or_error(path: Path, known: dict[str, str], what: str) -> str:
+    if not path.exists():
+        raise InputFileError(f"{path}: file not found")
+    suffix = path.suffix.lower()
+    if suffix not in known and not (what == "trajectory" and suffix == ""):
+        listing = ", ".join(f"{k} ({v})" for k, v in known.items())
+        raise InputFileError(f"{path}: unknown {what} file type {path.suffix!r}; handsim reads {listing}")
+    return suffix
+
+
+def read_skeleton(path: str | Path) -> Skeleton:
+    """Read a hand skeleton, choosing the reader from the file extension.
+
+    Args:
+        path: A ``.xmlskel`` file, or a ``.SKEL`` file with its ``.LIMITS`` (and optionally ``.MOTION``,
+            ``.OFF``, ``.SKIN``, ``.VOI``) beside it.
+
+    Returns:
+        The skeleton in SI units.
+
+    Raises:
+        InputFileError: Missing or unreadable file, or an extension handsim does not read.
+        FormatError: The file does not follow its format (the message names file, line and field).
+    """
+    p = Path(path)
+    suffix = _suffix_or_error(p, SKELETON_SUFFIXES, "skeleton")
+    if suffix == ".xmlskel":
+        return read_xmlskel(p)
+    return read_tzionas_skeleton(p)
+
+
+def read_trajectory(path: str | Path, skeleton: Skeleton | None = None) -> Trajectory:
+    """Read recorded hand motion as joint-angle targets.
+
+    Args:
+        path: A GraspDB14 CyberGlove recording in radians (``*-rad-*.txt``; GraspDB14's FK-oracle files
+            have no extension and are accepted too).
+        skeleton: The hand the targets are for. Its DoF names become the trajectory's columns; DoFs the
+            recording does not drive are held at 0 and listed in ``notes``. Without a skeleton, the
+            columns are the DoFs the glove drives.
+
+    Returns:
+        The trajectory (times in s, targets in rad).
+
+    Raises:
+        InputFileError: Missing or unreadable file, or an unknown extension.
+        FormatError: Malformed rows (the message names file, line and field), or a raw-count file.
+    """
+    p = Path(path)
+    _suffix_or_error(p, TRAJECTORY_SUFFIXES, "trajectory")
+    return read_graspdb_glove(p, skeleton=skeleton)
+
+
+__all__ = ["read_skeleton", "read_trajectory"]

@@ -1,0 +1,92 @@
+"""Recorded hand motion as joint targets: the :class:`Trajectory` data type."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from functools import cached_property
+
+import numpy as np
+
+from handsim.errors import TrajectoryError
+
+
+@dataclass(frozen=True)
+class Trajectory:
+    """Joint-angle targets over time for a hand model, in SI units.
+
+    Attributes:
+        times: Sample times in seconds from the first sample, shape (T,), strictly increasing.
+        dof_names: Column names; each equals the MuJoCo joint name of the DoF it drives.
+        targets: Joint angles in radians, shape (T, ndof).
+        valid: True where a target was measured and usable, shape (T, ndof).
+        switch: Glove switch state per sample (CyberGlove recordings), shape (T,), or None.
+        root_pose: Optional root pose per sample, shape (T, 7): position (m) and quaternion (w, x, y, z).
+        channels: Recorded channels that drive no DoF (kept, not dropped), name → shape (T,) array.
+        computed: Names of DoFs whose values were computed rather than measured (e.g. coupled DIPs).
+        source: The file the trajectory was read from.
+        sha256: SHA-256 of that file's bytes ("" when not read from a file).
+        notes: Decisions and repairs made while reading, for the user to see.
+    """
+
+    times: np.ndarray
+    dof_names: tuple[str, ...]
+    targets: np.ndarray
+    valid: np.ndarray
+    switch: np.ndarray | None = None
+    root_pose: np.ndarray | None = None
+    channels: dict[str, np.ndarray] = field(default_factory=dict)
+    computed: tuple[str, ...] = ()
+    source: str = ""
+    sha256: str = ""
+    notes: tuple[str, ...] = ()
+
+    def __post_init__(self) -> None:
+        t = np.asarray(self.times)
+        n = t.shape[0] if t.ndim == 1 else -1
+        if t.ndim != 1 or n < 1:
+            raise TrajectoryError(f"times must be a non-empty 1-D array, got shape {t.shape}")
+        if np.any(np.diff(t) <= 0):
+            k = int(np.argmax(np.diff(t) <= 0))
+            raise TrajectoryError(f"times must strictly increase; sample {k + 1} is not after sample {k}")
+        if len(set(self.dof_names)) != len(self.dof_names):
+            raise TrajectoryError(f"duplicate DoF names in {list(self.dof_names)}")
+        shape = (n, len(self.dof_names))
+        if np.shape(self.targets) != shape:
+            raise TrajectoryError(f"targets must have shape {shape}, got {np.shape(self.targets)}")
+        if np.shape(self.valid) != shape:
+            raise TrajectoryError(f"valid must have shape {shape}, got {np.shape(self.valid)}")
+        if self.switch is not None and np.shape(self.switch) != (n,):
+            raise TrajectoryError(f"switch must have shape ({n},), got {np.shape(self.switch)}")
+        if self.root_pose is not None and np.shape(self.root_pose) != (n, 7):
+            raise TrajectoryError(f"root_pose must have shape ({n}, 7), got {np.shape(self.root_pose)}")
+        for name, values in self.channels.items():
+            if np.shape(values) != (n,):
+                raise TrajectoryError(f"channel {name!r} must have shape ({n},), got {np.shape(values)}")
+        unknown = [c for c in self.computed if c not in self.dof_names]
+        if unknown:
+            raise TrajectoryError(f"computed DoFs {unknown} are not among {list(self.dof_names)}")
+
+    @property
+    def nframes(self) -> int:
+        """Number of samples T."""
+        return int(self.times.shape[0])
+
+    @property
+    def duration(self) -> float:
+        """Time from the first to the last sample, seconds."""
+        return float(self.times[-1] - self.times[0])
+
+    @cached_property
+    def mean_rate(self) -> float:
+        """Mean sampling rate in Hz (samples per second over the duration); 0 for one sample."""
+        return (self.nframes - 1) / self.duration if self.nframes > 1 else 0.0
+
+    def column(self, dof_name: str) -> np.ndarray:
+        """Targets of one DoF, shape (T,).
+
+        Raises:
+            TrajectoryError: If the trajectory has no such DoF; the message lists the valid names.
+        """
+        if dof_name not in self.dof_names:
+            raise TrajectoryError(f"no DoF {dof_name!r}; DoFs are {list(self.dof_names)}")
+        return self.targets[:, self.dof_names.index(dof_name)]
