@@ -11,9 +11,6 @@ from __future__ import annotations
 from pathlib import Path
 
 from handsim.errors import InputFileError
-from handsim.io.graspdb import read_graspdb_glove
-from handsim.io.tzionas import read_tzionas_skeleton
-from handsim.io.xmlskel import read_xmlskel
 from handsim.skeleton import Skeleton
 from handsim.trajectory import Trajectory
 
@@ -48,7 +45,11 @@ def read_skeleton(path: str | Path) -> Skeleton:
     p = Path(path)
     suffix = _suffix_or_error(p, SKELETON_SUFFIXES, "skeleton")
     if suffix == ".xmlskel":
+        from handsim.io.xmlskel import read_xmlskel
+
         return read_xmlskel(p)
+    from handsim.io.tzionas import read_tzionas_skeleton
+
     return read_tzionas_skeleton(p)
 
 
@@ -71,6 +72,8 @@ def read_trajectory(path: str | Path, skeleton: Skeleton | None = None) -> Traje
     """
     p = Path(path)
     _suffix_or_error(p, TRAJECTORY_SUFFIXES, "trajectory")
+    from handsim.io.graspdb import read_graspdb_glove
+
     return read_graspdb_glove(p, skeleton=skeleton)
 
 
