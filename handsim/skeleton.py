@@ -339,4 +339,3 @@ class Skeleton:
     def clip_to_limits(self, q: npt.ArrayLike) -> np.ndarray:
         """Return ``q`` clipped to the DoF limits (shape (ndof,) or (T, ndof))."""
         return np.clip(np.asarray(q, dtype=float), self.limits[:, 0], self.limits[:, 1])
-

@@ -1,0 +1,294 @@
+"""Build a MuJoCo hand (:class:`mujoco.MjSpec`) from a :class:`~handsim.skeleton.Skeleton`.
+
+The model reads like a document (Menagerie style): default classes first (``visual``, ``collision``, one
+class per DoF kind carrying armature, damping and actuator gains), then one body per joint that has
+children, one hinge per DoF, one position actuator per DoF.
+
+Naming contract (later layers rely on it):
+
+* MuJoCo joint name = DoF name (= the trajectory's ``dof_names``); actuator = DoF name + ``_act``.
+* Every skeleton joint J has a site named ``mj_name(J)`` at its origin; fingertips are skeleton joints,
+  so they have sites too. Bodies are named like their joint.
+
+Joint ranges are the skeleton's DoF limits, and each actuator's ``ctrlrange`` equals its joint's range:
+targets outside the anatomical limits are clamped by MuJoCo, never silently widened (trajectory readers
+report how many samples fall outside).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import mujoco
+import numpy as np
+from scipy.spatial import ConvexHull, QhullError
+
+from handsim.builders.hand_geometry import Capsule, default_hand_mass, hand_geometry
+from handsim.errors import ModelError
+from handsim.skeleton import Skeleton, mj_name
+
+SKIN_RGBA = (0.87, 0.70, 0.60, 1.0)
+COLLISION_RGBA = (0.3, 0.5, 0.9, 0.4)
+SKIN_FRICTION = (1.0, 0.005, 0.0001)
+
+
+@dataclass(frozen=True)
+class JointClass:
+    """Dynamics shared by the DoFs of one kind.
+
+    Attributes:
+        armature: Rotor inertia added to the DoF, kg·m² (stabilises light finger links).
+        damping: Joint damping, N·m·s/rad.
+        kp: Position-actuator stiffness, N·m/rad.
+        force: Actuator torque limit, N·m.
+    """
+
+    armature: float
+    damping: float
+    kp: float
+    force: float
+
+
+# Finger flexion: a 1 rad error gives 2 N·m (index MCP flexion strength is a few N·m); ~10 Hz bandwidth.
+JOINT_CLASSES: dict[str, JointClass] = {
+    "flex": JointClass(armature=2e-4, damping=0.05, kp=2.0, force=3.0),
+    "abd": JointClass(armature=2e-4, damping=0.05, kp=1.5, force=2.0),
+    "pron": JointClass(armature=2e-4, damping=0.05, kp=1.5, force=2.0),
+    "rot": JointClass(armature=2e-4, damping=0.05, kp=1.5, force=2.0),
+    "wrist": JointClass(armature=5e-3, damping=0.5, kp=20.0, force=15.0),
+}
+
+
+def _quat(rotation: np.ndarray) -> np.ndarray:
+    q = np.empty(4)
+    mujoco.mju_mat2Quat(q, np.ascontiguousarray(rotation, dtype=float).ravel())
+    return q
+
+
+def _add_defaults(spec: mujoco.MjSpec, root_has_dofs: bool) -> dict[str, mujoco.MjsDefault]:
+    main = spec.default
+    main.geom.friction = list(SKIN_FRICTION)
+    main.geom.condim = 4
+    visual = spec.add_default("visual", main)
+    visual.geom.group = 2
+    visual.geom.contype = 0
+    visual.geom.conaffinity = 0
+    visual.geom.density = 0
+    visual.geom.rgba = list(SKIN_RGBA)
+    collision = spec.add_default("collision", main)
+    collision.geom.group = 3
+    collision.geom.rgba = list(COLLISION_RGBA)
+    classes = {"visual": visual, "collision": collision}
+    kinds = [k for k in JOINT_CLASSES if k != "wrist" or root_has_dofs]
+    for kind in kinds:
+        params = JOINT_CLASSES[kind]
+        d = spec.add_default(kind, main)
+        d.joint.armature = params.armature
+        d.joint.damping = [params.damping, 0.0, 0.0]
+        d.actuator.set_to_position(kp=params.kp)
+        d.actuator.forcelimited = mujoco.mjtLimited.mjLIMITED_TRUE
+        d.actuator.forcerange = [-params.force, params.force]
+        classes[kind] = d
+    return classes
+
+
+def _capsule_geoms(
+    body: mujoco.MjsBody, capsule: Capsule, to_local, mass: float, classes: dict, name: str
+) -> None:
+    fromto = np.concatenate([to_local(capsule.start), to_local(capsule.end)])
+    body.add_geom(
+        classes["collision"],
+        name=name,
+        type=mujoco.mjtGeom.mjGEOM_CAPSULE,
+        fromto=fromto.tolist(),
+        size=[capsule.radius, 0, 0],
+        mass=mass,
+    )
+    body.add_geom(
+        classes["visual"],
+        type=mujoco.mjtGeom.mjGEOM_CAPSULE,
+        fromto=fromto.tolist(),
+        size=[capsule.radius, 0, 0],
+    )
+
+
+def _skinned_hulls(skeleton: Skeleton, min_vertices: int = 8) -> dict[int, tuple[np.ndarray, float]]:
+    """Per-bone convex hulls from the skinned mesh: joint index → (hull vertices, hull volume)."""
+    mesh = skeleton.mesh
+    if mesh is None:
+        raise ModelError(
+            f"skeleton {skeleton.name!r} has no skinned mesh (.OFF + .SKIN); use collision='capsules'"
+        )
+    owner = np.argmax(mesh.weights, axis=1)
+    hulls = {}
+    for column, bone in enumerate(mesh.bones):
+        verts = mesh.vertices[owner == column]
+        if len(verts) < min_vertices:
+            continue
+        try:
+            hull = ConvexHull(verts)
+        except QhullError:
+            continue  # flat or degenerate part: no hull (it would crash or mislead the collider)
+        if hull.volume <= 1e-9:
+            continue
+        hulls[skeleton.joint_index(bone)] = (verts[hull.vertices], float(hull.volume))
+    return hulls
+
+
+def build_hand(
+    skeleton: Skeleton,
+    *,
+    mass: float | None = None,
+    breadth: float | None = None,
+    collision: str = "capsules",
+    name: str | None = None,
+    timestep: float = 0.002,
+) -> mujoco.MjSpec:
+    """Build a position-controlled MuJoCo hand from a skeleton.
+
+    Args:
+        skeleton: The hand skeleton (SI units).
+        mass: Whole-hand mass in kg; by default 0.45 kg scaled with the cube of the hand length.
+        breadth: Hand breadth in metres for sizing the capsules and palm; estimated when None.
+        collision: ``"capsules"`` (capsules per bone and a convex palm) or ``"mesh"`` (a convex hull per
+            bone from the skinned ``.OFF`` mesh, each vertex assigned to its highest-weight bone).
+        name: Model name; the skeleton's name by default.
+        timestep: Simulation timestep in seconds.
+
+    Returns:
+        An uncompiled spec. The root body sits at the skeleton's root rest position and frame; DoFs of
+        the root joint (a wrist) are hinges of the root body, otherwise the root is fixed to the world.
+
+    Raises:
+        ModelError: Unknown ``collision`` option, or ``"mesh"`` without a skinned mesh.
+    """
+    if collision not in ("capsules", "mesh"):
+        raise ModelError(f"unknown collision option {collision!r}; expected 'capsules' or 'mesh'")
+    spec = mujoco.MjSpec()
+    spec.compiler.degree = False
+    spec.modelname = name or mj_name(skeleton.name)
+    spec.option.timestep = timestep
+    spec.option.integrator = mujoco.mjtIntegrator.mjINT_IMPLICITFAST
+    spec.option.cone = mujoco.mjtCone.mjCONE_ELLIPTIC
+    spec.option.impratio = 10.0
+    root_name = skeleton.joints[0].name
+    root_has_dofs = bool(skeleton.dofs_of(root_name))
+    classes = _add_defaults(spec, root_has_dofs)
+
+    geometry = hand_geometry(skeleton, breadth)
+    hulls = _skinned_hulls(skeleton) if collision == "mesh" else {}
+    volumes = (
+        {i: v for i, (_, v) in hulls.items()}
+        if collision == "mesh"
+        else {("capsule", k): c.volume for k, c in enumerate(geometry.capsules)}
+        | {"palm": geometry.palm_volume}
+    )
+    total_volume = sum(volumes.values())
+    total_mass = default_hand_mass(skeleton.hand_length) if mass is None else mass
+    if total_mass <= 0 or total_volume <= 0:
+        raise ModelError(f"hand {skeleton.name!r}: mass ({total_mass}) and volume must be positive")
+    density = total_mass / total_volume
+
+    has_children = {j.parent for j in skeleton.joints}
+    bodies: dict[int, mujoco.MjsBody] = {}
+    for i, joint in enumerate(skeleton.joints):
+        site_pos = [0.0, 0.0, 0.0]
+        if i not in has_children and joint.parent >= 0:
+            parent = skeleton.joints[joint.parent]
+            site_pos = (parent.frame.T @ (joint.position - parent.position)).tolist()
+            bodies[joint.parent].add_site(name=mj_name(joint.name), pos=site_pos, size=[0.003, 0, 0])
+            continue
+        if joint.parent < 0:
+            parent_body, pos, rot = spec.worldbody, joint.position, joint.frame
+        else:
+            parent = skeleton.joints[joint.parent]
+            parent_body = bodies[joint.parent]
+            pos = parent.frame.T @ (joint.position - parent.position)
+            rot = parent.frame.T @ joint.frame
+        body = parent_body.add_body(name=mj_name(joint.name), pos=pos.tolist(), quat=_quat(rot).tolist())
+        bodies[i] = body
+        body.add_site(name=mj_name(joint.name), pos=site_pos, size=[0.003, 0, 0])
+        for dof in skeleton.dofs_of(joint.name):
+            cls = classes["wrist" if joint.parent < 0 else dof.kind]
+            body.add_joint(
+                cls,
+                name=dof.name,
+                type=mujoco.mjtJoint.mjJNT_HINGE,
+                axis=np.asarray(dof.axis).tolist(),
+                range=[dof.lower, dof.upper],
+            )
+            spec.add_actuator(
+                cls,
+                name=f"{dof.name}_act",
+                target=dof.name,
+                trntype=mujoco.mjtTrn.mjTRN_JOINT,
+                ctrlrange=[dof.lower, dof.upper],
+            )
+
+    def to_local(index: int):
+        frame, origin = skeleton.joints[index].frame, skeleton.joints[index].position
+        return lambda p: (np.asarray(p) - origin) @ frame
+
+    if collision == "capsules":
+        for capsule in geometry.capsules:
+            name_i = mj_name(skeleton.joints[capsule.joint].name)
+            _capsule_geoms(
+                bodies[capsule.joint],
+                capsule,
+                to_local(capsule.joint),
+                density * capsule.volume,
+                classes,
+                f"{name_i}_capsule",
+            )
+        if len(geometry.palm_vertices):
+            _add_mesh_geoms(
+                spec,
+                bodies[0],
+                "palm",
+                to_local(0)(geometry.palm_vertices),
+                density * geometry.palm_volume,
+                classes,
+            )
+    else:
+        for index, (verts, volume) in hulls.items():
+            _add_mesh_geoms(
+                spec,
+                bodies[index],
+                f"{mj_name(skeleton.joints[index].name)}_hull",
+                to_local(index)(verts),
+                density * volume,
+                classes,
+            )
+
+    _add_excludes(spec, skeleton, geometry.rigid_to_root, bodies)
+    return spec
+
+
+def _add_mesh_geoms(
+    spec: mujoco.MjSpec, body: mujoco.MjsBody, name: str, vertices: np.ndarray, mass: float, classes: dict
+) -> None:
+    spec.add_mesh(name=name, uservert=np.asarray(vertices, dtype=float).ravel().tolist())
+    body.add_geom(classes["collision"], name=name, type=mujoco.mjtGeom.mjGEOM_MESH, meshname=name, mass=mass)
+    body.add_geom(classes["visual"], type=mujoco.mjtGeom.mjGEOM_MESH, meshname=name)
+
+
+def _add_excludes(
+    spec: mujoco.MjSpec, skeleton: Skeleton, rigid: frozenset[int], bodies: dict[int, mujoco.MjsBody]
+) -> None:
+    """Exclude contacts between adjacent links.
+
+    Every body is excluded with its parent's rigid group (its parent, and up to the root when the parent
+    is rigidly attached to it), and the bodies rigidly attached to the root are excluded among themselves.
+    """
+    pairs: set[tuple[int, int]] = set()
+    for i in bodies:
+        p = skeleton.joints[i].parent
+        while p >= 0:
+            pairs.add((p, i))
+            if p not in rigid or p == 0:
+                break
+            p = skeleton.joints[p].parent
+    group = sorted(i for i in rigid if i in bodies)
+    pairs |= {(a, b) for k, a in enumerate(group) for b in group[k + 1 :]}
+    for a, b in sorted(pairs):
+        spec.add_exclude(bodyname1=bodies[a].name, bodyname2=bodies[b].name)
