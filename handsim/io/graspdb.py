@@ -1,0 +1,385 @@
+"""Reader for GraspDB14 CyberGlove motion files (``*-rad-*.txt``) and their file names.
+
+A motion file (spec §4.2.2, Table 4.3) has one row per sample, 30 blank-separated entries::
+
+    YYYY MM DD HH mm ss.sssss switch  s0 s1 … s22
+
+the date and time of the sample, the glove's switch state (0/1), then the 23 sensor readings of
+:data:`handsim.glove.SENSORS` in radians (``rad`` files) or as 8-bit counts (``raw`` files, which need a
+calibration and are refused here). Rows end with a trailing blank in the original files; it is not
+required.
+
+The sensor → DoF conventions (every angle negated, ``T-TMCJ`` about local y, ``I-AA``/``P-Arch`` kept as
+channels, DIPs computed) are those of the GraspDB14 MATLAB tools; see :mod:`handsim.glove.sensors`.
+"""
+
+from __future__ import annotations
+
+import re
+from dataclasses import dataclass
+from datetime import datetime
+from pathlib import Path
+
+import numpy as np
+
+from handsim.errors import FormatError, TrajectoryError
+from handsim.glove.sensors import SENSOR_NAMES, SENSORS, computed_dofs, discarded_sensors, driven_dofs
+from handsim.io._text import parse_float, read_bytes, sha256_of
+from handsim.skeleton import Skeleton
+from handsim.trajectory import Trajectory
+
+NTOKENS = 30
+"""Entries per motion row: 6 time-stamp fields, the switch, 23 sensors."""
+
+RAW_LIMIT = 7.0
+"""A sensor value with a larger magnitude marks a raw-count file (radians satisfy |x| ≤ 2π)."""
+
+_TIMESTAMP_FIELDS = ("year", "month", "day", "hour", "minute", "second")
+FIELDS: tuple[str, ...] = (
+    *(f"timestamp {f}" for f in _TIMESTAMP_FIELDS),
+    "switch",
+    *(f"sensor {n}" for n in SENSOR_NAMES),
+)
+"""Field name of each of the 30 row entries, as used in error messages."""
+
+_SWITCH = 6
+_FIRST_SENSOR = 7
+_RAW_ADVICE = (
+    "raw files hold uncalibrated 8-bit sensor counts, not radians, and need a calibration to become "
+    "joint angles (handsim calibrate, a later feature); read the matching '-rad-' file instead"
+)
+
+
+# --------------------------------------------------------------------------------------------------
+# File names
+
+
+@dataclass(frozen=True)
+class GraspDBName:
+    """What a GraspDB14 motion (or phase annotation) file name says, spec §4.1.2.
+
+    Attributes:
+        object_id: Object grasped or manipulated (Table 4.1), e.g. 1 for the tennis ball.
+        scenario: Recording scenario ``exNo`` as written, e.g. ``"01"`` or ``"03-1"``.
+        datatype: ``"rad"`` (joint angles in radians) or ``"raw"`` (8-bit sensor counts).
+        trial_id: Linear trial counter.
+        actor_id: Actor (subject) who performed the task.
+        grasp_id: Grasp type after Feix et al. (Table 3.3); present in scenario 3 names.
+        action_id: Action (Table 4.2), e.g. ``"i_r"``; present in scenario 2 names.
+        annotation: True for a phase annotation file (``…_annot-.txt``).
+        prefix: Text before the object id, without its ``_`` (``"r"`` in ``r_01_11_ex03-…``); its meaning
+            is not documented in the spec.
+    """
+
+    object_id: int
+    scenario: str
+    datatype: str
+    trial_id: int
+    actor_id: int
+    grasp_id: int | None = None
+    action_id: str | None = None
+    annotation: bool = False
+    prefix: str = ""
+
+    @property
+    def scenario_number(self) -> int:
+        """The scenario as a number: 1, 2 or 3 (``"03-1"`` → 3)."""
+        return int(self.scenario.split("-")[0])
+
+
+_NAME_RE = re.compile(
+    r"""
+    (?:(?P<prefix>[a-z]+)_)?             # optional prefix, e.g. "r_"
+    (?P<obj>\d+)                         # object id
+    (?:_(?P<grasp>\d+)|_(?P<action>[a-z]_[a-z]))?   # grasp id (scenario 3) or action id (scenario 2)
+    _ex(?P<ex>\d+(?:-\d+)?)              # scenario, e.g. 03 or 03-1
+    -(?P<dtype>rad|raw)
+    -(?P<trial>\d+)
+    -grasp-su(?P<actor>\d+)
+    (?P<annot>_annot-)?
+    (?:\.txt)?
+    """,
+    re.IGNORECASE | re.VERBOSE,
+)
+
+
+def parse_graspdb_filename(name: str | Path) -> GraspDBName | None:
+    """Decode a GraspDB14 motion file name (spec §4.1.2).
+
+    Recognised forms (``.txt`` optional, case ignored, any folder part ignored)::
+
+        <objID>_ex<exNo>-<datatype>-<trialID>-grasp-su<actorID>.txt              scenario 1
+        <objID>_<actionID>_ex<exNo>-<datatype>-<trialID>-grasp-su<actorID>.txt   scenario 2
+        <objID>_<graspID>_ex<exNo>-<datatype>-<trialID>-grasp-su<actorID>.txt    scenario 3
+
+    optionally with a prefix such as ``r_`` before the object id, and with ``_annot-`` before the
+    extension for a phase annotation file. Whether a grasp or an action id is present is read from the
+    name, not inferred from the scenario number.
+
+    Args:
+        name: A file name or path.
+
+    Returns:
+        The decoded name, or None when the name does not follow the pattern (not an error: any file may
+        be read, whatever its name).
+    """
+    m = _NAME_RE.fullmatch(Path(name).name)
+    if m is None:
+        return None
+    return GraspDBName(
+        object_id=int(m["obj"]),
+        scenario=m["ex"],
+        datatype=m["dtype"].lower(),
+        trial_id=int(m["trial"]),
+        actor_id=int(m["actor"]),
+        grasp_id=int(m["grasp"]) if m["grasp"] else None,
+        action_id=m["action"].lower() if m["action"] else None,
+        annotation=m["annot"] is not None,
+        prefix=(m["prefix"] or "").lower(),
+    )
+
+
+# --------------------------------------------------------------------------------------------------
+# Motion files
+
+
+def read_graspdb_glove(path: str | Path, skeleton: Skeleton | None = None) -> Trajectory:
+    """Read a GraspDB14 CyberGlove recording in radians as joint-angle targets.
+
+    Conventions (those of the GraspDB14 MATLAB tools, see :mod:`handsim.glove.sensors`):
+
+    * Every sensor angle is negated: ``target = -value``.
+    * ``T-TMCJ`` drives ``th_tmc_pron``, i.e. the thumb TMC joint's local **y** axis, as the MATLAB code
+      does, although the report's Table 5.1 says local z.
+    * ``I-AA`` and ``P-Arch`` drive no DoF; their values (as in the file, not negated) are kept in
+      :attr:`Trajectory.channels` under the sensor names.
+    * ``I-DIPJ``, ``M-DIPJ``, ``R-DIPJ`` and ``L-DIPJ`` are inferred by the glove software (the 18-sensor
+      glove does not measure them); their DoFs are listed in :attr:`Trajectory.computed`.
+
+    Times are seconds since the first row, from the full date and time of each row (minute, hour and
+    day changes are handled). All targets are marked valid.
+
+    Args:
+        path: The recording (``*-rad-*.txt``; any name, with or without extension, is accepted).
+        skeleton: The hand the targets are for. When given, the columns are ``skeleton.dof_names`` and
+            DoFs the glove does not drive are held at 0 (listed in ``notes``). Without it, the columns
+            are :func:`handsim.glove.driven_dofs` in sensor order.
+
+    Returns:
+        The trajectory, with ``switch``, ``source`` and ``sha256`` of the file bytes set.
+
+    Raises:
+        InputFileError: The file is missing or unreadable.
+        FormatError: The file is empty, a row does not have 30 entries, an entry is not a finite number,
+            the switch is not 0 or 1, a time stamp is not a valid date and time or not after the
+            previous row's, or the file is a raw-count file (``-raw-`` in its name, or a sensor value
+            with magnitude above 7). The message names the file, the 1-based line and the field.
+        TrajectoryError: ``skeleton`` lacks a DoF the glove drives (the message lists the missing DoFs
+            and the skeleton's DoFs).
+    """
+    p = Path(path)
+    data = read_bytes(p)
+    lowered = p.name.lower()
+    if "_annot-" in lowered:
+        raise FormatError(
+            p, "this is a GraspDB14 phase annotation file ('_annot-' in its name), not a motion recording"
+        )
+    if "-raw-" in lowered:
+        raise FormatError(p, f"this is a raw-count file ('-raw-' in its name); {_RAW_ADVICE}")
+    # Invalid UTF-8 can only sit in a token that is not a number; it shows as U+FFFD in that error.
+    text = data.decode("utf-8", errors="replace")
+    linenos, rows = _split_rows(text)
+    if not rows:
+        raise FormatError(
+            p,
+            f"empty file: expected rows of {NTOKENS} blank-separated entries "
+            "(YYYY MM DD HH mm ss.sssss switch, then 23 sensor values in radians)",
+        )
+    values = _fast_parse(rows)
+    times = _fast_times(values) if values is not None else None
+    if values is None or times is None:
+        values = _checked_parse(p, linenos, rows)  # raises a precise FormatError on the first bad row
+        times = _fast_times(values)
+        if times is None:  # pragma: no cover - the row-by-row check covers every fast-path check
+            raise FormatError(p, "rows failed validation, but no single row could be blamed")
+
+    sensors = values[:, _FIRST_SENSOR:]
+    driven = driven_dofs()
+    by_dof = {s.dof: s for s in SENSORS if s.dof is not None}
+    notes = [
+        f"times are seconds since the first row's time stamp {_stamp(rows[0])}",
+        "every sensor angle was negated (target = -file value), as in the GraspDB14 MATLAB tools",
+        "T-TMCJ drives th_tmc_pron (the thumb TMC joint's local y axis, as the GraspDB14 MATLAB code "
+        "does; the report's Table 5.1 says z)",
+        "I-AA and P-Arch drive no DoF (discarded by the GraspDB14 sensor map); their file values, not "
+        "negated, are kept in channels",
+        f"{', '.join(s.name for s in SENSORS if s.computed)} are not measured by the 18-sensor glove "
+        "(the glove software infers them); their DoFs are listed as computed",
+    ]
+    if skeleton is None:
+        dof_names = driven
+        targets = -sensors[:, [by_dof[d].index for d in driven]]
+    else:
+        dof_names = skeleton.dof_names
+        missing = [d for d in driven if d not in dof_names]
+        if missing:
+            raise TrajectoryError(
+                f"{p}: skeleton {skeleton.name!r} lacks DoFs the glove drives: {missing}; "
+                f"its DoFs are {list(dof_names)}"
+            )
+        targets = np.zeros((values.shape[0], len(dof_names)))
+        for col, name in enumerate(dof_names):
+            if name in by_dof:
+                targets[:, col] = -sensors[:, by_dof[name].index]
+        held = [d for d in dof_names if d not in by_dof]
+        if held:
+            notes.append(f"DoFs not driven by the glove are held at 0: {held}")
+
+    return Trajectory(
+        times=times,
+        dof_names=tuple(dof_names),
+        targets=targets,
+        valid=np.ones(targets.shape, dtype=bool),
+        switch=values[:, _SWITCH] == 1.0,
+        channels={s.name: sensors[:, s.index].copy() for s in discarded_sensors()},
+        computed=computed_dofs(),
+        source=str(p),
+        sha256=sha256_of(data),
+        notes=tuple(notes),
+    )
+
+
+def _split_rows(text: str) -> tuple[list[int], list[list[str]]]:
+    """Tokens of every non-blank line, with the 1-based line numbers."""
+    linenos: list[int] = []
+    rows: list[list[str]] = []
+    for i, line in enumerate(text.splitlines(), start=1):
+        tokens = line.split()
+        if tokens:
+            linenos.append(i)
+            rows.append(tokens)
+    return linenos, rows
+
+
+def _stamp(tokens: list[str]) -> str:
+    """The time stamp of a row as written (``YYYY MM DD HH mm ss.sssss``)."""
+    return " ".join(tokens[:6])
+
+
+def _fast_parse(rows: list[list[str]]) -> np.ndarray | None:
+    """All rows as an (N, 30) float array, or None if any row is malformed (then check row by row)."""
+    if any(len(r) != NTOKENS for r in rows):
+        return None
+    try:
+        values = np.array(rows, dtype=float)
+    except ValueError:
+        return None
+    if not np.all(np.isfinite(values)):
+        return None
+    switch = values[:, _SWITCH]
+    if not np.all((switch == 0.0) | (switch == 1.0)):
+        return None
+    if np.any(np.abs(values[:, _FIRST_SENSOR:]) > RAW_LIMIT):
+        return None
+    return values
+
+
+def _fast_times(values: np.ndarray) -> np.ndarray | None:
+    """Seconds since the first row, or None if a time stamp is invalid or not after the previous one."""
+    seconds = values[:, 5]
+    if np.any((seconds < 0.0) | (seconds >= 60.0)):
+        return None
+    minutes, inverse = np.unique(values[:, :5], axis=0, return_inverse=True)
+    inverse = inverse.reshape(-1)
+    try:
+        stamps = [_minute(row) for row in minutes]
+    except (ValueError, OverflowError):
+        return None
+    base = stamps[int(inverse[0])]
+    offsets = np.array([(s - base).total_seconds() for s in stamps])
+    times = offsets[inverse] + (seconds - seconds[0])
+    if np.any(np.diff(times) <= 0.0):
+        return None
+    return times
+
+
+def _minute(fields: np.ndarray | list[float]) -> datetime:
+    """The date and time (to the minute) from year, month, day, hour, minute values.
+
+    Raises:
+        ValueError: A value is not an integer, or the date or time does not exist.
+    """
+    ints = []
+    for v in fields:
+        if not float(v).is_integer():
+            raise ValueError(f"{v!r} is not an integer")
+        ints.append(int(v))
+    return datetime(*ints)
+
+
+def _checked_parse(path: Path, linenos: list[int], rows: list[list[str]]) -> np.ndarray:
+    """Parse row by row, raising a :class:`FormatError` that names line and field at the first problem.
+
+    This is the slow path, taken only when the vectorised parse found something wrong; it applies the
+    same checks in row order so the error points at the first offending row.
+    """
+    values = np.empty((len(rows), NTOKENS))
+    base: datetime | None = None
+    first_second = 0.0
+    previous: tuple[float, int, list[str]] | None = None
+    for k, (line, tokens) in enumerate(zip(linenos, rows, strict=True)):
+        if len(tokens) != NTOKENS:
+            raise FormatError(
+                path,
+                f"expected {NTOKENS} blank-separated entries (6 time-stamp fields, switch, 23 sensors), "
+                f"got {len(tokens)}",
+                line=line,
+            )
+        row = [parse_float(t, path, line, f) for t, f in zip(tokens, FIELDS, strict=True)]
+        for i in range(5):
+            if not row[i].is_integer():
+                raise FormatError(path, f"expected an integer, got {tokens[i]!r}", line=line, field=FIELDS[i])
+        try:
+            minute = datetime(*(int(v) for v in row[:5]))
+        except (ValueError, OverflowError) as exc:
+            raise FormatError(
+                path,
+                f"time stamp {_stamp(tokens)!r} is not a valid date and time ({exc})",
+                line=line,
+                field="timestamp",
+            ) from None
+        second = row[5]
+        if not 0.0 <= second < 60.0:
+            raise FormatError(
+                path, f"expected seconds in [0, 60), got {tokens[5]!r}", line=line, field=FIELDS[5]
+            )
+        if row[_SWITCH] not in (0.0, 1.0):
+            raise FormatError(
+                path, f"expected 0 (off) or 1 (on), got {tokens[_SWITCH]!r}", line=line, field="switch"
+            )
+        for i in range(_FIRST_SENSOR, NTOKENS):
+            if abs(row[i]) > RAW_LIMIT:
+                raise FormatError(
+                    path,
+                    f"value {tokens[i]} exceeds {RAW_LIMIT:g} in magnitude, so this is a raw-count file "
+                    f"(angles in radians satisfy |x| <= 2*pi); {_RAW_ADVICE}",
+                    line=line,
+                    field=FIELDS[i],
+                )
+        if base is None:
+            base, first_second = minute, second
+        t = (minute - base).total_seconds() + (second - first_second)
+        if previous is not None and not t > previous[0]:
+            raise FormatError(
+                path,
+                f"time stamp {_stamp(tokens)!r} is not after the previous row's {_stamp(previous[2])!r} "
+                f"(line {previous[1]}); time stamps must strictly increase",
+                line=line,
+                field="timestamp",
+            )
+        previous = (t, line, tokens)
+        values[k] = row
+    return values
+
+
+__all__ = ["FIELDS", "NTOKENS", "RAW_LIMIT", "GraspDBName", "parse_graspdb_filename", "read_graspdb_glove"]
