@@ -1,0 +1,7 @@
+"""handsim: captured human hand motion (CyberGlove, MANO, Tzionas) as MuJoCo physics.
+
+Data flows one way: ``handsim.io`` readers → plain data (:class:`~handsim.skeleton.Skeleton`,
+:class:`~handsim.trajectory.Trajectory`) → ``handsim.builders`` (``mujoco.MjSpec``) → ``handsim.sim``.
+"""
+
+__version__ = "0.1.0"
