@@ -55,6 +55,7 @@ class ModelSummary:
     def lines(self) -> list[str]:
         """Human-readable lines for the CLI."""
         size = (self.bbox_max - self.bbox_min) * 1000
+        lo, hi = np.round(self.bbox_min, 4).tolist(), np.round(self.bbox_max, 4).tolist()
         return [
             f"model      {self.name}",
             f"bodies     {self.bodies}",
@@ -63,9 +64,7 @@ class ModelSummary:
             f"geoms      {self.geoms} ({self.collision_geoms} collision)",
             f"sites      {self.sites}",
             f"mass       {self.mass:.3f} kg",
-            "bbox       "
-            + " × ".join(f"{v:.1f}" for v in size)
-            + f" mm  (min {np.round(self.bbox_min, 4).tolist()} m, max {np.round(self.bbox_max, 4).tolist()} m)",
+            "bbox       " + " × ".join(f"{v:.1f}" for v in size) + f" mm  (min {lo} m, max {hi} m)",
         ]
 
 
