@@ -12,9 +12,7 @@ GRASPDB = SHARED_DATA / "graspdb14"
 TZIONAS = SHARED_DATA / "tzionas_ijcv16"
 MANO = SHARED_DATA / "mano"
 
-_REASON = (
-    "needs the real sample data in ../shared/data (present in the project's CI, not in a user's clone)"
-)
+_REASON = "needs the real sample data in ../shared/data (present in the project's CI, not in a user's clone)"
 
 
 def _require(path: Path) -> Path:

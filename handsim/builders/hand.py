@@ -21,9 +21,10 @@ from dataclasses import dataclass
 
 import mujoco
 import numpy as np
+from scipy.optimize import linprog
 from scipy.spatial import ConvexHull, QhullError
 
-from handsim.builders.hand_geometry import Capsule, default_hand_mass, hand_geometry
+from handsim.builders.hand_geometry import Capsule, default_hand_mass, finger_chains, hand_geometry
 from handsim.errors import ModelError
 from handsim.skeleton import Skeleton, mj_name
 
@@ -151,7 +152,8 @@ def build_hand(
         mass: Whole-hand mass in kg; by default 0.45 kg scaled with the cube of the hand length.
         breadth: Hand breadth in metres for sizing the capsules and palm; estimated when None.
         collision: ``"capsules"`` (capsules per bone and a convex palm) or ``"mesh"`` (a convex hull per
-            bone from the skinned ``.OFF`` mesh, each vertex assigned to its highest-weight bone).
+            bone from the skinned ``.OFF`` mesh, each vertex assigned to its highest-weight bone; parts
+            whose hulls intersect in the rest pose do not collide with each other).
         name: Model name; the skeleton's name by default.
         timestep: Simulation timestep in seconds.
 
@@ -260,7 +262,8 @@ def build_hand(
                 classes,
             )
 
-    _add_excludes(spec, skeleton, geometry.rigid_to_root, bodies)
+    overlapping = _overlapping_hulls(hulls) if collision == "mesh" else set()
+    _add_excludes(spec, skeleton, geometry.rigid_to_root, bodies, overlapping)
     return spec
 
 
@@ -272,13 +275,37 @@ def _add_mesh_geoms(
     body.add_geom(classes["visual"], type=mujoco.mjtGeom.mjGEOM_MESH, meshname=name)
 
 
+def _overlapping_hulls(hulls: dict[int, tuple[np.ndarray, float]]) -> set[tuple[int, int]]:
+    """Pairs of joints whose rest-pose hulls intersect (the skinned surface is continuous there).
+
+    Two convex hulls intersect iff some point satisfies both hulls' facet inequalities: a linear
+    feasibility problem.
+    """
+    equations = {i: ConvexHull(v).equations for i, (v, _) in hulls.items()}
+    pairs = set()
+    keys = sorted(equations)
+    for k, a in enumerate(keys):
+        for b in keys[k + 1 :]:
+            eq = np.vstack([equations[a], equations[b]])
+            result = linprog(np.zeros(3), A_ub=eq[:, :3], b_ub=-eq[:, 3], bounds=[(None, None)] * 3)
+            if result.status == 0:
+                pairs.add((a, b))
+    return pairs
+
+
 def _add_excludes(
-    spec: mujoco.MjSpec, skeleton: Skeleton, rigid: frozenset[int], bodies: dict[int, mujoco.MjsBody]
+    spec: mujoco.MjSpec,
+    skeleton: Skeleton,
+    rigid: frozenset[int],
+    bodies: dict[int, mujoco.MjsBody],
+    overlapping: set[tuple[int, int]],
 ) -> None:
-    """Exclude contacts between adjacent links.
+    """Exclude contacts between links that touch by construction.
 
     Every body is excluded with its parent's rigid group (its parent, and up to the root when the parent
-    is rigidly attached to it), and the bodies rigidly attached to the root are excluded among themselves.
+    is rigidly attached to it); the bodies rigidly attached to the root are excluded among themselves;
+    the links of one finger are excluded among themselves (capsules meet at every joint, and a curled
+    rest pose makes non-adjacent phalanges touch); and ``overlapping`` pairs are excluded.
     """
     pairs: set[tuple[int, int]] = set()
     for i in bodies:
@@ -288,7 +315,10 @@ def _add_excludes(
             if p not in rigid or p == 0:
                 break
             p = skeleton.joints[p].parent
-    group = sorted(i for i in rigid if i in bodies)
-    pairs |= {(a, b) for k, a in enumerate(group) for b in group[k + 1 :]}
+    groups = [sorted(i for i in rigid if i in bodies)]
+    groups += [sorted(i for i in chain if i in bodies) for chain in finger_chains(skeleton)]
+    for group in groups:
+        pairs |= {(a, b) for k, a in enumerate(group) for b in group[k + 1 :]}
+    pairs |= overlapping
     for a, b in sorted(pairs):
         spec.add_exclude(bodyname1=bodies[a].name, bodyname2=bodies[b].name)
