@@ -131,7 +131,7 @@ def test_build_hand_raises_error_if_collision_option_is_unknown():
 
 
 def test_build_hand_raises_error_if_mesh_collision_has_no_skinned_mesh():
-    with pytest.raises(ModelError, match="has no skinned mesh .*use collision='capsules'"):
+    with pytest.raises(ModelError, match=r"has no skinned mesh .*use collision='capsules'"):
         build_hand(default_skeleton(), collision="mesh")
 
 

@@ -1,0 +1,49 @@
+"""The handsim command line, run as a user would (through main())."""
+
+from __future__ import annotations
+
+import mujoco
+import pytest
+
+from handsim.cli import main
+
+
+def test_help_explains_the_commands(capsys):
+    with pytest.raises(SystemExit) as exc:
+        main(["--help"])
+    assert exc.value.code == 0
+    out = capsys.readouterr().out
+    assert "handsim demo" in out and "build" in out
+
+
+def test_demo_builds_and_simulates_the_default_hand(capsys, tmp_path):
+    assert main(["demo", "-o", str(tmp_path / "hand.xml")]) == 0
+    out = capsys.readouterr().out
+    assert "actuators  27" in out
+    assert "0 MuJoCo warnings" in out
+    assert mujoco.MjModel.from_xml_path(str(tmp_path / "hand.xml")).nu == 27
+
+
+def test_build_hand_from_graspdb_skeleton_writes_mjcf(capsys, tmp_path, graspdb_dir):
+    out_file = tmp_path / "sub" / "hand.xml"
+    assert main(["build", "hand", str(graspdb_dir / "default.xmlskel"), "-o", str(out_file)]) == 0
+    out = capsys.readouterr().out
+    for word in ("bodies", "DoFs       27", "actuators  27", "mass", "bbox", "note"):
+        assert word in out
+    model = mujoco.MjModel.from_xml_path(str(out_file))
+    assert model.njnt == 27
+
+
+def test_build_hand_default_accepts_a_hand_length(capsys):
+    assert main(["build", "hand", "--default", "--hand-length", "0.17"]) == 0
+    assert "mass       0.322 kg" in capsys.readouterr().out  # 0.45 kg × (0.17 / 0.19)³
+
+
+def test_build_hand_reports_a_missing_file_and_exits_1(capsys, tmp_path):
+    assert main(["build", "hand", str(tmp_path / "missing.xmlskel")]) == 1
+    assert "missing.xmlskel: file not found" in capsys.readouterr().err
+
+
+def test_build_hand_refuses_both_a_file_and_default(tmp_path):
+    with pytest.raises(SystemExit, match="not both"):
+        main(["build", "hand", str(tmp_path / "a.xmlskel"), "--default"])
