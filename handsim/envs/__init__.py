@@ -1,0 +1,1 @@
+"""Gymnasium environments of handsim (none are registered yet)."""
