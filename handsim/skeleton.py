@@ -231,12 +231,7 @@ class Skeleton:
         Raises:
             SkeletonError: If there is no such joint; the message lists the valid names.
         """
-        try:
-            return self.joint_names.index(name)
-        except ValueError:
-            raise SkeletonError(
-                f"skeleton {self.name!r} has no joint {name!r}; joints are {list(self.joint_names)}"
-            ) from None
+        return self._lookup("joint", self.joint_names, name)
 
     def dof_index(self, name: str) -> int:
         """Index of the DoF called ``name``.
@@ -244,11 +239,14 @@ class Skeleton:
         Raises:
             SkeletonError: If there is no such DoF; the message lists the valid names.
         """
+        return self._lookup("DoF", self.dof_names, name)
+
+    def _lookup(self, kind: str, names: tuple[str, ...], name: str) -> int:
         try:
-            return self.dof_names.index(name)
+            return names.index(name)
         except ValueError:
             raise SkeletonError(
-                f"skeleton {self.name!r} has no DoF {name!r}; DoFs are {list(self.dof_names)}"
+                f"skeleton {self.name!r} has no {kind} {name!r}; {kind}s are {list(names)}"
             ) from None
 
     def children(self, index: int) -> list[int]:

@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 from handsim.builders import build_hand, default_skeleton
-from handsim.errors import ModelError
+from handsim.errors import ModelError, SkeletonError
 from handsim.io import read_skeleton
 from handsim.sim import compile_spec, warning_counts
 from handsim.skeleton import mj_name
@@ -138,3 +138,11 @@ def test_build_hand_raises_error_if_mesh_collision_has_no_skinned_mesh():
 def test_build_hand_honours_an_explicit_mass():
     model = compile_spec(build_hand(default_skeleton(), mass=0.5))
     assert float(model.body_subtreemass[0]) == pytest.approx(0.5)
+
+
+def test_skeleton_lookup_raises_error_listing_valid_names():
+    skeleton = default_skeleton()
+    with pytest.raises(SkeletonError, match=r"has no joint 'if-mc'; joints are \['root', 'th-tmc'"):
+        skeleton.joint_index("if-mc")
+    with pytest.raises(SkeletonError, match=r"has no DoF 'if_mcp'; DoFs are \['root_abd'"):
+        skeleton.dof_index("if_mcp")
