@@ -97,6 +97,16 @@ def _capsule_geoms(
     body: mujoco.MjsBody, capsule: Capsule, to_local, mass: float, classes: dict, name: str
 ) -> None:
     fromto = np.concatenate([to_local(capsule.start), to_local(capsule.end)])
+    if not capsule.collides:  # inside the palm: carries the link's mass, does not collide
+        body.add_geom(
+            classes["visual"],
+            name=name,
+            type=mujoco.mjtGeom.mjGEOM_CAPSULE,
+            fromto=fromto.tolist(),
+            size=[capsule.radius, 0, 0],
+            mass=mass,
+        )
+        return
     body.add_geom(
         classes["collision"],
         name=name,
@@ -262,8 +272,9 @@ def build_hand(
                 classes,
             )
 
-    overlapping = _overlapping_hulls(hulls) if collision == "mesh" else set()
-    _add_excludes(spec, skeleton, geometry.rigid_to_root, bodies, overlapping)
+    touching = _overlapping_hulls(hulls) if collision == "mesh" else set()
+    touching |= {(0, i) for i in geometry.palm_links if i in bodies}  # palm vs. metacarpal and proximal
+    _add_excludes(spec, skeleton, geometry.rigid_to_root, bodies, touching)
     return spec
 
 
@@ -298,14 +309,15 @@ def _add_excludes(
     skeleton: Skeleton,
     rigid: frozenset[int],
     bodies: dict[int, mujoco.MjsBody],
-    overlapping: set[tuple[int, int]],
+    touching: set[tuple[int, int]],
 ) -> None:
     """Exclude contacts between links that touch by construction.
 
     Every body is excluded with its parent's rigid group (its parent, and up to the root when the parent
     is rigidly attached to it); the bodies rigidly attached to the root are excluded among themselves;
     the links of one finger are excluded among themselves (capsules meet at every joint, and a curled
-    rest pose makes non-adjacent phalanges touch); and ``overlapping`` pairs are excluded.
+    rest pose makes non-adjacent phalanges touch); and the ``touching`` pairs (palm vs. each finger's
+    first two links, mesh parts whose rest hulls intersect) are excluded.
     """
     pairs: set[tuple[int, int]] = set()
     for i in bodies:
@@ -319,6 +331,6 @@ def _add_excludes(
     groups += [sorted(i for i in chain if i in bodies) for chain in finger_chains(skeleton)]
     for group in groups:
         pairs |= {(a, b) for k, a in enumerate(group) for b in group[k + 1 :]}
-    pairs |= overlapping
+    pairs |= touching
     for a, b in sorted(pairs):
         spec.add_exclude(bodyname1=bodies[a].name, bodyname2=bodies[b].name)

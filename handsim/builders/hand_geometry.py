@@ -2,8 +2,11 @@
 
 * Each bone (joint → child) becomes a capsule. Its radius is an anthropometric fraction of the hand
   breadth, reduced where needed so that capsules of different fingers do not touch in the rest pose.
-* The palm is the convex hull of the joints rigidly attached to the root (and their children),
-  thickened along the palm normal. Bones inside the palm get no capsule.
+* The palm is the convex hull of the root, the joints rigidly attached to it, the base of the thumb and
+  the carpometacarpal and metacarpophalangeal joints of the other fingers, thickened along the palm
+  normal. The metacarpals of the fingers lie inside it and get no capsule (a small palm-arch DoF of a
+  metacarpal, as in the Tzionas hand, then moves the finger but not that part of the palm); the thumb's
+  metacarpal does get one. Fingertips are listed thumb first.
 * The whole-hand mass is split over the collision shapes in proportion to their volumes.
 
 Anthropometric constants: hand mass 0.6 % of body mass (Winter, *Biomechanics and Motor Control of
@@ -28,7 +31,7 @@ REFERENCE_HAND_MASS_KG = 0.45
 BREADTH_TO_LENGTH = 0.45  # typical adult hand breadth / hand length
 PALM_THICKNESS_TO_BREADTH = 0.33
 # Capsule radius / hand breadth, by position of the bone along its finger (proximal first).
-FINGER_RADIUS_TO_BREADTH = (0.11, 0.10, 0.09, 0.085)
+FINGER_RADIUS_TO_BREADTH = (0.11, 0.10, 0.09)
 THUMB_RADIUS_TO_BREADTH = (0.13, 0.12, 0.11)
 REST_CLEARANCE = 0.92  # capsules of different fingers keep this fraction of half their rest distance
 
@@ -43,6 +46,8 @@ class Capsule:
         start: Proximal end, skeleton frame, metres.
         end: Distal end, skeleton frame, metres.
         radius: Radius in metres.
+        collides: False for a finger metacarpal that has a DoF: it lies inside the palm, so it only
+            carries the link's mass.
     """
 
     joint: int
@@ -50,6 +55,7 @@ class Capsule:
     start: np.ndarray
     end: np.ndarray
     radius: float
+    collides: bool = True
 
     @property
     def volume(self) -> float:
@@ -67,6 +73,8 @@ class HandGeometry:
         palm_vertices: Vertices of the convex palm (skeleton frame), shape (N, 3); empty if none.
         palm_volume: Volume of the palm hull, m³.
         rigid_to_root: Indices of joints rigidly attached to the root (no DoF on the path), root included.
+        palm_links: Indices of the first two joints of every finger chain (metacarpal and proximal
+            phalanx bodies), which touch the palm by construction.
         breadth: Hand breadth used for sizing, metres.
     """
 
@@ -74,6 +82,7 @@ class HandGeometry:
     palm_vertices: np.ndarray
     palm_volume: float
     rigid_to_root: frozenset[int]
+    palm_links: frozenset[int]
     breadth: float
 
 
@@ -127,11 +136,10 @@ def _segment_distance(a0: np.ndarray, a1: np.ndarray, b0: np.ndarray, b1: np.nda
     return float(np.min(np.linalg.norm(pa[:, None] - pb[None], axis=-1)))
 
 
-def _palm(skeleton: Skeleton, rigid: frozenset[int], breadth: float) -> tuple[np.ndarray, float]:
-    idx = set(rigid)
-    for i, j in enumerate(skeleton.joints):
-        if j.parent in rigid:
-            idx.add(i)
+def _palm(skeleton: Skeleton, chains: list[list[int]], breadth: float) -> tuple[np.ndarray, float]:
+    idx = set(rigid_to_root(skeleton))
+    for f, chain in enumerate(chains):
+        idx.update(chain[:1] if f == 0 else chain[:2])
     points = skeleton.rest_positions[sorted(idx)]
     if len(points) < 3:
         return np.zeros((0, 3)), 0.0
@@ -157,19 +165,21 @@ def hand_geometry(skeleton: Skeleton, breadth: float | None = None) -> HandGeome
         The collision shapes in the skeleton frame.
     """
     b = estimate_breadth(skeleton) if breadth is None else breadth
-    rigid = rigid_to_root(skeleton)
     chains = finger_chains(skeleton)
     finger_of = {i: f for f, chain in enumerate(chains) for i in chain}
     thumb = 0 if chains else -1  # fingertips are listed thumb first
     pos = skeleton.rest_positions
     bones = []
-    for f, chain in enumerate(chains):
-        moving = [i for i in chain[:-1] if i not in rigid]
-        table = THUMB_RADIUS_TO_BREADTH if f == thumb else FINGER_RADIUS_TO_BREADTH
-        for k, i in enumerate(moving):
-            child = chain[chain.index(i) + 1]
-            bones.append((i, child, table[min(k, len(table) - 1)] * b))
     capsules = []
+    rigid = rigid_to_root(skeleton)
+    for f, chain in enumerate(chains):
+        first = 0 if f == thumb else 1  # finger metacarpals lie inside the palm
+        table = THUMB_RADIUS_TO_BREADTH if f == thumb else FINGER_RADIUS_TO_BREADTH
+        for k, (i, child) in enumerate(zip(chain[first:-1], chain[first + 1 :], strict=True)):
+            bones.append((i, child, table[min(k, len(table) - 1)] * b))
+        if first == 1 and chain[0] not in rigid and len(chain) > 1:
+            i, child = chain[0], chain[1]
+            capsules.append(Capsule(i, child, pos[i].copy(), pos[child].copy(), table[0] * b, collides=False))
     for i, child, radius in bones:
         r = radius
         for j, other_child, other_radius in bones:
@@ -178,5 +188,6 @@ def hand_geometry(skeleton: Skeleton, breadth: float | None = None) -> HandGeome
             gap = _segment_distance(pos[i], pos[child], pos[j], pos[other_child])
             r = min(r, REST_CLEARANCE * gap * radius / (radius + other_radius))
         capsules.append(Capsule(i, child, pos[i].copy(), pos[child].copy(), r))
-    palm_vertices, palm_volume = _palm(skeleton, rigid, b)
-    return HandGeometry(tuple(capsules), palm_vertices, palm_volume, rigid, b)
+    palm_vertices, palm_volume = _palm(skeleton, chains, b)
+    palm_links = frozenset(i for chain in chains for i in chain[:2])
+    return HandGeometry(tuple(capsules), palm_vertices, palm_volume, rigid, palm_links, b)
