@@ -97,30 +97,11 @@ def _capsule_geoms(
     body: mujoco.MjsBody, capsule: Capsule, to_local, mass: float, classes: dict, name: str
 ) -> None:
     fromto = np.concatenate([to_local(capsule.start), to_local(capsule.end)])
-    if not capsule.collides:  # inside the palm: carries the link's mass, does not collide
-        body.add_geom(
-            classes["visual"],
-            name=name,
-            type=mujoco.mjtGeom.mjGEOM_CAPSULE,
-            fromto=fromto.tolist(),
-            size=[capsule.radius, 0, 0],
-            mass=mass,
-        )
-        return
-    body.add_geom(
-        classes["collision"],
-        name=name,
-        type=mujoco.mjtGeom.mjGEOM_CAPSULE,
-        fromto=fromto.tolist(),
-        size=[capsule.radius, 0, 0],
-        mass=mass,
-    )
-    body.add_geom(
-        classes["visual"],
-        type=mujoco.mjtGeom.mjGEOM_CAPSULE,
-        fromto=fromto.tolist(),
-        size=[capsule.radius, 0, 0],
-    )
+    shape = {"type": mujoco.mjtGeom.mjGEOM_CAPSULE, "fromto": fromto.tolist(), "size": [capsule.radius, 0, 0]}
+    # A capsule inside the palm carries its link's mass but does not collide.
+    body.add_geom(classes["collision" if capsule.collides else "visual"], name=name, mass=mass, **shape)
+    if capsule.collides:
+        body.add_geom(classes["visual"], **shape)
 
 
 def _skinned_hulls(skeleton: Skeleton, min_vertices: int = 8) -> dict[int, tuple[np.ndarray, float]]:
@@ -189,13 +170,10 @@ def build_hand(
 
     geometry = hand_geometry(skeleton, breadth)
     hulls = _skinned_hulls(skeleton) if collision == "mesh" else {}
-    volumes = (
-        {i: v for i, (_, v) in hulls.items()}
-        if collision == "mesh"
-        else {("capsule", k): c.volume for k, c in enumerate(geometry.capsules)}
-        | {"palm": geometry.palm_volume}
-    )
-    total_volume = sum(volumes.values())
+    if collision == "mesh":
+        total_volume = sum(volume for _, volume in hulls.values())
+    else:
+        total_volume = sum(c.volume for c in geometry.capsules) + geometry.palm_volume
     total_mass = default_hand_mass(skeleton.hand_length) if mass is None else mass
     if total_mass <= 0 or total_volume <= 0:
         raise ModelError(f"hand {skeleton.name!r}: mass ({total_mass}) and volume must be positive")
