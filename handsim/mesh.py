@@ -1,0 +1,143 @@
+"""Triangle meshes in SI units, validated and repaired before any native code (CoACD, MuJoCo) sees them.
+
+CoACD aborts the whole process on some malformed meshes and silently returns garbage on others, and
+MuJoCo's qhull can fail on flat input, so :func:`validate_mesh` checks everything those libraries assume
+and repairs only what is safe to repair (duplicate vertices, degenerate or duplicate faces, inconsistent
+or inverted winding, small holes), reporting each repair in :attr:`Mesh.notes`.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+import numpy.typing as npt
+import trimesh
+
+from handsim.errors import MeshError
+
+FLATNESS_TOL = 1e-6  # smallest / largest principal extent below which a mesh is flat
+MAX_HOLE_EDGES = 64  # holes with at most this many boundary edges are "small" and filled
+
+
+@dataclass(frozen=True)
+class Mesh:
+    """A validated triangle mesh.
+
+    Attributes:
+        vertices: Vertex positions in metres, shape (V, 3).
+        faces: Triangles as vertex indices, shape (F, 3), outward winding.
+        source: Where it came from (file path or description).
+        watertight: True if every edge is shared by exactly two faces (a closed surface).
+        notes: Repairs made, for the user to see.
+    """
+
+    vertices: np.ndarray
+    faces: np.ndarray
+    source: str = ""
+    watertight: bool = True
+    notes: tuple[str, ...] = ()
+
+    @property
+    def extent(self) -> np.ndarray:
+        """Axis-aligned size in metres, shape (3,)."""
+        return self.vertices.max(axis=0) - self.vertices.min(axis=0)
+
+    @property
+    def volume(self) -> float:
+        """Enclosed volume in m³ (meaningful only for a watertight mesh)."""
+        return float(self.to_trimesh().volume)
+
+    def to_trimesh(self) -> trimesh.Trimesh:
+        """The mesh as a :class:`trimesh.Trimesh` (no processing)."""
+        return trimesh.Trimesh(self.vertices, self.faces, process=False)
+
+
+def validate_mesh(
+    vertices: npt.ArrayLike, faces: npt.ArrayLike, source: str, *, require_watertight: bool = True
+) -> Mesh:
+    """Check a mesh, repair what is safe to repair, and return it.
+
+    Args:
+        vertices: Vertex positions in metres, shape (V, 3).
+        faces: Triangles, shape (F, 3), integer vertex indices.
+        source: Name used in messages (usually the file path).
+        require_watertight: Raise if the repaired mesh is still not closed (its volume, and so its mass
+            from a density, would be meaningless). Pass False when the mass is given explicitly.
+
+    Returns:
+        The repaired mesh, with each repair listed in ``notes``.
+
+    Raises:
+        MeshError: Fewer than 4 vertices, no faces, non-finite vertices, face indices out of range,
+            a flat or degenerate mesh, or (with ``require_watertight``) a mesh that stays open.
+    """
+    v = np.asarray(vertices, dtype=float)
+    f = np.asarray(faces)
+    if v.ndim != 2 or v.shape[1] != 3 or len(v) < 4:
+        raise MeshError(f"{source}: a mesh needs at least 4 vertices of 3 coordinates, got shape {v.shape}")
+    bad = ~np.all(np.isfinite(v), axis=1)
+    if bad.any():
+        raise MeshError(
+            f"{source}: vertex {int(np.argmax(bad))} is not finite ({v[bad][0].tolist()}); "
+            f"{int(bad.sum())} non-finite vertices in all"
+        )
+    if f.ndim != 2 or f.shape[1] != 3 or len(f) == 0:
+        raise MeshError(f"{source}: expected triangles of shape (F, 3) with F > 0, got shape {f.shape}")
+    if not np.issubdtype(f.dtype, np.integer):
+        if not np.all(np.isfinite(f)) or np.any(f != np.round(f)):
+            raise MeshError(f"{source}: face indices must be integers")
+        f = f.astype(np.int64)
+    out = (f < 0) | (f >= len(v))
+    if out.any():
+        face = int(np.argmax(out.any(axis=1)))
+        raise MeshError(f"{source}: face {face} has vertex index {int(f[out][0])} outside 0..{len(v) - 1}")
+    centred = v - v.mean(axis=0)
+    singular = np.linalg.svd(centred, compute_uv=False)
+    if singular[0] <= 0 or singular[-1] / singular[0] < FLATNESS_TOL:
+        raise MeshError(f"{source}: the mesh is flat or degenerate (all vertices on a plane or a line)")
+
+    mesh = trimesh.Trimesh(v, f, process=False)
+    notes: list[str] = []
+    nv = len(mesh.vertices)
+    mesh.merge_vertices()
+    if len(mesh.vertices) != nv:
+        notes.append(f"merged {nv - len(mesh.vertices)} duplicate vertices")
+    keep = mesh.nondegenerate_faces() & mesh.unique_faces()
+    if not keep.all():
+        mesh.update_faces(keep)
+        mesh.remove_unreferenced_vertices()
+        notes.append(f"removed {int((~keep).sum())} degenerate or duplicate faces")
+    if len(mesh.faces) < 4:
+        raise MeshError(
+            f"{source}: only {len(mesh.faces)} usable faces remain after removing degenerate ones"
+        )
+    if not mesh.is_winding_consistent:
+        trimesh.repair.fix_winding(mesh)
+        notes.append("made face winding consistent")
+    if not mesh.is_watertight:
+        before = len(mesh.faces)
+        if _largest_hole(mesh) <= MAX_HOLE_EDGES and trimesh.repair.fill_holes(mesh):
+            notes.append(f"filled small holes with {len(mesh.faces) - before} faces")
+    if mesh.is_watertight and mesh.volume < 0:
+        trimesh.repair.fix_inversion(mesh)
+        notes.append("inverted faces pointing inwards")
+    if require_watertight and not mesh.is_watertight:
+        raise MeshError(
+            f"{source}: the mesh is not watertight after repair (open boundary or non-manifold edges), so "
+            "its volume and mass are undefined; close it, or give the object's mass explicitly"
+        )
+    return Mesh(
+        vertices=np.asarray(mesh.vertices, dtype=float),
+        faces=np.asarray(mesh.faces, dtype=np.int64),
+        source=source,
+        watertight=bool(mesh.is_watertight),
+        notes=tuple(notes),
+    )
+
+
+def _largest_hole(mesh: trimesh.Trimesh) -> int:
+    """Number of boundary edges (an upper bound on the size of the largest hole)."""
+    edges = mesh.edges_sorted
+    _, counts = np.unique(edges, axis=0, return_counts=True)
+    return int(np.sum(counts == 1))

@@ -1,0 +1,154 @@
+"""Mesh reading with explicit units, validation (errors before native code) and safe repairs."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+import trimesh
+
+from handsim.errors import InputFileError, MeshError
+from handsim.io.mesh import read_mesh
+from handsim.mesh import validate_mesh
+
+BOX = trimesh.creation.box((0.05, 0.04, 0.03))
+
+
+def _box():
+    return np.array(BOX.vertices), np.array(BOX.faces)
+
+
+@pytest.mark.parametrize("ext", ["obj", "off", "stl", "ply"])
+def test_read_mesh_reads_every_format_in_mm_as_metres(tmp_path, ext):
+    path = tmp_path / f"box.{ext}"
+    trimesh.creation.box((50.0, 40.0, 30.0)).export(path)
+    mesh = read_mesh(path, "mm")
+    np.testing.assert_allclose(mesh.extent, [0.05, 0.04, 0.03], atol=1e-12)
+    assert mesh.volume == pytest.approx(6e-5)
+    assert mesh.watertight
+
+
+def test_read_mesh_raises_error_if_mm_file_is_read_as_m(tmp_path):
+    path = tmp_path / "box.obj"
+    trimesh.creation.box((50.0, 40.0, 30.0)).export(path)
+    with pytest.raises(
+        MeshError,
+        match=r"box\.obj: the object is 50 m across in units='m', outside the "
+        r"plausible 5 mm – 0.6 m; are the coordinates in mm\? \(pass units='mm'\)",
+    ):
+        read_mesh(path, "m")
+
+
+def test_read_mesh_raises_error_if_m_file_is_read_as_mm(tmp_path):
+    path = tmp_path / "box.obj"
+    BOX.export(path)
+    with pytest.raises(MeshError, match=r"0.05 mm|5e-05 m across in units='mm'.*are the coordinates in m\?"):
+        read_mesh(path, "mm")
+
+
+def test_read_mesh_raises_error_if_units_are_unknown(tmp_path):
+    path = tmp_path / "box.obj"
+    BOX.export(path)
+    with pytest.raises(MeshError, match=r"unknown units 'cm'; expected one of \['m', 'mm'\]"):
+        read_mesh(path, "cm")
+
+
+def test_read_mesh_raises_error_if_extension_is_unknown(tmp_path):
+    path = tmp_path / "box.dae"
+    path.write_text("x")
+    with pytest.raises(InputFileError, match=r"unknown mesh file type '\.dae'; handsim reads \.obj, \.off"):
+        read_mesh(path, "m")
+
+
+def test_read_mesh_raises_error_if_file_is_missing(tmp_path):
+    with pytest.raises(InputFileError, match=r"nope\.stl: file not found"):
+        read_mesh(tmp_path / "nope.stl", "m")
+
+
+def test_validate_raises_error_if_fewer_than_4_vertices():
+    with pytest.raises(
+        MeshError, match=r"m: a mesh needs at least 4 vertices of 3 coordinates, got shape \(3, 3\)"
+    ):
+        validate_mesh(np.eye(3), [[0, 1, 2]], "m")
+
+
+def test_validate_raises_error_if_a_vertex_is_not_finite():
+    v, f = _box()
+    v[5, 1] = np.nan
+    with pytest.raises(MeshError, match=r"m: vertex 5 is not finite .*1 non-finite vertices in all"):
+        validate_mesh(v, f, "m")
+
+
+def test_validate_raises_error_if_a_face_index_is_out_of_range():
+    v, f = _box()
+    f[3, 2] = 8
+    with pytest.raises(MeshError, match=r"m: face 3 has vertex index 8 outside 0\.\.7"):
+        validate_mesh(v, f, "m")
+
+
+def test_validate_raises_error_if_there_are_no_faces():
+    v, _ = _box()
+    with pytest.raises(MeshError, match=r"expected triangles of shape \(F, 3\) with F > 0, got shape \(0,\)"):
+        validate_mesh(v, [], "m")
+
+
+def test_validate_raises_error_if_mesh_is_flat():
+    v = np.array([[0, 0, 0], [0.1, 0, 0], [0, 0.1, 0], [0.1, 0.1, 0]], dtype=float)
+    with pytest.raises(MeshError, match=r"m: the mesh is flat or degenerate"):
+        validate_mesh(v, [[0, 1, 2], [1, 3, 2], [0, 2, 1], [1, 2, 3]], "m")
+
+
+def test_validate_repairs_inverted_winding_and_reports_it():
+    v, f = _box()
+    mesh = validate_mesh(v, f[:, ::-1], "m")
+    assert mesh.volume == pytest.approx(6e-5)
+    assert "inverted faces pointing inwards" in mesh.notes
+
+
+def test_validate_repairs_inconsistent_winding_and_reports_it():
+    v, f = _box()
+    f = f.copy()
+    f[0] = f[0, ::-1]
+    mesh = validate_mesh(v, f, "m")
+    assert mesh.volume == pytest.approx(6e-5)
+    assert "made face winding consistent" in mesh.notes
+
+
+def test_validate_merges_unmerged_vertices_and_reports_it():
+    v, f = _box()
+    soup = v[f].reshape(-1, 3)
+    mesh = validate_mesh(soup, np.arange(len(soup)).reshape(-1, 3), "m")
+    assert len(mesh.vertices) == 8
+    assert mesh.watertight
+    assert "merged 28 duplicate vertices" in mesh.notes
+
+
+def test_validate_fills_a_small_hole_and_reports_it():
+    sphere = trimesh.creation.icosphere(subdivisions=2, radius=0.03)
+    mesh = validate_mesh(sphere.vertices, sphere.faces[1:], "m")
+    assert mesh.watertight
+    assert mesh.volume == pytest.approx(sphere.volume)
+    assert "filled small holes with 1 faces" in mesh.notes
+
+
+def test_validate_raises_error_if_mesh_stays_open():
+    sphere = trimesh.creation.icosphere(subdivisions=3, radius=0.03)
+    keep = sphere.triangles_center[:, 2] < 0.0  # a hemisphere: one 64+ edge hole
+    with pytest.raises(
+        MeshError, match=r"m: the mesh is not watertight after repair .* give the object's mass"
+    ):
+        validate_mesh(sphere.vertices, sphere.faces[keep], "m")
+
+
+def test_validate_accepts_an_open_mesh_when_watertightness_is_not_required():
+    sphere = trimesh.creation.icosphere(subdivisions=3, radius=0.03)
+    keep = sphere.triangles_center[:, 2] < 0.0
+    mesh = validate_mesh(sphere.vertices, sphere.faces[keep], "m", require_watertight=False)
+    assert not mesh.watertight
+
+
+def test_tzionas_cube_and_pipe_meshes_read_in_mm(tzionas_dir):
+    cube = read_mesh(tzionas_dir / "Models/20/Model_Object_Cube.OFF", "mm")
+    np.testing.assert_allclose(cube.extent, [0.053] * 3, atol=1e-4)
+    assert cube.watertight
+    pipe = read_mesh(tzionas_dir / "Models/17/Model_Object_Pipe_Gray.OFF", "mm")
+    assert pipe.extent.max() == pytest.approx(0.35, abs=1e-3)
