@@ -104,8 +104,8 @@ def _capsule_geoms(
         body.add_geom(classes["visual"], **shape)
 
 
-def _skinned_hulls(skeleton: Skeleton, min_vertices: int = 8) -> dict[int, tuple[np.ndarray, float]]:
-    """Per-bone convex hulls from the skinned mesh: joint index → (hull vertices, hull volume)."""
+def _skinned_hulls(skeleton: Skeleton, min_vertices: int = 8) -> dict[int, ConvexHull]:
+    """Per-bone convex hulls from the skinned mesh, by joint index."""
     mesh = skeleton.mesh
     if mesh is None:
         raise ModelError(
@@ -123,7 +123,7 @@ def _skinned_hulls(skeleton: Skeleton, min_vertices: int = 8) -> dict[int, tuple
             continue  # flat or degenerate part: no hull (it would crash or mislead the collider)
         if hull.volume <= 1e-9:
             continue
-        hulls[skeleton.joint_index(bone)] = (verts[hull.vertices], float(hull.volume))
+        hulls[skeleton.joint_index(bone)] = hull
     return hulls
 
 
@@ -171,7 +171,7 @@ def build_hand(
     geometry = hand_geometry(skeleton, breadth)
     hulls = _skinned_hulls(skeleton) if collision == "mesh" else {}
     if collision == "mesh":
-        total_volume = sum(volume for _, volume in hulls.values())
+        total_volume = sum(hull.volume for hull in hulls.values())
     else:
         total_volume = sum(c.volume for c in geometry.capsules) + geometry.palm_volume
     total_mass = default_hand_mass(skeleton.hand_length) if mass is None else mass
@@ -179,13 +179,15 @@ def build_hand(
         raise ModelError(f"hand {skeleton.name!r}: mass ({total_mass}) and volume must be positive")
     density = total_mass / total_volume
 
+    def to_local(index: int):
+        frame, origin = skeleton.joints[index].frame, skeleton.joints[index].position
+        return lambda p: (np.asarray(p) - origin) @ frame
+
     has_children = {j.parent for j in skeleton.joints}
     bodies: dict[int, mujoco.MjsBody] = {}
     for i, joint in enumerate(skeleton.joints):
-        site_pos = [0.0, 0.0, 0.0]
-        if i not in has_children and joint.parent >= 0:
-            parent = skeleton.joints[joint.parent]
-            site_pos = (parent.frame.T @ (joint.position - parent.position)).tolist()
+        if i not in has_children and joint.parent >= 0:  # a leaf (fingertip): a site on its parent
+            site_pos = to_local(joint.parent)(joint.position).tolist()
             bodies[joint.parent].add_site(name=mj_name(joint.name), pos=site_pos, size=[0.003, 0, 0])
             continue
         if joint.parent < 0:
@@ -193,11 +195,11 @@ def build_hand(
         else:
             parent = skeleton.joints[joint.parent]
             parent_body = bodies[joint.parent]
-            pos = parent.frame.T @ (joint.position - parent.position)
+            pos = to_local(joint.parent)(joint.position)
             rot = parent.frame.T @ joint.frame
         body = parent_body.add_body(name=mj_name(joint.name), pos=pos.tolist(), quat=_quat(rot).tolist())
         bodies[i] = body
-        body.add_site(name=mj_name(joint.name), pos=site_pos, size=[0.003, 0, 0])
+        body.add_site(name=mj_name(joint.name), pos=[0.0, 0.0, 0.0], size=[0.003, 0, 0])
         for dof in skeleton.dofs_of(joint.name):
             cls = classes["wrist" if joint.parent < 0 else dof.kind]
             body.add_joint(
@@ -214,10 +216,6 @@ def build_hand(
                 trntype=mujoco.mjtTrn.mjTRN_JOINT,
                 ctrlrange=[dof.lower, dof.upper],
             )
-
-    def to_local(index: int):
-        frame, origin = skeleton.joints[index].frame, skeleton.joints[index].position
-        return lambda p: (np.asarray(p) - origin) @ frame
 
     if collision == "capsules":
         for capsule in geometry.capsules:
@@ -240,13 +238,13 @@ def build_hand(
                 classes,
             )
     else:
-        for index, (verts, volume) in hulls.items():
+        for index, hull in hulls.items():
             _add_mesh_geoms(
                 spec,
                 bodies[index],
                 f"{mj_name(skeleton.joints[index].name)}_hull",
-                to_local(index)(verts),
-                density * volume,
+                to_local(index)(hull.points[hull.vertices]),
+                density * hull.volume,
                 classes,
             )
 
@@ -264,13 +262,13 @@ def _add_mesh_geoms(
     body.add_geom(classes["visual"], type=mujoco.mjtGeom.mjGEOM_MESH, meshname=name)
 
 
-def _overlapping_hulls(hulls: dict[int, tuple[np.ndarray, float]]) -> set[tuple[int, int]]:
+def _overlapping_hulls(hulls: dict[int, ConvexHull]) -> set[tuple[int, int]]:
     """Pairs of joints whose rest-pose hulls intersect (the skinned surface is continuous there).
 
     Two convex hulls intersect iff some point satisfies both hulls' facet inequalities: a linear
     feasibility problem.
     """
-    equations = {i: ConvexHull(v).equations for i, (v, _) in hulls.items()}
+    equations = {i: hull.equations for i, hull in hulls.items()}
     pairs = set()
     keys = sorted(equations)
     for k, a in enumerate(keys):
