@@ -11,6 +11,37 @@ from handsim.errors import TrajectoryError
 
 
 @dataclass(frozen=True)
+class Phase:
+    """A named interval of a trajectory, e.g. the ``grasp`` phase of a GraspDB14 trial.
+
+    Attributes:
+        name: Phase name as annotated (``rest``, ``reach``, ``grasp``, ``retract`` …).
+        start: First frame of the phase.
+        stop: One past the last frame (Python slice convention).
+    """
+
+    name: str
+    start: int
+    stop: int
+
+
+@dataclass(frozen=True)
+class ObjectTrack:
+    """A recorded object's pose over the frames of a trajectory.
+
+    Attributes:
+        pose: Object frame pose per sample, shape (T, 7): position (m) and quaternion (w, x, y, z).
+        articulation: Articulation angle per sample in radians (hinge of a two-part object), shape (T,),
+            or None for a rigid object.
+        valid: True where the pose was recorded and usable, shape (T,).
+    """
+
+    pose: np.ndarray
+    articulation: np.ndarray | None = None
+    valid: np.ndarray | None = None
+
+
+@dataclass(frozen=True)
 class Trajectory:
     """Joint-angle targets over time for a hand model, in SI units.
 
@@ -23,6 +54,9 @@ class Trajectory:
         root_pose: Optional root pose per sample, shape (T, 7): position (m) and quaternion (w, x, y, z).
         channels: Recorded channels that drive no DoF (kept, not dropped), name → shape (T,) array.
         computed: Names of DoFs whose values were computed rather than measured (e.g. coupled DIPs).
+        filled: True where a target was filled in by gap filling, shape (T, ndof), or None.
+        phases: Named frame intervals (trial phases), in time order.
+        objects: Recorded object pose tracks by object name.
         source: The file the trajectory was read from.
         sha256: SHA-256 of that file's bytes ("" when not read from a file).
         notes: Decisions and repairs made while reading, for the user to see.
@@ -36,6 +70,9 @@ class Trajectory:
     root_pose: np.ndarray | None = None
     channels: dict[str, np.ndarray] = field(default_factory=dict)
     computed: tuple[str, ...] = ()
+    filled: np.ndarray | None = None
+    phases: tuple[Phase, ...] = ()
+    objects: dict[str, ObjectTrack] = field(default_factory=dict)
     source: str = ""
     sha256: str = ""
     notes: tuple[str, ...] = ()
@@ -65,6 +102,23 @@ class Trajectory:
         unknown = [c for c in self.computed if c not in self.dof_names]
         if unknown:
             raise TrajectoryError(f"computed DoFs {unknown} are not among {list(self.dof_names)}")
+        if self.filled is not None and np.shape(self.filled) != shape:
+            raise TrajectoryError(f"filled must have shape {shape}, got {np.shape(self.filled)}")
+        for phase in self.phases:
+            if not 0 <= phase.start < phase.stop <= n:
+                raise TrajectoryError(
+                    f"phase {phase.name!r} spans frames [{phase.start}, {phase.stop}), outside [0, {n})"
+                )
+        for name, track in self.objects.items():
+            if np.shape(track.pose) != (n, 7):
+                raise TrajectoryError(
+                    f"object {name!r} pose must have shape ({n}, 7), got {np.shape(track.pose)}"
+                )
+            for what, arr in (("articulation", track.articulation), ("valid", track.valid)):
+                if arr is not None and np.shape(arr) != (n,):
+                    raise TrajectoryError(
+                        f"object {name!r} {what} must have shape ({n},), got {np.shape(arr)}"
+                    )
 
     @property
     def nframes(self) -> int:
@@ -80,6 +134,17 @@ class Trajectory:
     def mean_rate(self) -> float:
         """Mean sampling rate in Hz (samples per second over the duration); 0 for one sample."""
         return (self.nframes - 1) / self.duration if self.nframes > 1 else 0.0
+
+    def phase(self, name: str) -> Phase:
+        """The first phase with this name.
+
+        Raises:
+            TrajectoryError: If there is none; the message lists the phases there are.
+        """
+        for phase in self.phases:
+            if phase.name == name:
+                return phase
+        raise TrajectoryError(f"no phase {name!r}; phases are {[p.name for p in self.phases]}")
 
     def column(self, dof_name: str) -> np.ndarray:
         """Targets of one DoF, shape (T,).
