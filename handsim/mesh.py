@@ -115,10 +115,17 @@ def validate_mesh(
     if not mesh.is_winding_consistent:
         trimesh.repair.fix_winding(mesh)
         notes.append("made face winding consistent")
-    if not mesh.is_watertight:
-        before = len(mesh.faces)
-        if _largest_hole(mesh) <= MAX_HOLE_EDGES and trimesh.repair.fill_holes(mesh):
-            notes.append(f"filled small holes with {len(mesh.faces) - before} faces")
+    if not mesh.is_watertight and mesh.is_winding_consistent:
+        loops = boundary_loops(mesh.faces)
+        if loops and all(len(loop) <= MAX_HOLE_EDGES for loop in loops):
+            capped_v, capped_f = cap_loops(mesh.vertices, mesh.faces, loops)
+            capped = trimesh.Trimesh(capped_v, capped_f, process=False)
+            if capped.is_watertight:
+                notes.append(
+                    f"filled {len(loops)} small holes (at most {MAX_HOLE_EDGES} edges each) with "
+                    f"{len(capped_f) - len(mesh.faces)} faces"
+                )
+                mesh = capped
     if mesh.is_watertight and mesh.volume < 0:
         trimesh.repair.fix_inversion(mesh)
         notes.append("inverted faces pointing inwards")
@@ -136,8 +143,64 @@ def validate_mesh(
     )
 
 
-def _largest_hole(mesh: trimesh.Trimesh) -> int:
-    """Number of boundary edges (an upper bound on the size of the largest hole)."""
-    edges = mesh.edges_sorted
-    _, counts = np.unique(edges, axis=0, return_counts=True)
-    return int(np.sum(counts == 1))
+def boundary_loops(faces: npt.ArrayLike) -> list[list[int]]:
+    """The open boundary of a consistently wound triangle mesh as closed vertex loops.
+
+    Args:
+        faces: Triangles, shape (F, 3).
+
+    Returns:
+        One list of vertex indices per hole, in the order of the faces' directed boundary edges; empty for a
+        closed mesh. Boundaries through non-manifold vertices (where loops cannot be told apart) give none.
+    """
+    f = np.asarray(faces, dtype=np.int64)
+    directed = np.concatenate([f[:, [0, 1]], f[:, [1, 2]], f[:, [2, 0]]])
+    present = {(int(a), int(b)) for a, b in directed}
+    boundary = [(a, b) for a, b in present if (b, a) not in present]
+    nxt: dict[int, int] = {}
+    for a, b in boundary:
+        if a in nxt:
+            return []
+        nxt[a] = b
+    loops = []
+    while nxt:
+        start, loop = next(iter(nxt)), []
+        v = start
+        while v in nxt:
+            loop.append(v)
+            v = nxt.pop(v)
+        if v != start:
+            return []
+        loops.append(loop)
+    return loops
+
+
+def cap_loops(
+    vertices: npt.ArrayLike, faces: npt.ArrayLike, loops: list[list[int]]
+) -> tuple[np.ndarray, np.ndarray]:
+    """Close each boundary loop with a fan of triangles around the loop's centroid.
+
+    The fan keeps the mesh's winding (each cap triangle runs against its boundary edge). It is exact for
+    planar star-shaped loops — a cut through a tube, a missing patch of a smooth surface — which is what
+    callers pass.
+
+    Args:
+        vertices: Vertex positions, shape (V, 3).
+        faces: Triangles, shape (F, 3).
+        loops: Loops from :func:`boundary_loops`.
+
+    Returns:
+        Vertices with one centroid appended per loop, and the faces with the caps appended.
+    """
+    v = [np.asarray(vertices, dtype=float)]
+    f = [np.asarray(faces, dtype=np.int64)]
+    n = len(v[0])
+    for loop in loops:
+        ring = np.asarray(loop, dtype=np.int64)
+        if len(ring) == 3:
+            f.append(ring[::-1][None, :])
+            continue
+        v.append(v[0][ring].mean(axis=0, keepdims=True))
+        f.append(np.column_stack([np.roll(ring, -1), ring, np.full(len(ring), n)]))
+        n += 1
+    return np.vstack(v), np.vstack(f)

@@ -8,7 +8,7 @@ import trimesh
 
 from handsim.errors import InputFileError, MeshError
 from handsim.io.mesh import read_mesh
-from handsim.mesh import validate_mesh
+from handsim.mesh import boundary_loops, cap_loops, validate_mesh
 
 BOX = trimesh.creation.box((0.05, 0.04, 0.03))
 
@@ -127,12 +127,33 @@ def test_validate_fills_a_small_hole_and_reports_it():
     mesh = validate_mesh(sphere.vertices, sphere.faces[1:], "m")
     assert mesh.watertight
     assert mesh.volume == pytest.approx(sphere.volume)
-    assert "filled small holes with 1 faces" in mesh.notes
+    assert "filled 1 small holes (at most 64 edges each) with 1 faces" in mesh.notes
+
+
+def test_validate_fills_a_many_edged_hole_with_a_fan_and_reports_it():
+    sphere = trimesh.creation.icosphere(subdivisions=3, radius=0.03)
+    keep = sphere.triangles_center[:, 2] < 0.027  # removes a polar cap: one hole of a few dozen edges
+    loops = boundary_loops(sphere.faces[keep])
+    assert len(loops) == 1 and 8 < len(loops[0]) <= 64
+    mesh = validate_mesh(sphere.vertices, sphere.faces[keep], "m")
+    assert mesh.watertight
+    assert mesh.volume == pytest.approx(sphere.volume, rel=1e-2)  # the flat cap cuts off a thin dome
+    assert f"filled 1 small holes (at most 64 edges each) with {len(loops[0])} faces" in mesh.notes
+
+
+def test_cap_loops_closes_a_cut_tube_with_outward_winding():
+    tube = trimesh.creation.cylinder(radius=0.02, height=0.1, sections=40)
+    keep = tube.triangles_center[:, 2] < 0.04  # drop the top cap: one 40-edge loop
+    loops = boundary_loops(tube.faces[keep])
+    v, f = cap_loops(tube.vertices, tube.faces[keep], loops)
+    capped = trimesh.Trimesh(v, f, process=False)
+    assert capped.is_watertight and capped.is_winding_consistent
+    assert capped.volume == pytest.approx(tube.volume, rel=1e-9)
 
 
 def test_validate_raises_error_if_mesh_stays_open():
-    sphere = trimesh.creation.icosphere(subdivisions=3, radius=0.03)
-    keep = sphere.triangles_center[:, 2] < 0.0  # a hemisphere: one 64+ edge hole
+    sphere = trimesh.creation.icosphere(subdivisions=4, radius=0.03)
+    keep = sphere.triangles_center[:, 2] < 0.0  # a hemisphere: one 96-edge hole
     with pytest.raises(
         MeshError, match=r"m: the mesh is not watertight after repair .* give the object's mass"
     ):
@@ -140,7 +161,7 @@ def test_validate_raises_error_if_mesh_stays_open():
 
 
 def test_validate_accepts_an_open_mesh_when_watertightness_is_not_required():
-    sphere = trimesh.creation.icosphere(subdivisions=3, radius=0.03)
+    sphere = trimesh.creation.icosphere(subdivisions=4, radius=0.03)
     keep = sphere.triangles_center[:, 2] < 0.0
     mesh = validate_mesh(sphere.vertices, sphere.faces[keep], "m", require_watertight=False)
     assert not mesh.watertight
