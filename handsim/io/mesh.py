@@ -33,6 +33,27 @@ def read_mesh(path: str | Path, units: str, *, require_watertight: bool = True) 
         MeshError: An unknown unit; an object whose largest extent is outside 5 mm – 0.6 m in the given
             unit (the message suggests the other unit); or any problem :func:`validate_mesh` finds.
     """
+    vertices, faces = read_mesh_arrays(path, units)
+    return validate_mesh(vertices, faces, str(Path(path)), require_watertight=require_watertight)
+
+
+def read_mesh_arrays(path: str | Path, units: str) -> tuple[np.ndarray, np.ndarray]:
+    """Read a mesh file's vertices (converted to metres, file order kept) and faces, without validation.
+
+    For readers that index vertices in file order (ARCTIC's ``parts.json``) before validating the mesh
+    with :func:`handsim.mesh.validate_mesh`.
+
+    Args:
+        path: An ``.obj``, ``.off``, ``.stl`` or ``.ply`` file.
+        units: ``"m"`` or ``"mm"``.
+
+    Returns:
+        Vertices (V, 3) in metres and faces (F, 3).
+
+    Raises:
+        InputFileError: Missing or unreadable file, or an unsupported extension.
+        MeshError: An unknown unit, an unparsable file, or an implausible size (see :func:`read_mesh`).
+    """
     p = Path(path)
     if units not in UNIT_SCALES:
         raise MeshError(f"{p}: unknown units {units!r}; expected one of {sorted(UNIT_SCALES)}")
@@ -42,8 +63,11 @@ def read_mesh(path: str | Path, units: str, *, require_watertight: bool = True) 
         raise InputFileError(
             f"{p}: unknown mesh file type {p.suffix!r}; handsim reads {', '.join(MESH_SUFFIXES)}"
         )
+    options = {"maintain_order": True} if suffix == ".obj" else {}
     try:
-        loaded = trimesh.load_mesh(trimesh.util.wrap_as_stream(data), file_type=suffix[1:], process=False)
+        loaded = trimesh.load_mesh(
+            trimesh.util.wrap_as_stream(data), file_type=suffix[1:], process=False, **options
+        )
     except Exception as exc:  # trimesh raises many types for malformed files
         raise MeshError(f"{p}: cannot parse as {suffix[1:].upper()}: {exc}") from exc
     if isinstance(loaded, trimesh.Scene):
@@ -62,4 +86,4 @@ def read_mesh(path: str | Path, units: str, *, require_watertight: bool = True) 
                 f"{p}: the object is {largest:.4g} m across in units={units!r}, outside the plausible "
                 f"{low * 1000:g} mm – {high:g} m; are the coordinates in {other}? (pass units={other!r})"
             )
-    return validate_mesh(vertices, faces, str(p), require_watertight=require_watertight)
+    return vertices, faces

@@ -1,0 +1,109 @@
+"""Child process that runs CoACD on one mesh; started by :mod:`handsim.builders.decompose`, not by users.
+
+Usage: ``python _coacd_worker.py IN.npz OUT.npz``. ``IN.npz`` holds ``vertices`` (V, 3) float64 metres,
+``faces`` (F, 3) int64 and ``params``, a JSON object of keyword arguments for :func:`coacd.run_coacd`.
+``OUT.npz`` receives the hulls packed as ``vertices`` (sum V_i, 3), ``faces`` (sum F_i, 3) with per-hull
+indices, ``vertex_counts`` and ``face_counts`` (H,), and ``seconds``, the time CoACD itself took.
+
+The parent starts this file by path, not with ``-m handsim.builders._coacd_worker``: ``-m`` would import
+``handsim/__init__`` and ``handsim/builders/__init__`` (MuJoCo, SciPy), about 0.5 s of dead weight per
+decomposition. So this module imports nothing from handsim; only the standard library, NumPy and CoACD.
+
+A crash here (CoACD aborts on some inputs) takes down only this process; the parent reports the exit
+status and the last lines of the output. For tests, the environment variable
+``HANDSIM_COACD_WORKER_FAULT`` makes the worker fail on purpose: ``abort`` calls :func:`os.abort`,
+``empty`` writes a result without hulls, ``garbage`` writes bytes that are not an ``.npz`` file.
+"""
+
+from __future__ import annotations
+
+import os
+import sys
+
+# Started by path, Python put this folder first on sys.path; drop it so that sibling modules (hand.py,
+# scene.py, ...) can never shadow a standard or third-party module imported below.
+if sys.path and os.path.abspath(sys.path[0] or os.curdir) == os.path.dirname(os.path.abspath(__file__)):
+    del sys.path[0]
+
+import json
+import time
+
+import numpy as np
+
+FAULT_ENV = "HANDSIM_COACD_WORKER_FAULT"
+
+
+def _no_core_dumps() -> None:
+    """Keep a deliberate or real abort from writing a core file."""
+    try:
+        import resource
+
+        resource.setrlimit(resource.RLIMIT_CORE, (0, 0))
+    except (ImportError, ValueError, OSError):  # Windows, or a hard limit we may not lower
+        pass
+
+
+def _pack(hulls: list[tuple[np.ndarray, np.ndarray]], seconds: float) -> dict[str, np.ndarray]:
+    """Hulls as the flat arrays stored in ``OUT.npz``."""
+    vertices = [np.asarray(v, dtype=np.float64).reshape(-1, 3) for v, _ in hulls]
+    faces = [np.asarray(f, dtype=np.int64).reshape(-1, 3) for _, f in hulls]
+    return {
+        "vertices": np.concatenate(vertices) if vertices else np.zeros((0, 3)),
+        "faces": np.concatenate(faces) if faces else np.zeros((0, 3), dtype=np.int64),
+        "vertex_counts": np.array([len(v) for v in vertices], dtype=np.int64),
+        "face_counts": np.array([len(f) for f in faces], dtype=np.int64),
+        "seconds": np.float64(seconds),
+    }
+
+
+def _save(path: str, arrays: dict[str, np.ndarray]) -> None:
+    """Write ``arrays`` to ``path`` exactly (``np.savez`` on a name would append ``.npz``)."""
+    with open(path, "wb") as f:
+        np.savez(f, **arrays)
+
+
+def main(argv: list[str]) -> int:
+    """Run CoACD on ``argv[0]`` and write the hulls to ``argv[1]``.
+
+    Args:
+        argv: The input and output ``.npz`` paths.
+
+    Returns:
+        The process exit status (0 on success).
+    """
+    if len(argv) != 2:
+        print("usage: _coacd_worker.py IN.npz OUT.npz", file=sys.stderr)
+        return 2
+    in_path, out_path = argv
+    _no_core_dumps()
+    fault = os.environ.get(FAULT_ENV, "")
+    if fault == "abort":
+        print("deliberate abort requested by " + FAULT_ENV, file=sys.stderr, flush=True)
+        os.abort()
+    if fault == "garbage":
+        with open(out_path, "wb") as f:
+            f.write(b"this is not an npz file")
+        return 0
+    if fault == "empty":
+        _save(out_path, _pack([], 0.0))
+        return 0
+    if fault:
+        print(f"unknown {FAULT_ENV}={fault!r}; expected abort, empty or garbage", file=sys.stderr)
+        return 2
+
+    import coacd
+
+    coacd.set_log_level("error")
+    with np.load(in_path, allow_pickle=False) as data:
+        vertices = np.ascontiguousarray(data["vertices"], dtype=np.float64)
+        faces = np.ascontiguousarray(data["faces"], dtype=np.int32)
+        params = json.loads(str(data["params"]))
+    start = time.perf_counter()
+    parts = coacd.run_coacd(coacd.Mesh(vertices, faces), **params)
+    seconds = time.perf_counter() - start
+    _save(out_path, _pack([(v, f) for v, f in parts], seconds))
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main(sys.argv[1:]))
