@@ -1,0 +1,339 @@
+"""Objects become MuJoCo bodies: hull collision geoms, a visual mesh, mass and inertia from the mesh.
+
+An object is described by plain data (:class:`ObjectModel`: one or two :class:`ObjectPart`, an optional
+:class:`Hinge`, a density or a total mass) and built in two steps:
+
+* :func:`prepare_object` decomposes every part that needs it (cached CoACD, see
+  :mod:`handsim.builders.decompose`) and computes each part's mass properties from its watertight mesh;
+* :func:`object_spec` turns the prepared object into a :class:`mujoco.MjSpec`.
+
+:func:`build_object` does both. The spec has one body per part, named after the part (``body`` for a
+rigid object); the root part carries a free joint ``free``, the second part a hinge ``hinge``. Body frames
+are the object frame: a recorded object pose is the root body's pose, and the child part's frame coincides
+with the root's at articulation 0. Collision geoms are ``hull_<i>`` (``<part>_hull_<i>`` for parts of an
+articulated object) or exact primitives ``prim_<i>``; the visual mesh is ``visual`` (``<part>_visual``).
+
+Mass and inertia are set explicitly on each body (``explicitinertial``) from the repaired watertight mesh
+and the density — summing overlapping hulls would over-count the mass — and every geom has density 0.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+
+import mujoco
+import numpy as np
+import trimesh
+
+from handsim.builders.decompose import Decomposition, DecompositionParams, decompose
+from handsim.builders.hand import SKIN_FRICTION
+from handsim.errors import ModelError
+from handsim.mesh import Mesh
+from handsim.object_model import Hinge, ObjectModel, Primitive
+
+OBJECT_RGBA = (0.55, 0.60, 0.68, 1.0)
+HULL_RGBA = (0.9, 0.5, 0.2, 0.4)
+HINGE_DAMPING = 1e-3  # N·m·s/rad: a little viscous loss so a free hinge settles
+OBJECT_CONDIM = 4  # sliding + torsional friction: a pinched object resists spinning about the contact normal
+
+
+@dataclass(frozen=True)
+class MassProperties:
+    """Mass properties of one part in the object frame.
+
+    Attributes:
+        mass: kg.
+        com: Centre of mass, metres, shape (3,).
+        inertia: Inertia tensor about the centre of mass, kg·m², shape (3, 3).
+        volume: The volume the mass was computed from, m³.
+    """
+
+    mass: float
+    com: np.ndarray
+    inertia: np.ndarray
+    volume: float
+
+
+@dataclass(frozen=True)
+class PreparedObject:
+    """An object with its collision hulls and mass properties computed, ready for :func:`object_spec`.
+
+    Attributes:
+        model: The object.
+        decompositions: Part name → decomposition (parts with primitives have none).
+        mass_properties: Part name → mass properties.
+        notes: What was decided while preparing (mass distribution, skipped decompositions …).
+    """
+
+    model: ObjectModel
+    decompositions: dict[str, Decomposition]
+    mass_properties: dict[str, MassProperties]
+    notes: tuple[str, ...] = field(default=())
+
+    @property
+    def total_mass(self) -> float:
+        """Total mass in kg."""
+        return float(sum(p.mass for p in self.mass_properties.values()))
+
+
+def prepare_object(
+    model: ObjectModel,
+    params: DecompositionParams | None = None,
+    *,
+    cache_dir: str | None = None,
+    use_cache: bool = True,
+    progress: bool = False,
+) -> PreparedObject:
+    """Decompose the object's parts (cached) and compute their mass properties.
+
+    Args:
+        model: The object.
+        params: CoACD parameters (defaults of :class:`DecompositionParams`).
+        cache_dir: Decomposition cache directory (default: ``default_cache_dir()``).
+        use_cache: Read and write the decomposition cache.
+        progress: Show a progress bar while CoACD runs.
+
+    Returns:
+        The prepared object.
+
+    Raises:
+        DecompositionError: CoACD failed or timed out on a part (the message names the mesh).
+    """
+    params = params or DecompositionParams()
+    decompositions = {
+        part.name: decompose(part.mesh, params, cache_dir=cache_dir, use_cache=use_cache, progress=progress)
+        for part in model.parts
+        if not part.primitives
+    }
+    notes: list[str] = []
+    if model.density is not None:
+        masses = {p.name: _mesh_mass_properties(p.mesh.to_trimesh(), model.density) for p in model.parts}
+    else:
+        solids = {
+            p.name: p.mesh.to_trimesh() if p.mesh.watertight else p.mesh.to_trimesh().convex_hull
+            for p in model.parts
+        }
+        volume = sum(float(s.volume) for s in solids.values())
+        density = model.mass / volume
+        masses = {name: _mesh_mass_properties(solid, density) for name, solid in solids.items()}
+        hulled = [p.name for p in model.parts if not p.mesh.watertight]
+        if hulled:
+            notes.append(
+                f"mass {model.mass:g} kg given; parts {hulled} are open, so their volume and inertia come "
+                "from their convex hulls"
+            )
+    return PreparedObject(model, decompositions, masses, tuple(notes))
+
+
+def hinge_friction(hinge: Hinge, child: MassProperties, gravity: float = 9.81) -> float:
+    """Dry friction torque (N·m) that holds the child part still against gravity, or 0.
+
+    The largest gravity torque about the hinge is m·g·r, r the distance of the child's centre of mass from
+    the axis; 1.5 times that holds the part in any orientation of the object.
+    """
+    if not hinge.holds_pose:
+        return 0.0
+    axis = np.asarray(hinge.axis, dtype=float)
+    axis = axis / np.linalg.norm(axis)
+    offset = child.com - np.asarray(hinge.pos, dtype=float)
+    lever = float(np.linalg.norm(offset - (offset @ axis) * axis))
+    return 1.5 * child.mass * gravity * lever
+
+
+def _mesh_mass_properties(mesh: trimesh.Trimesh, density: float) -> MassProperties:
+    """Mass, centre of mass and inertia of a closed mesh of uniform density."""
+    volume = float(mesh.volume)
+    if not volume > 0:
+        raise ModelError(f"{mesh.metadata.get('name', 'mesh')}: volume {volume} m³ is not positive")
+    props = trimesh.triangles.mass_properties(mesh.triangles, density=density)
+    return MassProperties(
+        mass=float(props.mass),
+        com=np.asarray(props.center_mass, dtype=float),
+        inertia=np.asarray(props.inertia, dtype=float),
+        volume=volume,
+    )
+
+
+def object_spec(
+    prepared: PreparedObject,
+    *,
+    free: bool = True,
+    friction: Sequence[float] = SKIN_FRICTION,
+    rgba: Sequence[float] = OBJECT_RGBA,
+) -> mujoco.MjSpec:
+    """The MuJoCo spec of a prepared object.
+
+    Args:
+        prepared: The object from :func:`prepare_object`.
+        free: Give the root body a free joint (False: the object is fixed to its parent frame).
+        friction: Sliding, torsional (m) and rolling (m) friction of the collision geoms; the default is
+            that of skin (MuJoCo uses the larger of two touching geoms' coefficients).
+        rgba: Colour of the visual mesh.
+
+    Returns:
+        The spec; it is not compiled.
+    """
+    model = prepared.model
+    spec = mujoco.MjSpec()
+    spec.compiler.degree = False
+    spec.modelname = model.name
+    main = spec.default
+    main.geom.friction = list(friction)
+    main.geom.condim = OBJECT_CONDIM
+    main.geom.density = 0.0
+    visual = spec.add_default("visual", main)
+    visual.geom.group = 2
+    visual.geom.contype = 0
+    visual.geom.conaffinity = 0
+    visual.geom.rgba = list(rgba)
+    collision = spec.add_default("collision", main)
+    collision.geom.group = 3
+    collision.geom.rgba = list(HULL_RGBA)
+
+    single = len(model.parts) == 1
+    parent = spec.worldbody
+    for index, part in enumerate(model.parts):
+        body = parent.add_body(name=part.name)
+        if index == 0:
+            if free:
+                body.add_freejoint(name="free")
+        else:
+            hinge = model.hinge
+            assert hinge is not None  # guaranteed by ObjectModel
+            joint = body.add_joint(
+                name="hinge",
+                type=mujoco.mjtJoint.mjJNT_HINGE,
+                axis=list(hinge.axis),
+                pos=list(hinge.pos),
+                damping=HINGE_DAMPING,
+                frictionloss=hinge_friction(hinge, prepared.mass_properties[part.name]),
+            )
+            if hinge.range is not None:
+                joint.limited = mujoco.mjtLimited.mjLIMITED_TRUE
+                joint.range = list(hinge.range)
+        props = prepared.mass_properties[part.name]
+        body.explicitinertial = True
+        body.mass = props.mass
+        body.ipos = props.com.tolist()
+        i = props.inertia
+        body.fullinertia = [i[0, 0], i[1, 1], i[2, 2], i[0, 1], i[0, 2], i[1, 2]]
+        prefix = "" if single else f"{part.name}_"
+        _add_visual(spec, body, visual, part.mesh, f"{prefix}visual")
+        if part.primitives:
+            for k, prim in enumerate(part.primitives):
+                body.add_geom(
+                    collision,
+                    name=f"{prefix}prim_{k}",
+                    type=_PRIMITIVE_TYPES[prim.kind],
+                    size=_geom_size(prim),
+                    pos=list(prim.pos),
+                    quat=list(prim.quat),
+                )
+        else:
+            for k, hull in enumerate(prepared.decompositions[part.name].hulls):
+                name = f"{prefix}hull_{k}"
+                spec.add_mesh(
+                    name=name, uservert=hull.vertices.ravel().tolist(), userface=hull.faces.ravel().tolist()
+                )
+                body.add_geom(collision, name=name, type=mujoco.mjtGeom.mjGEOM_MESH, meshname=name)
+        parent = body
+    if not single:
+        spec.add_exclude(bodyname1=model.parts[0].name, bodyname2=model.parts[1].name)
+    return spec
+
+
+_PRIMITIVE_TYPES = {
+    "sphere": mujoco.mjtGeom.mjGEOM_SPHERE,
+    "box": mujoco.mjtGeom.mjGEOM_BOX,
+    "cylinder": mujoco.mjtGeom.mjGEOM_CYLINDER,
+    "capsule": mujoco.mjtGeom.mjGEOM_CAPSULE,
+}
+
+
+def _geom_size(prim: Primitive) -> list[float]:
+    size = [*prim.size, 0.0, 0.0][:3]
+    return [float(s) for s in size]
+
+
+def _add_visual(
+    spec: mujoco.MjSpec, body: mujoco.MjsBody, cls: mujoco.MjsDefault, mesh: Mesh, name: str
+) -> None:
+    vis = spec.add_mesh(
+        name=name, uservert=mesh.vertices.ravel().tolist(), userface=mesh.faces.ravel().tolist()
+    )
+    if not mesh.watertight:
+        vis.inertia = mujoco.mjtMeshInertia.mjMESH_INERTIA_SHELL
+    body.add_geom(cls, name=name, type=mujoco.mjtGeom.mjGEOM_MESH, meshname=name)
+
+
+def build_object(
+    model: ObjectModel,
+    params: DecompositionParams | None = None,
+    *,
+    cache_dir: str | None = None,
+    use_cache: bool = True,
+    progress: bool = False,
+    free: bool = True,
+    friction: Sequence[float] = SKIN_FRICTION,
+) -> mujoco.MjSpec:
+    """Build an object's MuJoCo spec: :func:`prepare_object` then :func:`object_spec`.
+
+    Args:
+        model: The object.
+        params: CoACD parameters.
+        cache_dir: Decomposition cache directory.
+        use_cache: Read and write the decomposition cache.
+        progress: Show a progress bar while CoACD runs.
+        free: Give the root body a free joint.
+        friction: Friction of the collision geoms (default: skin).
+
+    Returns:
+        The spec; it is not compiled.
+    """
+    prepared = prepare_object(model, params, cache_dir=cache_dir, use_cache=use_cache, progress=progress)
+    return object_spec(prepared, free=free, friction=friction)
+
+
+def object_bounds(spec: mujoco.MjSpec) -> tuple[np.ndarray, np.ndarray]:
+    """Axis-aligned bounds of an object spec's collision geometry in its object frame (articulation 0).
+
+    Args:
+        spec: A spec made by :func:`object_spec`.
+
+    Returns:
+        Lower and upper corners, metres.
+    """
+    points: list[np.ndarray] = []
+    meshes = {m.name: np.asarray(m.uservert).reshape(-1, 3) for m in spec.meshes}
+    for geom in spec.geoms:
+        if geom.contype == 0 and geom.conaffinity == 0:
+            continue
+        if int(geom.type) == int(mujoco.mjtGeom.mjGEOM_MESH):
+            points.append(meshes[geom.meshname])
+            continue
+        points.append(_primitive_corners(geom))
+    if not points:
+        raise ModelError(f"object spec {spec.modelname!r} has no collision geometry")
+    allp = np.vstack(points)
+    return allp.min(axis=0), allp.max(axis=0)
+
+
+def _primitive_corners(geom: mujoco.MjsGeom) -> np.ndarray:
+    """Corners of a primitive geom's bounding box in its body frame."""
+    s = np.asarray(geom.size, dtype=float)
+    kind = int(geom.type)
+    if kind == int(mujoco.mjtGeom.mjGEOM_SPHERE):
+        half = np.full(3, s[0])
+    elif kind == int(mujoco.mjtGeom.mjGEOM_BOX):
+        half = s[:3]
+    elif kind == int(mujoco.mjtGeom.mjGEOM_CYLINDER):
+        half = np.array([s[0], s[0], s[1]])
+    elif kind == int(mujoco.mjtGeom.mjGEOM_CAPSULE):
+        half = np.array([s[0], s[0], s[0] + s[1]])
+    else:
+        raise ModelError(f"geom {geom.name!r}: unsupported primitive type {kind}")
+    corners = np.array([[x, y, z] for x in (-1, 1) for y in (-1, 1) for z in (-1, 1)]) * half
+    rot = np.empty(9)
+    mujoco.mju_quat2Mat(rot, np.asarray(geom.quat, dtype=float))
+    return corners @ rot.reshape(3, 3).T + np.asarray(geom.pos, dtype=float)
