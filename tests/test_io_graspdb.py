@@ -13,9 +13,23 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from handsim.errors import FormatError, InputFileError, TrajectoryError
-from handsim.glove import SENSOR_NAMES, SENSORS, computed_dofs, discarded_sensors, driven_dofs
+from handsim.glove import (
+    SENSOR_NAMES,
+    SENSORS,
+    GloveCalibration,
+    apply_calibration,
+    computed_dofs,
+    discarded_sensors,
+    driven_dofs,
+)
 from handsim.io import read_trajectory
-from handsim.io.graspdb import GraspDBName, parse_graspdb_filename, read_graspdb_glove
+from handsim.io.graspdb import (
+    GraspDBName,
+    filename_datatype,
+    parse_graspdb_filename,
+    read_graspdb_glove,
+    read_graspdb_raw,
+)
 from handsim.skeleton import Dof, Joint, Skeleton
 
 REAL_TRIALS = {
@@ -26,6 +40,13 @@ REAL_TRIALS = {
 ORACLE_NO_EXT = "fk_oracle/16_14_ex01-rad-004-grasp-su06"
 DIP_DOFS = ("if_dip_flex", "mf_dip_flex", "rf_dip_flex", "lf_dip_flex")
 NAME = "01_ex01-rad-001-grasp-su01.txt"
+RAW_NAME = "01_ex01-raw-001-grasp-su01.txt"
+ADVICE = (
+    r"raw files hold uncalibrated 8-bit sensor counts, not radians, and need a calibration to become joint "
+    r"angles: pass one \(read_graspdb_glove\(path, calibration=\.\.\.\)\), e\.g\. estimated with "
+    r"handsim\.glove\.estimate_calibration from the actor's '_calib-' sequence, or read the matching '-rad-' "
+    r"file instead"
+)
 
 # --------------------------------------------------------------------------------------------------
 # Helpers
@@ -450,7 +471,9 @@ def test_seconds_outside_a_minute_are_an_error(tmp_path: Path, token: str) -> No
 
 def test_raw_file_by_name_is_refused_with_calibration_advice(tmp_path: Path) -> None:
     path = _write(tmp_path, _rows(2), name="01_ex01-raw-002-grasp-su01.txt")
-    with pytest.raises(FormatError, match=r"raw-count file .*need a calibration.*handsim calibrate"):
+    with pytest.raises(
+        FormatError, match=rf"^{path}: this is a raw-count file \('-raw-' in its name\); {ADVICE}$"
+    ):
         read_graspdb_glove(path)
 
 
@@ -460,8 +483,8 @@ def test_raw_counts_in_a_rad_named_file_are_refused(tmp_path: Path) -> None:
     lines = [_row(sensors=counts)]
     with pytest.raises(
         FormatError,
-        match=r":1 \[sensor T-TMCJ\]: value 101 exceeds 7 in magnitude, so this is a raw-count file.*"
-        r"need a calibration.*handsim calibrate",
+        match=r":1 \[sensor T-TMCJ\]: value 101 exceeds 7 in magnitude, so this is a raw-count file "
+        r"\(angles in radians satisfy \|x\| <= 2\*pi\), although its name says '-rad-'; " + ADVICE + "$",
     ):
         read_graspdb_glove(_write(tmp_path, lines))
 
@@ -479,6 +502,218 @@ def test_first_bad_row_is_reported(tmp_path: Path) -> None:
     lines[1] = _replace_token(lines[1], 11, "nan")
     with pytest.raises(FormatError, match=r":2 \[sensor I-MCPJ\]"):
         read_graspdb_glove(_write(tmp_path, lines))
+
+
+# --------------------------------------------------------------------------------------------------
+# Raw-count files
+
+# the spec's example raw row (§4.2.2) starts 101 114 128 107 136 94 0 0 119; the DIPs and I-AA read 0
+RAW_COUNTS = [
+    101,
+    114,
+    128,
+    107,
+    136,
+    94,
+    0,
+    0,
+    119,
+    97,
+    0,
+    88,
+    120,
+    99,
+    0,
+    140,
+    121,
+    93,
+    0,
+    77,
+    131,
+    125,
+    109,
+]
+DIP_AND_IAA = [6, 7, 10, 14, 18]
+
+
+def _raw_rows(n: int = 3) -> list[str]:
+    start = datetime(2014, 9, 12, 8, 49, 21, 712000)
+    rows = []
+    for i in range(n):
+        counts = [c + (i if c else 0) for c in RAW_COUNTS]
+        rows.append(
+            _row(start + timedelta(milliseconds=16 * i), "1" if i % 2 == 0 else "0", [str(c) for c in counts])
+        )
+    return rows
+
+
+def _calibration() -> GloveCalibration:
+    gains = tuple(-0.015 - 0.0001 * i for i in range(23))
+    offsets = tuple(100.0 + i for i in range(23))
+    return GloveCalibration(gains=gains, offsets=offsets, provenance="test calibration")
+
+
+@pytest.mark.parametrize(
+    ("name", "kind"),
+    [
+        ("01_ex01-raw-002-grasp-su01.txt", "raw"),
+        ("r_01_11_ex03-rad-004-grasp-su04.txt", "rad"),
+        ("su04_calib-raw-1.txt", "raw"),
+        ("motion.txt", None),
+        ("su04_calib-.txt", None),
+        ("x-rad-raw-y.txt", None),
+    ],
+)
+def test_filename_datatype_reads_rad_or_raw_from_the_name(name: str, kind: str | None) -> None:
+    assert filename_datatype(name) == kind
+
+
+def test_raw_file_with_calibration_reads_as_negated_calibrated_angles(tmp_path: Path) -> None:
+    path = _write(tmp_path, _raw_rows(3), name=RAW_NAME)
+    cal = _calibration()
+    traj = read_graspdb_glove(path, calibration=cal)
+    counts = _file_values(path)
+    angles = apply_calibration(counts, cal)
+    for sensor in SENSORS:
+        if sensor.dof is not None:
+            np.testing.assert_array_equal(traj.column(sensor.dof), -angles[:, sensor.index])
+    np.testing.assert_array_equal(traj.channels["P-Arch"], angles[:, 20])
+    assert traj.switch is not None
+    assert traj.switch.tolist() == [True, False, True]
+    assert traj.computed == DIP_DOFS
+    assert traj.notes[1] == (
+        "raw 8-bit counts converted to radians with the calibration 'test calibration' "
+        "(angle = gain * (raw - offset); no abduction coupling)"
+    )
+    assert traj.notes[3] == (
+        "I-DIPJ, M-DIPJ, R-DIPJ, L-DIPJ counts are 0 in this raw file (the 18-sensor glove does not measure "
+        "them), so their DoFs (listed as computed) hold the calibrated 0 counts; infer them with "
+        "handsim.glove.couple_dip"
+    )
+
+
+def test_raw_file_without_a_name_hint_reads_with_calibration(tmp_path: Path) -> None:
+    path = _write(tmp_path, _raw_rows(2), name="take.txt")
+    traj = read_graspdb_glove(path, calibration=_calibration())
+    assert traj.nframes == 2
+
+
+def test_rad_file_with_a_calibration_is_an_error(tmp_path: Path) -> None:
+    path = _write(tmp_path, _rows(2))
+    with pytest.raises(
+        FormatError,
+        match=rf"^{path}: the file name says it holds joint angles in radians \('-rad-'\), but a calibration "
+        r"was given: a calibration converts raw-count files only; read it without one$",
+    ):
+        read_graspdb_glove(path, calibration=_calibration())
+
+
+def test_real_rad_file_with_a_calibration_is_an_error(graspdb_dir: Path) -> None:
+    with pytest.raises(
+        FormatError,
+        match=r"the file name says it holds joint angles in radians \('-rad-'\), but a calibration",
+    ):
+        read_graspdb_glove(graspdb_dir / "01_ex01-rad-002-grasp-su01.txt", calibration=_calibration())
+
+
+def test_raw_named_file_holding_radians_is_an_error(tmp_path: Path) -> None:
+    path = _write(tmp_path, _rows(2), name=RAW_NAME)
+    with pytest.raises(
+        FormatError,
+        match=rf"^{path}:1 \[sensor T-TMCJ\]: expected a raw sensor count \(an integer from 0 to 255\), "
+        r"got '0\.01000'; the file name says raw \('-raw-'\), but this value is not a count: is it a file of "
+        r"angles in radians\?$",
+    ):
+        read_graspdb_glove(path, calibration=_calibration())
+
+
+def test_unnamed_file_of_radians_with_a_calibration_is_an_error(tmp_path: Path) -> None:
+    path = _write(tmp_path, _rows(2), name="take.txt")
+    with pytest.raises(
+        FormatError,
+        match=r":1 \[sensor T-TMCJ\]: expected a raw sensor count \(an integer from 0 to 255\), "
+        r"got '0\.01000'; a calibration was given, so the file must hold raw counts; a file of angles in "
+        r"radians is read without a calibration$",
+    ):
+        read_graspdb_glove(path, calibration=_calibration())
+
+
+@pytest.mark.parametrize(
+    ("token", "field"), [("256", "sensor W-AA"), ("-1", "sensor W-AA"), ("12.5", "sensor W-AA")]
+)
+def test_raw_value_that_is_not_an_8_bit_count_is_an_error(tmp_path: Path, token: str, field: str) -> None:
+    lines = _raw_rows(3)
+    lines[2] = _replace_token(lines[2], 29, token)
+    path = _write(tmp_path, lines, name=RAW_NAME)
+    with pytest.raises(
+        FormatError,
+        match=rf"^{path}:3 \[{field}\]: expected a raw sensor count \(an integer from 0 to 255\), "
+        rf"got '{token}'",
+    ):
+        read_graspdb_raw(path)
+
+
+def test_read_raw_returns_times_switch_and_integer_counts(tmp_path: Path) -> None:
+    path = _write(tmp_path, _raw_rows(3), name="su04_calib-.txt")
+    times, switch, counts = read_graspdb_raw(path)
+    np.testing.assert_allclose(times, [0.0, 0.016, 0.032], atol=1e-12)
+    assert switch.tolist() == [True, False, True]
+    assert counts.dtype == np.int64
+    assert counts.shape == (3, 23)
+    assert counts[0].tolist() == RAW_COUNTS
+    assert (counts[:, DIP_AND_IAA] == 0).all()
+
+
+def test_read_raw_of_a_rad_named_file_is_an_error(tmp_path: Path) -> None:
+    path = _write(tmp_path, _raw_rows(2))
+    with pytest.raises(
+        FormatError,
+        match=rf"^{path}: the file name says it holds joint angles in radians \('-rad-'\), not raw counts; "
+        r"read it with read_graspdb_glove$",
+    ):
+        read_graspdb_raw(path)
+
+
+def test_read_raw_of_real_rad_values_in_an_unnamed_file_is_an_error(
+    graspdb_dir: Path, tmp_path: Path
+) -> None:
+    path = tmp_path / "take.txt"
+    path.write_bytes((graspdb_dir / "01_ex01-rad-002-grasp-su01.txt").read_bytes())
+    with pytest.raises(
+        FormatError,
+        match=rf"^{path}:1 \[sensor T-TMCJ\]: expected a raw sensor count \(an integer from 0 to 255\), "
+        r"got '-0\.68112'; raw-count files hold 8-bit sensor counts; is this a file of angles in radians "
+        r"\(read it with read_graspdb_glove\)\?$",
+    ):
+        read_graspdb_raw(path)
+
+
+def test_read_raw_of_an_annotation_file_is_an_error(graspdb_dir: Path) -> None:
+    with pytest.raises(FormatError, match=r"phase annotation file \('_annot-' in its name\), not a motion"):
+        read_graspdb_raw(graspdb_dir / "01_11_ex03-rad-004-grasp-su04_annot-.txt")
+
+
+def test_empty_raw_file_says_raw_counts_are_expected(tmp_path: Path) -> None:
+    path = tmp_path / RAW_NAME
+    path.write_text("\n")
+    with pytest.raises(
+        FormatError,
+        match=rf"^{path}: empty file: expected rows of 30 blank-separated entries "
+        r"\(YYYY MM DD HH mm ss\.sssss switch, then 23 raw sensor counts\)$",
+    ):
+        read_graspdb_raw(path)
+
+
+def test_ten_thousand_raw_rows_parse_fast(tmp_path: Path) -> None:
+    start = datetime(2014, 9, 12, 8, 49, 21, 712000)
+    lines = [
+        _row(start + timedelta(milliseconds=16 * i), "1", [str(c) for c in RAW_COUNTS]) for i in range(10_000)
+    ]
+    path = _write(tmp_path, lines, name=RAW_NAME)
+    t0 = time.perf_counter()
+    recording = read_graspdb_raw(path)
+    assert time.perf_counter() - t0 < 0.5
+    assert recording.counts.shape == (10_000, 23)
 
 
 # --------------------------------------------------------------------------------------------------

@@ -9,13 +9,17 @@ Entry points:
 from __future__ import annotations
 
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 from handsim.errors import InputFileError
 from handsim.skeleton import Skeleton
 from handsim.trajectory import Trajectory
 
+if TYPE_CHECKING:
+    from handsim.glove.calibration import GloveCalibration
+
 SKELETON_SUFFIXES = {".xmlskel": "GraspDB14 skeleton", ".skel": "Tzionas/Ballan skeleton (+ .LIMITS)"}
-TRAJECTORY_SUFFIXES = {".txt": "GraspDB14 CyberGlove recording (radians)"}
+TRAJECTORY_SUFFIXES = {".txt": "GraspDB14 CyberGlove recording (radians, or raw counts with a calibration)"}
 
 
 def _suffix_or_error(path: Path, known: dict[str, str], what: str) -> str:
@@ -53,7 +57,9 @@ def read_skeleton(path: str | Path) -> Skeleton:
     return read_tzionas_skeleton(p)
 
 
-def read_trajectory(path: str | Path, skeleton: Skeleton | None = None) -> Trajectory:
+def read_trajectory(
+    path: str | Path, skeleton: Skeleton | None = None, calibration: GloveCalibration | None = None
+) -> Trajectory:
     """Read recorded hand motion as joint-angle targets.
 
     Args:
@@ -62,6 +68,8 @@ def read_trajectory(path: str | Path, skeleton: Skeleton | None = None) -> Traje
         skeleton: The hand the targets are for. Its DoF names become the trajectory's columns; DoFs the
             recording does not drive are held at 0 and listed in ``notes``. Without a skeleton, the
             columns are the DoFs the glove drives.
+        calibration: For a raw-count recording (``*-raw-*``): the glove calibration that converts counts
+            to radians (see :func:`handsim.glove.estimate_calibration`).
 
     Returns:
         The trajectory (times in s, targets in rad).
@@ -74,7 +82,7 @@ def read_trajectory(path: str | Path, skeleton: Skeleton | None = None) -> Traje
     _suffix_or_error(p, TRAJECTORY_SUFFIXES, "trajectory")
     from handsim.io.graspdb import read_graspdb_glove
 
-    return read_graspdb_glove(p, skeleton=skeleton)
+    return read_graspdb_glove(p, skeleton=skeleton, calibration=calibration)
 
 
 __all__ = ["read_skeleton", "read_trajectory"]

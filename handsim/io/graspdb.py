@@ -1,13 +1,19 @@
-"""Reader for GraspDB14 CyberGlove motion files (``*-rad-*.txt``) and their file names.
+"""Reader for GraspDB14 CyberGlove motion files (``*-rad-*.txt``, ``*-raw-*.txt``) and their file names.
 
 A motion file (spec §4.2.2, Table 4.3) has one row per sample, 30 blank-separated entries::
 
     YYYY MM DD HH mm ss.sssss switch  s0 s1 … s22
 
 the date and time of the sample, the glove's switch state (0/1), then the 23 sensor readings of
-:data:`handsim.glove.SENSORS` in radians (``rad`` files) or as 8-bit counts (``raw`` files, which need a
-calibration and are refused here). Rows end with a trailing blank in the original files; it is not
-required.
+:data:`handsim.glove.SENSORS`: joint angles in radians (``rad`` files) or 8-bit sensor counts, integers
+0..255 (``raw`` files, and the recorded calibration sequences, same row format). Rows end with a
+trailing blank in the original files; it is not required.
+
+``rad`` or ``raw`` is read from the file name (``-rad-``/``-raw-``, :func:`filename_datatype`) and checked
+against the values: a ``rad`` file holds no value above :data:`RAW_LIMIT` in magnitude, a ``raw`` file
+only integer counts; a disagreement is an error. A ``raw`` file becomes joint angles only with a
+calibration (:func:`read_graspdb_glove` with ``calibration=``, see :mod:`handsim.glove.calibration`);
+:func:`read_graspdb_raw` returns its counts as they are, e.g. to estimate a calibration.
 
 The sensor → DoF conventions (every angle negated, ``T-TMCJ`` about local y, ``I-AA``/``P-Arch`` kept as
 channels, DIPs computed) are those of the GraspDB14 MATLAB tools; see :mod:`handsim.glove.sensors`.
@@ -19,10 +25,12 @@ import re
 from dataclasses import dataclass
 from datetime import datetime
 from pathlib import Path
+from typing import NamedTuple
 
 import numpy as np
 
 from handsim.errors import FormatError, TrajectoryError
+from handsim.glove.calibration import GloveCalibration, apply_calibration
 from handsim.glove.sensors import SENSOR_NAMES, SENSORS, computed_dofs, discarded_sensors, driven_dofs
 from handsim.io._text import parse_float, read_bytes, sha256_of
 from handsim.skeleton import Skeleton
@@ -33,6 +41,9 @@ NTOKENS = 30
 
 RAW_LIMIT = 7.0
 """A sensor value with a larger magnitude marks a raw-count file (radians satisfy |x| ≤ 2π)."""
+
+RAW_MAX = 255
+"""Largest raw sensor count (8 bits)."""
 
 _TIMESTAMP_FIELDS = ("year", "month", "day", "hour", "minute", "second")
 FIELDS: tuple[str, ...] = (
@@ -46,8 +57,11 @@ _SWITCH = 6
 _FIRST_SENSOR = 7
 _RAW_ADVICE = (
     "raw files hold uncalibrated 8-bit sensor counts, not radians, and need a calibration to become "
-    "joint angles (handsim calibrate, a later feature); read the matching '-rad-' file instead"
+    "joint angles: pass one (read_graspdb_glove(path, calibration=...)), e.g. estimated with "
+    "handsim.glove.estimate_calibration from the actor's '_calib-' sequence, or read the matching '-rad-' "
+    "file instead"
 )
+_DIP_SENSORS = tuple(s for s in SENSORS if s.computed)
 
 
 # --------------------------------------------------------------------------------------------------
@@ -143,8 +157,85 @@ def parse_graspdb_filename(name: str | Path) -> GraspDBName | None:
 # Motion files
 
 
-def read_graspdb_glove(path: str | Path, skeleton: Skeleton | None = None) -> Trajectory:
-    """Read a GraspDB14 CyberGlove recording in radians as joint-angle targets.
+def filename_datatype(path: str | Path) -> str | None:
+    """What a file name says the values are: ``"rad"``, ``"raw"``, or None when it does not say.
+
+    Args:
+        path: A file name or path; a GraspDB14 name (:func:`parse_graspdb_filename`) or any name holding
+            ``-rad-`` or ``-raw-`` (case ignored).
+
+    Returns:
+        ``"rad"``, ``"raw"`` or None.
+    """
+    parsed = parse_graspdb_filename(path)
+    if parsed is not None:
+        return parsed.datatype
+    lowered = Path(path).name.lower()
+    kinds = [k for k in ("rad", "raw") if f"-{k}-" in lowered]
+    return kinds[0] if len(kinds) == 1 else None
+
+
+class RawGloveRecording(NamedTuple):
+    """The content of a raw-count CyberGlove file (motion or calibration sequence).
+
+    Attributes:
+        times: Seconds since the first row, shape (T,).
+        switch: Switch state per row, shape (T,), bool.
+        counts: Raw 8-bit sensor counts, shape (T, 23), int64, columns in
+            :data:`~handsim.glove.SENSOR_NAMES` order.
+    """
+
+    times: np.ndarray
+    switch: np.ndarray
+    counts: np.ndarray
+
+
+def read_graspdb_raw(path: str | Path) -> RawGloveRecording:
+    """Read a raw-count CyberGlove file: a ``*-raw-*`` motion or a recorded calibration sequence.
+
+    Args:
+        path: The file (rows as in a motion file, sensor values integer counts 0..255).
+
+    Returns:
+        ``(times, switch, counts)``.
+
+    Raises:
+        InputFileError: The file is missing or unreadable.
+        FormatError: The file name says ``-rad-`` or ``_annot-``, the file is empty, a row does not have 30
+            entries, a time stamp or switch is invalid (as for :func:`read_graspdb_glove`), or a sensor
+            value is not an integer count 0..255 (then it is probably a file of angles in radians). The
+            message names the file, the 1-based line and the field.
+    """
+    p = Path(path)
+    data = read_bytes(p)
+    _refuse_annotation(p)
+    if filename_datatype(p) == "rad":
+        raise FormatError(
+            p,
+            "the file name says it holds joint angles in radians ('-rad-'), not raw counts; "
+            "read it with read_graspdb_glove",
+        )
+    why = (
+        "the file name says raw ('-raw-'), but this value is not a count: is it a file of angles in radians?"
+        if filename_datatype(p) == "raw"
+        else "raw-count files hold 8-bit sensor counts; is this a file of angles in radians (read it with "
+        "read_graspdb_glove)?"
+    )
+    values, times, _ = _parse(p, data, "raw", why)
+    return RawGloveRecording(
+        times=times,
+        switch=values[:, _SWITCH] == 1.0,
+        counts=values[:, _FIRST_SENSOR:].astype(np.int64),
+    )
+
+
+def read_graspdb_glove(
+    path: str | Path, skeleton: Skeleton | None = None, calibration: GloveCalibration | None = None
+) -> Trajectory:
+    """Read a GraspDB14 CyberGlove recording as joint-angle targets.
+
+    A ``rad`` file is read as it is. A ``raw`` file needs ``calibration``: its counts become angles with
+    :func:`handsim.glove.apply_calibration`, then the same conventions apply.
 
     Conventions (those of the GraspDB14 MATLAB tools, see :mod:`handsim.glove.sensors`):
 
@@ -153,17 +244,21 @@ def read_graspdb_glove(path: str | Path, skeleton: Skeleton | None = None) -> Tr
       does, although the report's Table 5.1 says local z.
     * ``I-AA`` and ``P-Arch`` drive no DoF; their values (as in the file, not negated) are kept in
       :attr:`Trajectory.channels` under the sensor names.
-    * ``I-DIPJ``, ``M-DIPJ``, ``R-DIPJ`` and ``L-DIPJ`` are inferred by the glove software (the 18-sensor
-      glove does not measure them); their DoFs are listed in :attr:`Trajectory.computed`.
+    * ``I-DIPJ``, ``M-DIPJ``, ``R-DIPJ`` and ``L-DIPJ`` are not measured by the 18-sensor glove; their DoFs
+      are listed in :attr:`Trajectory.computed`. A ``rad`` file holds the glove software's inferred
+      values; a ``raw`` file holds 0 counts there, so after calibration they are 0 until
+      :func:`handsim.glove.couple_dip` infers them (a note says so).
 
     Times are seconds since the first row, from the full date and time of each row (minute, hour and
     day changes are handled). All targets are marked valid.
 
     Args:
-        path: The recording (``*-rad-*.txt``; any name, with or without extension, is accepted).
+        path: The recording (``*-rad-*.txt`` or, with a calibration, ``*-raw-*.txt``; any name, with or
+            without extension, is accepted: the values then tell ``rad`` from ``raw``).
         skeleton: The hand the targets are for. When given, the columns are ``skeleton.dof_names`` and
             DoFs the glove does not drive are held at 0 (listed in ``notes``). Without it, the columns
             are :func:`handsim.glove.driven_dofs` in sensor order.
+        calibration: Converts a raw-count file; must be None for a file in radians.
 
     Returns:
         The trajectory, with ``switch``, ``source`` and ``sha256`` of the file bytes set.
@@ -172,50 +267,56 @@ def read_graspdb_glove(path: str | Path, skeleton: Skeleton | None = None) -> Tr
         InputFileError: The file is missing or unreadable.
         FormatError: The file is empty, a row does not have 30 entries, an entry is not a finite number,
             the switch is not 0 or 1, a time stamp is not a valid date and time or not after the
-            previous row's, or the file is a raw-count file (``-raw-`` in its name, or a sensor value
-            with magnitude above 7). The message names the file, the 1-based line and the field.
+            previous row's; without a calibration, the file is a raw-count file (``-raw-`` in its name,
+            or a sensor value with magnitude above 7); with one, the name says ``-rad-`` or a sensor value
+            is not an integer count 0..255. The message names the file, the 1-based line and the field.
         TrajectoryError: ``skeleton`` lacks a DoF the glove drives (the message lists the missing DoFs
             and the skeleton's DoFs).
     """
     p = Path(path)
     data = read_bytes(p)
-    lowered = p.name.lower()
-    if "_annot-" in lowered:
-        raise FormatError(
-            p, "this is a GraspDB14 phase annotation file ('_annot-' in its name), not a motion recording"
+    _refuse_annotation(p)
+    named = filename_datatype(p)
+    if calibration is None:
+        if named == "raw":
+            raise FormatError(p, f"this is a raw-count file ('-raw-' in its name); {_RAW_ADVICE}")
+        why = ", although its name says '-rad-'" if named == "rad" else ""
+        values, times, rows = _parse(p, data, "rad", why)
+        sensors = values[:, _FIRST_SENSOR:]
+    else:
+        if named == "rad":
+            raise FormatError(
+                p,
+                "the file name says it holds joint angles in radians ('-rad-'), but a calibration was "
+                "given: a calibration converts raw-count files only; read it without one",
+            )
+        why = (
+            "the file name says raw ('-raw-'), but this value is not a count: is it a file of angles in "
+            "radians?"
+            if named == "raw"
+            else "a calibration was given, so the file must hold raw counts; a file of angles in radians is "
+            "read without a calibration"
         )
-    if "-raw-" in lowered:
-        raise FormatError(p, f"this is a raw-count file ('-raw-' in its name); {_RAW_ADVICE}")
-    # Invalid UTF-8 can only sit in a token that is not a number; it shows as U+FFFD in that error.
-    text = data.decode("utf-8", errors="replace")
-    linenos, rows = _split_rows(text)
-    if not rows:
-        raise FormatError(
-            p,
-            f"empty file: expected rows of {NTOKENS} blank-separated entries "
-            "(YYYY MM DD HH mm ss.sssss switch, then 23 sensor values in radians)",
-        )
-    values = _fast_parse(rows)
-    times = _fast_times(values) if values is not None else None
-    if values is None or times is None:
-        values = _checked_parse(p, linenos, rows)  # raises a precise FormatError on the first bad row
-        times = _fast_times(values)
-        if times is None:  # pragma: no cover - the row-by-row check covers every fast-path check
-            raise FormatError(p, "rows failed validation, but no single row could be blamed")
+        values, times, rows = _parse(p, data, "raw", why)
+        sensors = apply_calibration(values[:, _FIRST_SENSOR:], calibration)
 
-    sensors = values[:, _FIRST_SENSOR:]
     driven = driven_dofs()
     by_dof = {s.dof: s for s in SENSORS if s.dof is not None}
-    notes = [
-        f"times are seconds since the first row's time stamp {_stamp(rows[0])}",
+    notes = [f"times are seconds since the first row's time stamp {_stamp(rows[0])}"]
+    if calibration is not None:
+        notes += _calibration_notes(calibration, values[:, _FIRST_SENSOR:])
+    notes += [
         "every sensor angle was negated (target = -file value), as in the GraspDB14 MATLAB tools",
         "T-TMCJ drives th_tmc_pron (the thumb TMC joint's local y axis, as the GraspDB14 MATLAB code "
         "does; the report's Table 5.1 says z)",
         "I-AA and P-Arch drive no DoF (discarded by the GraspDB14 sensor map); their file values, not "
         "negated, are kept in channels",
-        f"{', '.join(s.name for s in SENSORS if s.computed)} are not measured by the 18-sensor glove "
-        "(the glove software infers them); their DoFs are listed as computed",
     ]
+    if calibration is None:
+        notes.append(
+            f"{', '.join(s.name for s in _DIP_SENSORS)} are not measured by the 18-sensor glove "
+            "(the glove software infers them); their DoFs are listed as computed"
+        )
     if skeleton is None:
         dof_names = driven
         targets = -sensors[:, [by_dof[d].index for d in driven]]
@@ -249,6 +350,69 @@ def read_graspdb_glove(path: str | Path, skeleton: Skeleton | None = None) -> Tr
     )
 
 
+def _calibration_notes(calibration: GloveCalibration, counts: np.ndarray) -> list[str]:
+    """Notes on a raw file converted with a calibration."""
+    coupled = [f"{c.sensor} k={c.k:g}" for c in calibration.coupling if c.k != 0.0]
+    notes = [
+        f"raw 8-bit counts converted to radians with the calibration '{calibration.provenance}' "
+        "(angle = gain * (raw - offset)"
+        + (f"; abduction coupling {', '.join(coupled)})" if coupled else "; no abduction coupling)"),
+        "MI-AA, RM-AA and LR-AA are the calibrated angles between two fingers; the glove software behind "
+        "the rad files spreads them over per-finger abductions instead (docs/cyberglove.md)",
+    ]
+    dips = [s.index for s in _DIP_SENSORS]
+    names = ", ".join(s.name for s in _DIP_SENSORS)
+    if np.all(counts[:, dips] == 0):
+        notes.append(
+            f"{names} counts are 0 in this raw file (the 18-sensor glove does not measure them), so their "
+            "DoFs (listed as computed) hold the calibrated 0 counts; infer them with handsim.glove.couple_dip"
+        )
+    else:
+        notes.append(
+            f"{names} counts are not all 0 (a 22-sensor glove?); their DoFs are still listed as computed"
+        )
+    return notes
+
+
+def _refuse_annotation(p: Path) -> None:
+    if "_annot-" in p.name.lower():
+        raise FormatError(
+            p, "this is a GraspDB14 phase annotation file ('_annot-' in its name), not a motion recording"
+        )
+
+
+def _parse(p: Path, data: bytes, kind: str, why: str) -> tuple[np.ndarray, np.ndarray, list[list[str]]]:
+    """Rows as an (N, 30) array, times since the first row, and the tokens; raises on the first bad row.
+
+    Args:
+        p: The file, for messages.
+        data: Its bytes.
+        kind: ``"rad"`` (sensor values in radians, |x| <= :data:`RAW_LIMIT`) or ``"raw"`` (integer counts
+            0..:data:`RAW_MAX`).
+        why: Text added to the message of a sensor value that does not fit ``kind``.
+    """
+    # Invalid UTF-8 can only sit in a token that is not a number; it shows as U+FFFD in that error.
+    text = data.decode("utf-8", errors="replace")
+    linenos, rows = _split_rows(text)
+    if not rows:
+        what = "23 sensor values in radians" if kind == "rad" else "23 raw sensor counts"
+        raise FormatError(
+            p,
+            f"empty file: expected rows of {NTOKENS} blank-separated entries "
+            f"(YYYY MM DD HH mm ss.sssss switch, then {what})",
+        )
+    values = _fast_parse(rows, kind)
+    times = _fast_times(values) if values is not None else None
+    if values is None or times is None:
+        values = _checked_parse(
+            p, linenos, rows, kind, why
+        )  # raises a precise FormatError on the first bad row
+        times = _fast_times(values)
+        if times is None:  # pragma: no cover - the row-by-row check covers every fast-path check
+            raise FormatError(p, "rows failed validation, but no single row could be blamed")
+    return values, times, rows
+
+
 def _split_rows(text: str) -> tuple[list[int], list[list[str]]]:
     """Tokens of every non-blank line, with the 1-based line numbers."""
     linenos: list[int] = []
@@ -266,7 +430,7 @@ def _stamp(tokens: list[str]) -> str:
     return " ".join(tokens[:6])
 
 
-def _fast_parse(rows: list[list[str]]) -> np.ndarray | None:
+def _fast_parse(rows: list[list[str]], kind: str) -> np.ndarray | None:
     """All rows as an (N, 30) float array, or None if any row is malformed (then check row by row)."""
     if any(len(r) != NTOKENS for r in rows):
         return None
@@ -279,7 +443,10 @@ def _fast_parse(rows: list[list[str]]) -> np.ndarray | None:
     switch = values[:, _SWITCH]
     if not np.all((switch == 0.0) | (switch == 1.0)):
         return None
-    if np.any(np.abs(values[:, _FIRST_SENSOR:]) > RAW_LIMIT):
+    sensors = values[:, _FIRST_SENSOR:]
+    if kind == "rad" and np.any(np.abs(sensors) > RAW_LIMIT):
+        return None
+    if kind == "raw" and not np.all((sensors >= 0) & (sensors <= RAW_MAX) & (sensors == np.round(sensors))):
         return None
     return values
 
@@ -317,7 +484,7 @@ def _minute(fields: np.ndarray | list[float]) -> datetime:
     return datetime(*ints)
 
 
-def _checked_parse(path: Path, linenos: list[int], rows: list[list[str]]) -> np.ndarray:
+def _checked_parse(path: Path, linenos: list[int], rows: list[list[str]], kind: str, why: str) -> np.ndarray:
     """Parse row by row, raising a :class:`FormatError` that names line and field at the first problem.
 
     This is the slow path, taken only when the vectorised parse found something wrong; it applies the
@@ -358,11 +525,18 @@ def _checked_parse(path: Path, linenos: list[int], rows: list[list[str]]) -> np.
                 path, f"expected 0 (off) or 1 (on), got {tokens[_SWITCH]!r}", line=line, field="switch"
             )
         for i in range(_FIRST_SENSOR, NTOKENS):
-            if abs(row[i]) > RAW_LIMIT:
+            if kind == "rad" and abs(row[i]) > RAW_LIMIT:
                 raise FormatError(
                     path,
                     f"value {tokens[i]} exceeds {RAW_LIMIT:g} in magnitude, so this is a raw-count file "
-                    f"(angles in radians satisfy |x| <= 2*pi); {_RAW_ADVICE}",
+                    f"(angles in radians satisfy |x| <= 2*pi){why}; {_RAW_ADVICE}",
+                    line=line,
+                    field=FIELDS[i],
+                )
+            if kind == "raw" and not (row[i].is_integer() and 0 <= row[i] <= RAW_MAX):
+                raise FormatError(
+                    path,
+                    f"expected a raw sensor count (an integer from 0 to {RAW_MAX}), got {tokens[i]!r}; {why}",
                     line=line,
                     field=FIELDS[i],
                 )
@@ -382,4 +556,15 @@ def _checked_parse(path: Path, linenos: list[int], rows: list[list[str]]) -> np.
     return values
 
 
-__all__ = ["FIELDS", "NTOKENS", "RAW_LIMIT", "GraspDBName", "parse_graspdb_filename", "read_graspdb_glove"]
+__all__ = [
+    "FIELDS",
+    "NTOKENS",
+    "RAW_LIMIT",
+    "RAW_MAX",
+    "GraspDBName",
+    "RawGloveRecording",
+    "filename_datatype",
+    "parse_graspdb_filename",
+    "read_graspdb_glove",
+    "read_graspdb_raw",
+]
