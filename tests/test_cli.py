@@ -47,3 +47,49 @@ def test_build_hand_reports_a_missing_file_and_exits_1(capsys, tmp_path):
 def test_build_hand_refuses_both_a_file_and_default(tmp_path):
     with pytest.raises(SystemExit, match="not both"):
         main(["build", "hand", str(tmp_path / "a.xmlskel"), "--default"])
+
+
+def test_catalog_lists_every_object_with_size_and_mass(capsys):
+    from handsim.builders import catalog
+
+    assert main(["catalog"]) == 0
+    out = capsys.readouterr().out
+    for name in catalog.names():
+        assert name in out
+    assert "tennis_ball      1   graspdb14  58 g" in out
+
+
+def test_build_object_from_catalogue_writes_mjcf_that_compiles(capsys, tmp_path):
+    out_file = tmp_path / "mug.xml"
+    assert main(["build", "object", "mug", "-o", str(out_file)]) == 0
+    out = capsys.readouterr().out
+    assert "collision 16 hulls (cached" in out and "mass       340.0 g" in out
+    model = mujoco.MjModel.from_xml_path(str(out_file))
+    assert model.body("body").mass[0] == pytest.approx(0.340)
+
+
+def test_build_object_from_mesh_file_needs_units(capsys, tmp_path):
+    import trimesh
+
+    path = tmp_path / "block.stl"
+    trimesh.creation.box((40.0, 30.0, 20.0)).export(path)
+    assert main(["build", "object", str(path)]) == 1
+    assert "give the mesh's units ('m' or 'mm')" in capsys.readouterr().err
+    assert main(["build", "object", str(path), "--units", "m"]) == 1
+    assert "are the coordinates in mm? (pass units='mm')" in capsys.readouterr().err
+    assert main(["build", "object", str(path), "--units", "mm", "--density", "500"]) == 0
+    assert "mass       12.0 g" in capsys.readouterr().out
+
+
+def test_build_object_with_unknown_name_lists_the_catalogue(capsys):
+    assert main(["build", "object", "teapot"]) == 1
+    err = capsys.readouterr().err
+    assert err.startswith("handsim: error: unknown object 'teapot'; catalogue objects are: bottle, ")
+
+
+def test_build_scene_with_hand_and_object_writes_mjcf_that_compiles(capsys, tmp_path):
+    out_file = tmp_path / "scene.xml"
+    assert main(["build", "scene", "--object", "tennis_ball", "-o", str(out_file)]) == 0
+    model = mujoco.MjModel.from_xml_path(str(out_file))
+    assert model.body("obj/body") is not None and model.body("hand/root") is not None
+    assert model.nu == 27

@@ -8,7 +8,8 @@ split into convex pieces. :func:`decompose` does that:
   which daemonic pool workers and Ray tasks cannot use). The child is killed after
   :attr:`DecompositionParams.timeout_s`, and a CoACD crash (it aborts the process on some inputs)
   becomes a :class:`DecompositionError` naming the mesh instead of the death of the caller.
-- Results are cached in ``cache_dir/coacd/<key[:2]>/<key>.npz``, keyed by :func:`cache_key`. Entries
+- Results are cached in ``cache_dir/coacd/<key[:2]>/<key>.npz``, keyed by :func:`cache_key`, with the
+  catalogue's objects pre-decomposed in a read-only bundled cache (:func:`bundled_entry`). Entries
   are written atomically and carry a checksum; a corrupt entry is deleted, rebuilt and reported in
   :attr:`Decomposition.notes`. Only successes are cached.
 - Every hull returned is recomputed by qhull (consistent outward faces) and has at least 4
@@ -47,12 +48,15 @@ import trimesh
 from scipy.spatial import QhullError
 from tqdm import tqdm
 
+from handsim.assets import ASSETS_DIR
 from handsim.errors import MeshError
 from handsim.mesh import FLATNESS_TOL, Mesh
 
 CACHE_FORMAT_VERSION = 1  # bump when the entry layout or the hull post-processing changes
 CONVEX_RTOL = 1e-3  # within 0.1 % of its hull's volume a mesh counts as convex (tessellation dents)
 FAULT_ENV = "HANDSIM_COACD_WORKER_FAULT"  # private test hook read by the worker (abort, empty, garbage)
+
+BUNDLED_CACHE_DIR = ASSETS_DIR / "coacd_cache"  # read-only entries for the catalogue, see bundled_entry
 
 _WORKER = Path(__file__).with_name("_coacd_worker.py")
 _PREPROCESS_MODES = ("auto", "on", "off")
@@ -194,6 +198,16 @@ class Decomposition:
     notes: tuple[str, ...] = field(default=())
 
 
+def bundled_entry(key: str) -> Path:
+    """Where handsim's read-only cache of catalogue hulls would hold the entry ``key``.
+
+    The catalogue's concave objects are decomposed once, by ``scripts/bundle_catalog_hulls.py``, and the
+    entries ship in ``handsim/assets/coacd_cache`` so that building them is instant; the key includes the
+    CoACD version, so another version decomposes anew.
+    """
+    return BUNDLED_CACHE_DIR / "coacd" / key[:2] / f"{key}.npz"
+
+
 def default_cache_dir() -> Path:
     """The folder of handsim's on-disk caches.
 
@@ -296,6 +310,16 @@ def decompose(
                 notes.append(f"cache entry {path} was corrupt ({e}) and was rebuilt")
                 with contextlib.suppress(OSError):  # the rebuilt entry replaces it anyway
                     path.unlink(missing_ok=True)
+            else:
+                return Decomposition(
+                    hulls=hulls, key=key, from_cache=True, coacd_seconds=coacd_seconds, notes=old_notes
+                )
+        bundled = bundled_entry(key)
+        if bundled.exists():
+            try:
+                hulls, coacd_seconds, old_notes = _read_entry(bundled)
+            except _CorruptEntryError as e:
+                notes.append(f"bundled cache entry {bundled} is corrupt ({e}); decomposing anew")
             else:
                 return Decomposition(
                     hulls=hulls, key=key, from_cache=True, coacd_seconds=coacd_seconds, notes=old_notes
@@ -482,6 +506,9 @@ def _wait(proc: subprocess.Popen, timeout_s: float, start: float, name: str, pro
         desc=f"CoACD {name}",
         bar_format="{desc}: {elapsed}{postfix}",
         file=sys.stderr,
+        mininterval=0.5
+        if sys.stderr.isatty()
+        else 30.0,  # a log file gets a line every 30 s, not 10 a second
         disable=not progress,
     ) as bar:
         while True:

@@ -36,7 +36,7 @@ class ModelSummary:
         collision_geoms: Geoms with non-zero contype or conaffinity.
         sites: Sites.
         mass: Total mass, kg.
-        bbox_min: Lower corner of the axis-aligned bounding box of all geoms at qpos0, metres.
+        bbox_min: Lower corner of the axis-aligned bounding box of all geoms but planes at qpos0, metres.
         bbox_max: Upper corner, metres.
     """
 
@@ -75,8 +75,15 @@ def summarize(model: mujoco.MjModel) -> ModelSummary:
     corners = np.array([[sx, sy, sz] for sx in (-1, 1) for sy in (-1, 1) for sz in (-1, 1)], dtype=float)
     points = []
     for g in range(model.ngeom):
-        center, half = model.geom_aabb[g, :3], model.geom_aabb[g, 3:]
-        local = center + corners * half
+        if model.geom_type[g] == mujoco.mjtGeom.mjGEOM_PLANE:
+            continue  # an infinite floor has no extent
+        mesh = model.geom_dataid[g] if model.geom_type[g] == mujoco.mjtGeom.mjGEOM_MESH else -1
+        if mesh >= 0:  # the mesh's own vertices: tighter than its box in the (rotated) inertial frame
+            start = model.mesh_vertadr[mesh]
+            local = model.mesh_vert[start : start + model.mesh_vertnum[mesh]]
+        else:
+            center, half = model.geom_aabb[g, :3], model.geom_aabb[g, 3:]
+            local = center + corners * half
         points.append(data.geom_xpos[g] + local @ data.geom_xmat[g].reshape(3, 3).T)
     allpts = np.vstack(points) if points else np.zeros((1, 3))
     collision = int(np.sum((model.geom_contype != 0) | (model.geom_conaffinity != 0)))

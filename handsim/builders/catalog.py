@@ -1,0 +1,174 @@
+"""The object catalogue: GraspDB14's objects, the bundled Tzionas objects, ARCTIC templates, any mesh file.
+
+* :func:`get` — a catalogue object by name (``"tennis_ball"``, ``"mug"``, ``"tzionas_cube"`` …);
+* :func:`get_graspdb` — a GraspDB14 object by its id in the report's Table 4.1;
+* :func:`entries` — every catalogue object with its size and mass (what ``handsim catalog`` prints);
+* :func:`arctic` — an ARCTIC template folder (ARCTIC cannot be redistributed; point at your copy);
+* :func:`resolve` — what the command line accepts: a catalogue name, an ARCTIC template folder, a
+  Tzionas ``.SKEL`` or a mesh file.
+
+All return :class:`handsim.object_model.ObjectModel`; :func:`handsim.builders.build_object` builds them.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass, replace
+from pathlib import Path
+
+from handsim.assets import TZIONAS_DIR
+from handsim.builders.graspdb_objects import (
+    GRASPDB_OBJECTS,
+    UnknownObjectError,
+    graspdb_object,
+)
+from handsim.errors import InputFileError
+from handsim.object_model import ObjectModel, mesh_object
+
+DEFAULT_DENSITY = 1000.0
+"""kg/m³ for a mesh file given neither density nor mass (water; plastics are 900–1400)."""
+
+TZIONAS_OBJECTS = {
+    "tzionas_cube": ("Models/20/Model_Object_Cube.SKEL", "the 53 mm cube of Tzionas et al. sequence 20"),
+    "tzionas_pipe": ("Models/17/Model_Object_Pipe_Gray.SKEL", "the two-part bendable pipe of sequence 17"),
+}
+
+
+@dataclass(frozen=True)
+class CatalogEntry:
+    """One catalogue object, described without building it.
+
+    Attributes:
+        name: Catalogue name.
+        source: ``"graspdb14"`` or ``"tzionas"``.
+        description: What the object is.
+        size: Key dimensions, e.g. ``"Ø 64 mm"``.
+        mass_kg: Mass in kg, or None when it is computed from an assumed density.
+        graspdb_id: The GraspDB14 object id, or None.
+        load: Makes the object model.
+    """
+
+    name: str
+    source: str
+    description: str
+    size: str
+    mass_kg: float | None
+    graspdb_id: int | None
+    load: Callable[[], ObjectModel]
+
+
+def _tzionas_model(name: str) -> ObjectModel:
+    from handsim.io.tzionas_objects import read_tzionas_object
+
+    model = read_tzionas_object(TZIONAS_DIR / TZIONAS_OBJECTS[name][0])
+    return replace(model, name=name)
+
+
+def entries() -> tuple[CatalogEntry, ...]:
+    """Every catalogue object: GraspDB14's in Table 4.1 order, then the Tzionas objects."""
+    graspdb = tuple(
+        CatalogEntry(
+            name=o.name,
+            source="graspdb14",
+            description=o.description,
+            size=o.size_note,
+            mass_kg=o.mass_kg,
+            graspdb_id=o.graspdb_id,
+            load=o.object_model,
+        )
+        for o in GRASPDB_OBJECTS
+    )
+    tzionas = tuple(
+        CatalogEntry(
+            name=name,
+            source="tzionas",
+            description=description,
+            size="53 mm cube" if name == "tzionas_cube" else "350 mm × Ø 48 mm, bends at the middle ±170°",
+            mass_kg=None,
+            graspdb_id=None,
+            load=lambda name=name: _tzionas_model(name),
+        )
+        for name, (_, description) in TZIONAS_OBJECTS.items()
+    )
+    return graspdb + tzionas
+
+
+def names() -> tuple[str, ...]:
+    """Names of every catalogue object."""
+    return tuple(e.name for e in entries())
+
+
+def get(name: str) -> ObjectModel:
+    """A catalogue object by name.
+
+    Raises:
+        UnknownObjectError: No such object; the message lists the valid names.
+    """
+    for entry in entries():
+        if entry.name == name:
+            return entry.load()
+    raise UnknownObjectError(f"unknown object {name!r}; catalogue objects are: {', '.join(sorted(names()))}")
+
+
+def get_graspdb(object_id: int) -> ObjectModel:
+    """A GraspDB14 object by its id (the report's Table 4.1; file names carry it).
+
+    Raises:
+        UnknownObjectError: No such id; the message lists the valid ids.
+    """
+    return graspdb_object(object_id).object_model()
+
+
+def arctic(folder: str | Path, *, density: float | None = None, mass: float | None = None) -> ObjectModel:
+    """An ARCTIC object template (``…/meta/object_vtemplates/<name>/``); see :mod:`handsim.io.arctic`."""
+    from handsim.io.arctic import read_arctic_template
+
+    return read_arctic_template(folder, density=density, mass=mass)
+
+
+def resolve(
+    what: str | Path,
+    *,
+    units: str | None = None,
+    density: float | None = None,
+    mass: float | None = None,
+) -> ObjectModel:
+    """An object from a catalogue name, an ARCTIC template folder, a Tzionas ``.SKEL`` or a mesh file.
+
+    Args:
+        what: The name or path.
+        units: A mesh file's units, ``"m"`` or ``"mm"`` (required for mesh files).
+        density: Density in kg/m³ for a mesh file (default 1000, water) or to override an ARCTIC or
+            Tzionas default.
+        mass: Total mass in kg instead of a density (the mesh may then be open).
+
+    Returns:
+        The object model.
+
+    Raises:
+        UnknownObjectError: Not a path and not a catalogue name (the message lists the names).
+        InputFileError: A mesh file without ``units``.
+    """
+    path = Path(what)
+    if path.is_dir():
+        return arctic(path, density=density, mass=mass)
+    if path.suffix.lower() == ".skel" and path.is_file():
+        from handsim.io.tzionas_objects import read_tzionas_object
+
+        return read_tzionas_object(path, density=density)
+    if path.suffix.lower() in {".obj", ".off", ".stl", ".ply"}:
+        from handsim.io.mesh import read_mesh
+
+        if units is None:
+            raise InputFileError(
+                f"{path}: give the mesh's units ('m' or 'mm'); a wrong guess scales it 1000×"
+            )
+        mesh = read_mesh(path, units, require_watertight=mass is None)
+        assumed = mass is None and density is None
+        model = mesh_object(mesh, density=DEFAULT_DENSITY if assumed else density, mass=mass)
+        if assumed:
+            model = replace(
+                model, notes=(*model.notes, f"no density or mass given; {DEFAULT_DENSITY:g} kg/m³ assumed")
+            )
+        return model
+    return get(str(what))

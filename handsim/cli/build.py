@@ -1,0 +1,226 @@
+"""``handsim build hand|object|scene``: build MuJoCo models and write them as MJCF."""
+
+from __future__ import annotations
+
+import argparse
+
+from handsim.cli._common import add_hand_size, write_text
+
+
+def _hand_spec(skeleton_path: str | None, args: argparse.Namespace):
+    from handsim.builders import build_hand, default_hand
+    from handsim.io import read_skeleton
+
+    if skeleton_path is None:
+        return default_hand(args.hand_length, getattr(args, "hand_breadth", None), mass=args.mass), None
+    skeleton = read_skeleton(skeleton_path)
+    return build_hand(skeleton, mass=args.mass, collision=args.collision), skeleton
+
+
+def _print_model(spec) -> None:
+    from handsim.sim import compile_spec, summarize
+
+    for line in summarize(compile_spec(spec)).lines():
+        print(line)
+
+
+def _build_hand(args: argparse.Namespace) -> int:
+    if args.skeleton is not None and args.default:
+        raise SystemExit("handsim build hand: give a SKELETON file or --default, not both")
+    if args.skeleton is None and not args.default:
+        raise SystemExit("handsim build hand: give a SKELETON file, or --default for the parametric hand")
+    spec, skeleton = _hand_spec(args.skeleton, args)
+    if skeleton is not None:
+        print(f"skeleton   {skeleton.source} ({skeleton.njoints} joints, {skeleton.ndof} DoFs)")
+        for note in skeleton.notes:
+            print(f"note       {note}")
+    _print_model(spec)
+    if args.output is not None:
+        print(f"wrote      {write_text(args.output, spec.to_xml())}")
+    return 0
+
+
+def _decomposition_params(args: argparse.Namespace):
+    from handsim.builders.decompose import DecompositionParams
+
+    return DecompositionParams(
+        threshold=args.threshold, max_convex_hull=args.max_hulls, timeout_s=args.timeout
+    )
+
+
+def _prepare(what: str, args: argparse.Namespace):
+    from handsim.builders.catalog import resolve
+    from handsim.builders.objects import prepare_object
+
+    model = resolve(what, units=args.units, density=args.density, mass=args.mass)
+    return prepare_object(
+        model,
+        _decomposition_params(args),
+        cache_dir=args.cache_dir,
+        use_cache=not args.no_cache,
+        progress=True,
+    )
+
+
+def _print_object(prepared) -> None:
+    model = prepared.model
+    print(f"object     {model.name}  ({model.source})")
+    for part in model.parts:
+        props = prepared.mass_properties[part.name]
+        d = prepared.decompositions.get(part.name)
+        if part.primitives:
+            collision = f"{len(part.primitives)} primitives ({', '.join(p.kind for p in part.primitives)})"
+        elif d.skipped:
+            collision = f"1 hull ({d.skipped})"
+        else:
+            origin = "cached" if d.from_cache else "computed"
+            collision = f"{len(d.hulls)} hulls ({origin}; CoACD {d.coacd_seconds:.1f} s)"
+        size = " × ".join(f"{e * 1000:.0f}" for e in part.mesh.extent)
+        print(
+            f"part       {part.name}: {size} mm, {props.volume * 1e6:.1f} cm³, {props.mass * 1000:.1f} g; "
+            f"collision {collision}"
+        )
+    if model.hinge is not None:
+        h = model.hinge
+        limits = "unlimited" if h.range is None else f"{h.range[0]:.3f} .. {h.range[1]:.3f} rad"
+        print(f"hinge      axis {tuple(round(a, 4) for a in h.axis)} through {h.pos} m, {limits}")
+    print(f"mass       {prepared.total_mass * 1000:.1f} g")
+    for note in (*model.notes, *prepared.notes):
+        print(f"note       {note}")
+
+
+def _build_object(args: argparse.Namespace) -> int:
+    from handsim.builders.objects import object_spec
+
+    prepared = _prepare(args.object, args)
+    _print_object(prepared)
+    spec = object_spec(prepared)
+    _print_model(spec)
+    if args.output is not None:
+        print(f"wrote      {write_text(args.output, spec.to_xml())}")
+    return 0
+
+
+def _build_scene(args: argparse.Namespace) -> int:
+    from handsim.builders.objects import object_spec
+    from handsim.builders.scene import build_scene
+
+    hand = None
+    if not args.no_hand:
+        hand, _ = _hand_spec(None if args.hand == "default" else args.hand, args)
+    objects = []
+    for what in args.object:
+        prepared = _prepare(what, args)
+        _print_object(prepared)
+        objects.append(object_spec(prepared))
+    spec = build_scene(hand, objects, hand_pos=args.hand_pos, table=not args.no_table)
+    _print_model(spec)
+    if args.output is not None:
+        print(f"wrote      {write_text(args.output, spec.to_xml())}")
+    return 0
+
+
+def _add_object_options(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument("--units", choices=("m", "mm"), help="units of a mesh file (required for mesh files)")
+    mass = parser.add_mutually_exclusive_group()
+    mass.add_argument("--density", type=float, metavar="KG_M3", help="density (default: the object's own)")
+    mass.add_argument("--mass", type=float, metavar="KG", help="total object mass instead of a density")
+    parser.add_argument(
+        "--threshold",
+        type=float,
+        default=0.05,
+        help="CoACD concavity threshold (default 0.05; lower = more hulls)",
+    )
+    parser.add_argument("--max-hulls", type=int, default=16, help="most convex hulls per part (default 16)")
+    parser.add_argument("--timeout", type=float, default=600.0, metavar="S", help="CoACD time limit per part")
+    parser.add_argument(
+        "--cache-dir", metavar="DIR", help="decomposition cache (default: the user cache dir)"
+    )
+    parser.add_argument(
+        "--no-cache", action="store_true", help="neither read nor write the decomposition cache"
+    )
+
+
+def register(commands: argparse._SubParsersAction) -> None:
+    """Add the ``build`` command and its ``hand``, ``object`` and ``scene`` kinds."""
+    build = commands.add_parser(
+        "build",
+        help="build MuJoCo models (MJCF): hands, objects, scenes",
+        description="Build MuJoCo models, print their summary and write them as MJCF with -o.",
+    )
+    kinds = build.add_subparsers(dest="kind", metavar="KIND", required=True)
+
+    hand = kinds.add_parser(
+        "hand",
+        help="a hand from a skeleton file or the parametric default",
+        description="Build a position-controlled hand from a GraspDB14 .xmlskel or a Tzionas .SKEL "
+        "(with .LIMITS, and optionally .MOTION/.OFF/.SKIN/.VOI beside it), or the parametric default hand "
+        "(--default). Prints bodies, DoFs, actuators, mass and bounding box; writes MJCF with -o.",
+    )
+    hand.add_argument("skeleton", nargs="?", metavar="SKELETON_FILE", help=".xmlskel or .SKEL file")
+    hand.add_argument("--default", action="store_true", help="use the parametric default hand")
+    _add_hand_options(hand)
+    hand.add_argument("-o", "--output", metavar="XML", help="write the model as MJCF to this file")
+    hand.set_defaults(func=_build_hand)
+
+    obj = kinds.add_parser(
+        "object",
+        help="an object from the catalogue, a mesh file, an ARCTIC template or a Tzionas .SKEL",
+        description="Build a free-floating object: convex hulls from CoACD (cached by content; convex "
+        "meshes and primitives skip it), a visual mesh, and mass and inertia from the watertight mesh and "
+        "a density. Objects: a catalogue name (see `handsim catalog`), a mesh file (.obj/.off/.stl/.ply, "
+        "give --units), an ARCTIC template folder, or a Tzionas object .SKEL.",
+    )
+    obj.add_argument("object", metavar="MESH_OR_CATALOG_NAME")
+    _add_object_options(obj)
+    obj.add_argument("-o", "--output", metavar="XML", help="write the model as MJCF to this file")
+    obj.set_defaults(func=_build_object)
+
+    scene = kinds.add_parser(
+        "scene",
+        help="a hand and objects on a table",
+        description="Build a grasping scene: the hand (prefix hand/) and objects (prefix obj/, or obj0/, "
+        "obj1/ … for several) resting on a table whose top is z = 0, a floor, lights and cameras.",
+    )
+    scene.add_argument(
+        "--hand", default="default", metavar="SKELETON_FILE", help="skeleton file, or 'default' (the default)"
+    )
+    scene.add_argument("--no-hand", action="store_true", help="objects only")
+    _add_hand_options(scene)
+    scene.add_argument(
+        "--hand-pos", type=float, nargs=3, default=(0.0, 0.0, 0.12), metavar=("X", "Y", "Z"),
+        help="position of the hand's root, metres (default 0 0 0.12)",
+    )  # fmt: skip
+    scene.add_argument(
+        "--object", action="append", default=[], metavar="MESH_OR_CATALOG_NAME", help="an object (repeatable)"
+    )
+    _add_object_options(scene)
+    scene.add_argument("--no-table", action="store_true", help="no table and floor")
+    scene.add_argument("-o", "--output", metavar="XML", help="write the model as MJCF to this file")
+    scene.set_defaults(func=_build_scene)
+
+
+def _add_hand_options(parser: argparse.ArgumentParser) -> None:
+    add_hand_size(parser)
+    parser.add_argument(
+        "--hand-breadth",
+        type=float,
+        default=None,
+        metavar="M",
+        help="parametric hand: breadth across the metacarpals in metres (default 0.45 × length)",
+    )
+    if not any(a.dest == "mass" for a in parser._actions):
+        parser.add_argument(
+            "--hand-mass",
+            dest="mass",
+            type=float,
+            default=None,
+            metavar="KG",
+            help="whole-hand mass in kg (default: 0.45 kg scaled with the cube of hand length)",
+        )
+    parser.add_argument(
+        "--collision",
+        choices=("capsules", "mesh"),
+        default="capsules",
+        help="collision shapes: capsules + palm (default) or per-bone hulls of the skinned mesh",
+    )
