@@ -24,6 +24,7 @@ import numpy as np
 from scipy.optimize import linprog
 from scipy.spatial import ConvexHull, QhullError
 
+from handsim.builders.geom_classes import add_geom_classes
 from handsim.builders.hand_geometry import Capsule, default_hand_mass, finger_chains, hand_geometry
 from handsim.errors import ModelError
 from handsim.skeleton import Skeleton, mj_name
@@ -68,17 +69,9 @@ def _quat(rotation: np.ndarray) -> np.ndarray:
 
 def _add_defaults(spec: mujoco.MjSpec, root_has_dofs: bool) -> dict[str, mujoco.MjsDefault]:
     main = spec.default
-    main.geom.friction = list(SKIN_FRICTION)
-    main.geom.condim = 4
-    visual = spec.add_default("visual", main)
-    visual.geom.group = 2
-    visual.geom.contype = 0
-    visual.geom.conaffinity = 0
-    visual.geom.density = 0
-    visual.geom.rgba = list(SKIN_RGBA)
-    collision = spec.add_default("collision", main)
-    collision.geom.group = 3
-    collision.geom.rgba = list(COLLISION_RGBA)
+    visual, collision = add_geom_classes(
+        spec, friction=SKIN_FRICTION, visual_rgba=SKIN_RGBA, collision_rgba=COLLISION_RGBA
+    )
     classes = {"visual": visual, "collision": collision}
     kinds = [k for k in JOINT_CLASSES if k != "wrist" or root_has_dofs]
     for kind in kinds:

@@ -27,6 +27,7 @@ import numpy as np
 import trimesh
 
 from handsim.builders.decompose import Decomposition, DecompositionParams, decompose
+from handsim.builders.geom_classes import add_geom_classes
 from handsim.builders.hand import SKIN_FRICTION
 from handsim.errors import ModelError
 from handsim.mesh import Mesh
@@ -35,7 +36,6 @@ from handsim.object_model import Hinge, ObjectModel, Primitive
 OBJECT_RGBA = (0.55, 0.60, 0.68, 1.0)
 HULL_RGBA = (0.9, 0.5, 0.2, 0.4)
 HINGE_DAMPING = 1e-3  # N·m·s/rad: a little viscous loss so a free hinge settles
-OBJECT_CONDIM = 4  # sliding + torsional friction: a pinched object resists spinning about the contact normal
 
 
 @dataclass(frozen=True)
@@ -178,18 +178,9 @@ def object_spec(
     spec = mujoco.MjSpec()
     spec.compiler.degree = False
     spec.modelname = model.name
-    main = spec.default
-    main.geom.friction = list(friction)
-    main.geom.condim = OBJECT_CONDIM
-    main.geom.density = 0.0
-    visual = spec.add_default("visual", main)
-    visual.geom.group = 2
-    visual.geom.contype = 0
-    visual.geom.conaffinity = 0
-    visual.geom.rgba = list(rgba)
-    collision = spec.add_default("collision", main)
-    collision.geom.group = 3
-    collision.geom.rgba = list(HULL_RGBA)
+    visual, collision = add_geom_classes(
+        spec, friction=friction, visual_rgba=rgba, collision_rgba=HULL_RGBA, density=0.0
+    )
 
     single = len(model.parts) == 1
     parent = spec.worldbody
