@@ -93,3 +93,37 @@ def test_build_scene_with_hand_and_object_writes_mjcf_that_compiles(capsys, tmp_
     model = mujoco.MjModel.from_xml_path(str(out_file))
     assert model.body("obj/body") is not None and model.body("hand/root") is not None
     assert model.nu == 27
+
+
+def test_inspect_prints_timing_phases_and_limit_violations_and_writes_a_plot(capsys, tmp_path, graspdb_dir):
+    motion = graspdb_dir / "r_01_11_ex03-rad-004-grasp-su04.txt"
+    plot = tmp_path / "plot.png"
+    args = ["inspect", str(motion), "--skeleton", str(graspdb_dir / "default.xmlskel"), "--plot", str(plot)]
+    assert main(args) == 0
+    out = capsys.readouterr().out
+    assert "frames     282 over 4.680 s (60.0 Hz mean; largest interval 32.0 ms at 2.043 s)" in out
+    assert "phase      grasp      frames 81–163 (1.36–2.71 s)" in out
+    assert "663 of 7614 valid samples outside the limits (663 below, 0 above) in 5 of 27 DoFs" in out
+    assert plot.stat().st_size > 10_000 and plot.read_bytes()[:4] == b"\x89PNG"
+
+
+def test_calibrate_fits_a_calibration_sequence_and_writes_json(capsys, tmp_path):
+    from handsim.glove import load_calibration
+    from tests.test_glove_calibration import _synthetic_sequence, _write_raw
+
+    raw, switch, gains, _ = _synthetic_sequence()
+    recording = _write_raw(tmp_path / "01_calib-raw-001-su01.txt", raw, switch)
+    assert main(["calibrate", str(recording), "-o", str(tmp_path / "glove.json")]) == 0
+    assert "wrote" in capsys.readouterr().out
+    calibration = load_calibration(tmp_path / "glove.json")
+    i = calibration.sensor_names.index("I-MCPJ")
+    assert abs(calibration.gains[i]) == pytest.approx(abs(gains[i]), rel=0.01)
+
+
+def test_inspect_raw_file_without_calibration_explains_what_to_do(capsys, tmp_path):
+    from tests.test_glove_calibration import _synthetic_sequence, _write_raw
+
+    raw, switch, _, _ = _synthetic_sequence()
+    recording = _write_raw(tmp_path / "01_ex01-raw-002-grasp-su01.txt", raw, switch)
+    assert main(["inspect", str(recording)]) == 1
+    assert "estimate_calibration" in capsys.readouterr().err

@@ -11,14 +11,15 @@ import sys
 from collections.abc import Sequence
 
 from handsim import __version__
-from handsim.cli import build, catalog, demo
+from handsim.cli import build, catalog, demo, trajectory
 from handsim.errors import HandsimError
 
 DESCRIPTION = """\
 handsim turns captured human hand motion into MuJoCo physics.
 
 Start with `handsim demo` (no arguments; uses data bundled with the package). Build models with
-`handsim build hand|object|scene ... -o model.xml`; list the object catalogue with `handsim catalog`.
+`handsim build hand|object|scene ... -o model.xml`; list the object catalogue with `handsim catalog`;
+look at a recording with `handsim inspect RECORDING --plot out.png`.
 """
 
 
@@ -29,7 +30,7 @@ def build_parser() -> argparse.ArgumentParser:
     )
     parser.add_argument("--version", action="version", version=f"handsim {__version__}")
     commands = parser.add_subparsers(dest="command", metavar="COMMAND")
-    for module in (demo, build, catalog):
+    for module in (demo, build, catalog, trajectory):
         module.register(commands)
     return parser
 

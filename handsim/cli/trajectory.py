@@ -1,0 +1,76 @@
+"""``handsim inspect`` and ``handsim calibrate``: look at a recording; fit a glove calibration."""
+
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+
+
+def load_trajectory(path: str, skeleton_path: str | None, calibration_path: str | None):
+    """Read a recording (with its skeleton and calibration when given) and attach annotated phases."""
+    from handsim.glove import attach_phases, find_annotation_file, load_calibration
+    from handsim.io import read_skeleton, read_trajectory
+
+    skeleton = read_skeleton(skeleton_path) if skeleton_path else None
+    calibration = load_calibration(calibration_path) if calibration_path else None
+    trajectory = read_trajectory(path, skeleton=skeleton, calibration=calibration)
+    annotation = find_annotation_file(path)
+    if annotation is not None and not trajectory.phases:
+        trajectory = attach_phases(trajectory, annotation)
+    return trajectory, skeleton
+
+
+def _inspect(args: argparse.Namespace) -> int:
+    from handsim.trajectory_report import describe
+
+    trajectory, skeleton = load_trajectory(args.trajectory, args.skeleton, args.calibration)
+    for line in describe(trajectory, skeleton).lines():
+        print(line)
+    if args.plot:
+        from handsim.plotting import plot_trajectory
+
+        print(f"plot       {plot_trajectory(trajectory, args.plot, skeleton)}")
+    return 0
+
+
+def _calibrate(args: argparse.Namespace) -> int:
+    from handsim.glove import estimate_calibration, save_calibration
+    from handsim.io.graspdb import read_graspdb_raw
+
+    recording = read_graspdb_raw(args.recording)
+    calibration = estimate_calibration(
+        recording.counts, recording.switch, provenance=str(Path(args.recording))
+    )
+    for line in calibration.notes:
+        print(f"note       {line}")
+    for name, residual in zip(calibration.sensor_names, calibration.residuals or (), strict=False):
+        print(f"residual   {name:8s} {residual:.4f} rad")
+    print(f"wrote      {save_calibration(calibration, args.output)}")
+    return 0
+
+
+def register(commands: argparse._SubParsersAction) -> None:
+    """Add the ``inspect`` and ``calibrate`` commands."""
+    inspect = commands.add_parser(
+        "inspect",
+        help="summarise a recording: timing, phases, gaps, joint-limit violations (and a plot)",
+        description="Read a recording (GraspDB14 CyberGlove rad file, or raw with --calibration) and print "
+        "its duration and rate, the largest interval between samples, channels, phases (from the "
+        "_annot- file beside it), gaps, and with --skeleton the samples outside the joint limits.",
+    )
+    inspect.add_argument("trajectory", metavar="TRAJECTORY")
+    inspect.add_argument("--skeleton", metavar="SKELETON_FILE", help="hand skeleton: columns and limits")
+    inspect.add_argument("--calibration", metavar="JSON", help="glove calibration for a raw-count file")
+    inspect.add_argument("--plot", metavar="PNG", help="write a plot of every DoF over time")
+    inspect.set_defaults(func=_inspect)
+
+    calibrate = commands.add_parser(
+        "calibrate",
+        help="estimate a CyberGlove calibration from a recorded calibration sequence",
+        description="Fit per-sensor gains and offsets to a raw calibration sequence (GraspDB14 protocol: "
+        "the switch separates the poses; flat hand = 0, wedges = 25° ab/adduction, table edge = 45° MCP "
+        "flexion) and write them as a calibration JSON file (see docs/cyberglove.md).",
+    )
+    calibrate.add_argument("recording", metavar="CALIB_RECORDING")
+    calibrate.add_argument("-o", "--output", required=True, metavar="JSON", help="calibration file to write")
+    calibrate.set_defaults(func=_calibrate)
