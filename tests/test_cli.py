@@ -127,3 +127,13 @@ def test_inspect_raw_file_without_calibration_explains_what_to_do(capsys, tmp_pa
     recording = _write_raw(tmp_path / "01_ex01-raw-002-grasp-su01.txt", raw, switch)
     assert main(["inspect", str(recording)]) == 1
     assert "estimate_calibration" in capsys.readouterr().err
+
+
+def test_inspect_bundled_tzionas_motion_reports_root_and_cube_tracks(capsys):
+    from handsim.assets import TZIONAS_DIR
+
+    assert main(["inspect", str(TZIONAS_DIR / "Models/20/Model_Hand_R.MOTION")]) == 0
+    out = capsys.readouterr().out
+    assert "frames     186 over 6.167 s (30.0 Hz mean" in out
+    assert "root pose  recorded" in out and "object     cube: pose track" in out
+    assert "95 of 5766 valid samples outside the limits" in out

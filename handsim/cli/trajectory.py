@@ -11,6 +11,8 @@ def load_trajectory(path: str, skeleton_path: str | None, calibration_path: str 
     from handsim.glove import attach_phases, find_annotation_file, load_calibration
     from handsim.io import read_skeleton, read_trajectory
 
+    if skeleton_path is None and Path(path).suffix.lower() == ".motion":
+        skeleton_path = str(Path(path).with_suffix(".SKEL"))  # a Tzionas motion's own skeleton
     skeleton = read_skeleton(skeleton_path) if skeleton_path else None
     calibration = load_calibration(calibration_path) if calibration_path else None
     trajectory = read_trajectory(path, skeleton=skeleton, calibration=calibration)
@@ -54,8 +56,8 @@ def register(commands: argparse._SubParsersAction) -> None:
     inspect = commands.add_parser(
         "inspect",
         help="summarise a recording: timing, phases, gaps, joint-limit violations (and a plot)",
-        description="Read a recording (GraspDB14 CyberGlove rad file, or raw with --calibration) and print "
-        "its duration and rate, the largest interval between samples, channels, phases (from the "
+        description="Read a recording (GraspDB14 CyberGlove rad file, or raw with --calibration; a "
+        "Tzionas Model_Hand_*.MOTION with its sequence's objects) and print its duration and rate, the largest interval between samples, channels, phases (from the "
         "_annot- file beside it), gaps, and with --skeleton the samples outside the joint limits.",
     )
     inspect.add_argument("trajectory", metavar="TRAJECTORY")

@@ -3,7 +3,8 @@
 Entry points:
 
 * :func:`read_skeleton` — ``.xmlskel`` (GraspDB14) or ``.SKEL`` (+ ``.LIMITS`` …, Tzionas/Ballan).
-* :func:`read_trajectory` — GraspDB14 CyberGlove recordings (``.txt``, radians).
+* :func:`read_trajectory` — GraspDB14 CyberGlove recordings (``.txt``, radians or raw counts with a
+  calibration) and Tzionas/Ballan hand ``.MOTION`` files (with the sequence's object tracks).
 """
 
 from __future__ import annotations
@@ -19,7 +20,10 @@ if TYPE_CHECKING:
     from handsim.glove.calibration import GloveCalibration
 
 SKELETON_SUFFIXES = {".xmlskel": "GraspDB14 skeleton", ".skel": "Tzionas/Ballan skeleton (+ .LIMITS)"}
-TRAJECTORY_SUFFIXES = {".txt": "GraspDB14 CyberGlove recording (radians, or raw counts with a calibration)"}
+TRAJECTORY_SUFFIXES = {
+    ".txt": "GraspDB14 CyberGlove recording (radians, or raw counts with a calibration)",
+    ".motion": "Tzionas/Ballan hand motion (with its .SKEL/.LIMITS, and the sequence's objects)",
+}
 
 
 def _suffix_or_error(path: Path, known: dict[str, str], what: str) -> str:
@@ -63,8 +67,11 @@ def read_trajectory(
     """Read recorded hand motion as joint-angle targets.
 
     Args:
-        path: A GraspDB14 CyberGlove recording in radians (``*-rad-*.txt``; GraspDB14's FK-oracle files
-            have no extension and are accepted too).
+        path: A GraspDB14 CyberGlove recording (``*-rad-*.txt``, or ``*-raw-*.txt`` with ``calibration``;
+            GraspDB14's FK-oracle files have no extension and are accepted too), or a Tzionas/Ballan
+            ``Model_Hand_*.MOTION`` (its ``.SKEL``/``.LIMITS`` beside it; ``skeleton`` is not used — the
+            columns are that skeleton's DoFs — and the objects of ``Configs/NN/MODELS_INFO.txt`` become
+            object tracks).
         skeleton: The hand the targets are for. Its DoF names become the trajectory's columns; DoFs the
             recording does not drive are held at 0 and listed in ``notes``. Without a skeleton, the
             columns are the DoFs the glove drives.
@@ -79,10 +86,26 @@ def read_trajectory(
         FormatError: Malformed rows (the message names file, line and field), or a raw-count file.
     """
     p = Path(path)
-    _suffix_or_error(p, TRAJECTORY_SUFFIXES, "trajectory")
+    suffix = _suffix_or_error(p, TRAJECTORY_SUFFIXES, "trajectory")
+    if suffix == ".motion":
+        return _read_tzionas(p)
     from handsim.io.graspdb import read_graspdb_glove
 
     return read_graspdb_glove(p, skeleton=skeleton, calibration=calibration)
+
+
+def _read_tzionas(path: Path) -> Trajectory:
+    """A hand ``.MOTION`` with the sequence's object tracks when its ``Configs/NN`` lists them."""
+    from handsim.io.tzionas_motion import config_dir_of, read_tzionas_motion, read_tzionas_sequence
+
+    if not path.stem.startswith("Model_Hand"):
+        raise InputFileError(
+            f"{path}: not a hand motion (Model_Hand_*.MOTION); object motions are read with "
+            "handsim.io.tzionas_motion.read_tzionas_object_motion"
+        )
+    if (config_dir_of(path.parent) / "MODELS_INFO.txt").is_file():
+        return read_tzionas_sequence(path.parent, hand=path.stem)
+    return read_tzionas_motion(path.with_suffix(".SKEL"))
 
 
 __all__ = ["read_skeleton", "read_trajectory"]
