@@ -57,8 +57,9 @@ def register(commands: argparse._SubParsersAction) -> None:
         "inspect",
         help="summarise a recording: timing, phases, gaps, joint-limit violations (and a plot)",
         description="Read a recording (GraspDB14 CyberGlove rad file, or raw with --calibration; a "
-        "Tzionas Model_Hand_*.MOTION with its sequence's objects) and print its duration and rate, the largest interval between samples, channels, phases (from the "
-        "_annot- file beside it), gaps, and with --skeleton the samples outside the joint limits.",
+        "Tzionas Model_Hand_*.MOTION with its sequence's objects) and print its duration and rate, the "
+        "largest interval between samples, channels, phases (from the _annot- file beside it), gaps, and "
+        "with --skeleton (a .MOTION's own .SKEL by default) the samples outside the joint limits.",
     )
     inspect.add_argument("trajectory", metavar="TRAJECTORY")
     inspect.add_argument("--skeleton", metavar="SKELETON_FILE", help="hand skeleton: columns and limits")
