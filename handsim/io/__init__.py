@@ -5,6 +5,10 @@ Entry points:
 * :func:`read_skeleton` — ``.xmlskel`` (GraspDB14) or ``.SKEL`` (+ ``.LIMITS`` …, Tzionas/Ballan).
 * :func:`read_trajectory` — GraspDB14 CyberGlove recordings (``.txt``, radians or raw counts with a
   calibration) and Tzionas/Ballan hand ``.MOTION`` files (with the sequence's object tracks).
+
+Other sources, with their own readers: ARCTIC (:mod:`handsim.io.arctic_motion`: ``read_arctic_mano``,
+``read_arctic_object``; templates in :mod:`handsim.io.arctic`), MANO models and poses
+(:mod:`handsim.io.mano`: ``read_mano_model``, ``mano_pose_to_trajectory``), meshes (:mod:`handsim.io.mesh`).
 """
 
 from __future__ import annotations

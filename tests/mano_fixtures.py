@@ -1,0 +1,206 @@
+"""Synthetic MANO model files and ARCTIC sequence files with the real files' structure.
+
+The MANO model files are licensed and absent here, so :func:`write_synthetic_mano_pkl` writes a small
+stand-in with the same layout as ``MANO_RIGHT.pkl``: a pickled dict whose ``shapedirs`` is a
+``chumpy.ch.Ch`` object and whose ``J_regressor`` is a ``scipy.sparse.csc.csc_matrix``, plus numpy arrays
+and the non-array entries a real file carries. The two classes are fakes registered in ``sys.modules``
+only while pickling, so the file references ``chumpy.ch`` / ``scipy.sparse.csc`` like a real one while
+chumpy is never installed or imported.
+
+Geometry: the bundled mean-shape joints; around each joint a ring of 6 vertices (the joint regressor row
+of the joint: random convex weights over them); around each bone a blob of vertices skinned mostly to it;
+the five fingertip vertices (MANO ids 744/320/443/554/671) just beyond each finger's last joint, skinned
+fully to it. Shape and pose blend shapes, the PCA basis and the mean pose are random but seeded.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import io
+import json
+import pickle
+import sys
+import types
+from collections.abc import Iterator
+from pathlib import Path
+
+import numpy as np
+from scipy.spatial import ConvexHull
+
+from handsim.io.mano import MEAN_JOINTS_FILE
+
+PARENTS = (-1, 0, 1, 2, 0, 4, 5, 0, 7, 8, 0, 10, 11, 0, 13, 14)
+NAMES = ("wrist", *(f"{f}{k}" for f in ("index", "middle", "pinky", "ring", "thumb") for k in (1, 2, 3)))
+TIP_IDS = {"thumb": 744, "index": 320, "middle": 443, "ring": 554, "pinky": 671}
+RING_RADIUS = 0.004  # m
+BLOB_RADIUS = 0.006  # m
+
+
+def mean_joints(side: str = "right") -> np.ndarray:
+    """The bundled mean-shape joints (mirrored in x for the left hand), shape (16, 3)."""
+    table = json.loads(MEAN_JOINTS_FILE.read_text())
+    joints = np.array(table["rest_joint_positions"], dtype=float)
+    return joints * np.array([-1.0, 1.0, 1.0]) if side == "left" else joints
+
+
+def synthetic_mano_arrays(seed: int = 0, nverts: int = 778, side: str = "right") -> dict[str, np.ndarray]:
+    """The arrays of a synthetic MANO model (all plain numpy; J_regressor dense)."""
+    rng = np.random.default_rng(seed)
+    joints = mean_joints(side)
+    index = {n: i for i, n in enumerate(NAMES)}
+    tips = {}
+    if nverts > max(TIP_IDS.values()):
+        for finger, vid in TIP_IDS.items():
+            j2, j3 = joints[index[f"{finger}2"]], joints[index[f"{finger}3"]]
+            tips[vid] = (index[f"{finger}3"], j3 + 1.1 * (j3 - j2) + rng.normal(scale=5e-4, size=3))
+    free = [k for k in range(nverts) if k not in tips]
+    if len(free) < 16 * 6 + 16 * 4:
+        raise ValueError(f"need at least {16 * 10} vertices besides the tips, got {len(free)}")
+    vertices = np.zeros((nverts, 3))
+    weights = np.zeros((nverts, 16))
+    regressor = np.zeros((16, nverts))
+    ring = np.vstack([np.eye(3), -np.eye(3)]) * RING_RADIUS
+    for j in range(16):
+        ids = free[6 * j : 6 * j + 6]
+        vertices[ids] = joints[j] + ring
+        weights[ids, j] = 1.0
+        regressor[j, ids] = rng.dirichlet(np.ones(6))
+    children = {j: [c for c in range(16) if PARENTS[c] == j] for j in range(16)}
+    tip_of = {index[f"{f}3"]: vid for f, vid in TIP_IDS.items()}
+    blob_ids = free[96:]
+    for n, k in enumerate(blob_ids):
+        j = n % 16
+        if j == 0:  # palm: between the wrist and the first joints of the fingers
+            w = rng.dirichlet(np.ones(6))
+            point = w @ joints[[0, 1, 4, 7, 10, 13]]
+        else:
+            end = joints[children[j][0]] if children[j] else None
+            if end is None:
+                end = (
+                    tips[tip_of[j]][1] if tip_of[j] in tips else joints[j] + (joints[j] - joints[PARENTS[j]])
+                )
+            point = joints[j] + rng.uniform(0.1, 0.9) * (end - joints[j])
+        vertices[k] = point + rng.normal(scale=BLOB_RADIUS / 2, size=3)
+        own = 1.0 if j == 0 else rng.uniform(0.6, 1.0)
+        weights[k, j] = own
+        if own < 1.0:
+            weights[k, PARENTS[j]] = 1.0 - own
+    for vid, (j, point) in tips.items():
+        vertices[vid] = point
+        weights[vid, j] = 1.0
+    owner = np.argmax(weights, axis=1)
+    faces = []
+    for j in range(16):
+        ids = np.flatnonzero(owner == j)
+        faces.append(ids[ConvexHull(vertices[ids]).simplices])
+    components = np.linalg.qr(rng.normal(size=(45, 45)))[0].T
+    return {
+        "v_template": vertices,
+        "shapedirs": rng.normal(scale=2e-3, size=(nverts, 3, 10)),
+        "J_regressor": regressor,
+        "kintree_table": np.array([[4294967295, *PARENTS[1:]], list(range(16))], dtype=np.int64),
+        "weights": weights,
+        "f": np.vstack(faces).astype(np.uint32),
+        "posedirs": rng.normal(scale=1e-3, size=(nverts, 3, 135)),
+        "hands_components": components,
+        "hands_mean": rng.normal(scale=0.2, size=45),
+    }
+
+
+@contextlib.contextmanager
+def _fake_chumpy_and_sparse() -> Iterator[tuple[type, type]]:
+    """Register fake ``chumpy.ch.Ch`` and ``scipy.sparse.csc.csc_matrix`` classes while pickling."""
+    chumpy = types.ModuleType("chumpy")
+    chumpy_ch = types.ModuleType("chumpy.ch")
+    csc = types.ModuleType("scipy.sparse.csc")
+
+    class Ch:  # pickled as chumpy.ch.Ch
+        pass
+
+    class csc_matrix:  # noqa: N801 - pickled as scipy.sparse.csc.csc_matrix
+        pass
+
+    Ch.__module__, Ch.__qualname__ = "chumpy.ch", "Ch"
+    csc_matrix.__module__, csc_matrix.__qualname__ = "scipy.sparse.csc", "csc_matrix"
+    chumpy_ch.Ch, chumpy.ch, csc.csc_matrix = Ch, chumpy_ch, csc_matrix
+    fakes = {"chumpy": chumpy, "chumpy.ch": chumpy_ch, "scipy.sparse.csc": csc}
+    saved = {name: sys.modules.get(name) for name in fakes}
+    sys.modules.update(fakes)
+    try:
+        yield Ch, csc_matrix
+    finally:
+        for name, module in saved.items():
+            if module is None:
+                sys.modules.pop(name, None)
+            else:
+                sys.modules[name] = module
+
+
+def write_synthetic_mano_pkl(
+    path: str | Path, *, seed: int = 0, nverts: int = 778, side: str = "right", protocol: int = 2
+) -> dict[str, np.ndarray]:
+    """Write a synthetic ``MANO_*.pkl`` and return its arrays (J_regressor dense) for the tests' own math."""
+    arrays = synthetic_mano_arrays(seed, nverts, side)
+    with _fake_chumpy_and_sparse() as (ch_class, csc_class):
+        shapedirs = ch_class()
+        shapedirs.__dict__.update(
+            {"x": arrays["shapedirs"], "_dirty_vars": {"x"}, "_depends_on_deps": {}, "label": None}
+        )
+        regressor = csc_class()
+        dense = arrays["J_regressor"]
+        rows, cols = np.nonzero(dense.T)  # column-major order: (col, row) pairs sorted by column
+        regressor.__dict__.update(
+            {
+                "_shape": dense.shape,
+                "maxprint": 50,
+                "indices": cols.astype(np.int32),
+                "indptr": np.searchsorted(rows, np.arange(dense.shape[1] + 1)).astype(np.int32),
+                "data": dense.T[rows, cols],
+                "format": "csc",
+            }
+        )
+        payload = {
+            **{k: v for k, v in arrays.items() if k not in ("shapedirs", "J_regressor")},
+            "shapedirs": shapedirs,
+            "J_regressor": regressor,
+            "J": arrays["J_regressor"] @ arrays["v_template"],
+            "bs_style": "lbs",
+            "bs_type": "lrotmin",
+            "hands_coeffs": np.zeros((3, 45)),
+        }
+        Path(path).write_bytes(pickle.dumps(payload, protocol=protocol))
+    return arrays
+
+
+def mano_hand_params(n: int, seed: int = 1, *, scale: float = 0.4) -> dict[str, np.ndarray]:
+    """Random MANO parameters of one hand in ARCTIC's layout (trans in metres)."""
+    rng = np.random.default_rng(seed)
+    return {
+        "rot": rng.normal(scale=1.0, size=(n, 3)).astype(np.float32),
+        "pose": rng.normal(scale=scale, size=(n, 45)).astype(np.float32),
+        "trans": rng.uniform(-0.5, 0.5, size=(n, 3)).astype(np.float32),
+        "shape": rng.normal(scale=0.5, size=10).astype(np.float32),
+        "fitting_err": rng.uniform(0.0, 0.01, size=n).astype(np.float32),
+    }
+
+
+def write_arctic_mano_npy(path: str | Path, right: dict, left: dict) -> None:
+    """Write ``<seq>.mano.npy`` exactly as ARCTIC does: ``np.save`` of a dict (pickled object array)."""
+    np.save(path, {"right": right, "left": left}, allow_pickle=True)
+
+
+def write_arctic_object_npy(path: str | Path, values: np.ndarray) -> None:
+    """Write ``<seq>.object.npy``: float32 (N, 7) = [articulation, axis-angle (3), translation mm (3)]."""
+    np.save(path, np.asarray(values, dtype=np.float32))
+
+
+def malicious_pickle(marker: Path) -> bytes:
+    """A protocol-0 pickle that would run ``os.system('touch <marker>')`` if loaded with pickle.load."""
+    return b"cos\nsystem\n(V" + f"touch {marker}".encode() + b"\ntR."
+
+
+def write_malicious_npy(path: str | Path, marker: Path) -> None:
+    """An object-array ``.npy`` whose pickled payload would run ``os.system``."""
+    buffer = io.BytesIO()
+    np.lib.format.write_array_header_1_0(buffer, {"descr": "|O", "fortran_order": False, "shape": ()})
+    Path(path).write_bytes(buffer.getvalue() + malicious_pickle(marker))
