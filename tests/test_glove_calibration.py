@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import json
 import math
+import re
 from datetime import datetime, timedelta
 from pathlib import Path
 
@@ -533,3 +534,30 @@ def test_estimation_rejects_an_empty_hold_window() -> None:
         CalibrationError, match=r"^hold_frames must be >= 1 and trim_frames >= 0, got 0 and 3$"
     ):
         estimate_calibration(raw, switch, hold_frames=0)
+
+
+def test_calibration_sequence_whose_switch_is_never_on_is_an_error(tmp_path: Path) -> None:
+
+    raw, switch, _, _ = _synthetic_sequence()
+    path = _write_raw(tmp_path / "01_calib-raw-001-su01.txt", raw, np.zeros_like(switch))
+    recording = read_graspdb_raw(path)
+    with pytest.raises(
+        CalibrationError,
+        match=rf"^{re.escape(str(path))}: the switch is never ON in its {len(raw)} samples, so the "
+        r"calibration poses cannot be told apart \(spec §3\.5: the actor presses the switch at each "
+        r"pose\); is this a calibration sequence\?$",
+    ):
+        estimate_calibration(recording.counts, recording.switch, provenance=str(path))
+
+
+def test_calibration_file_for_another_sensor_count_is_an_error(tmp_path: Path) -> None:
+    path = save_calibration(GloveCalibration.default(), tmp_path / "glove.json")
+    doc = json.loads(path.read_text())
+    doc["sensors"] = doc["sensors"][:18]
+    path.write_text(json.dumps(doc))
+    with pytest.raises(
+        FormatError,
+        match=rf"^{re.escape(str(path))} \[sensors\]: missing sensors \['L-DIPJ', 'LR-AA', 'P-Arch', 'W-FE', "
+        r"'W-AA'\]; all 23 must be listed$",
+    ):
+        load_calibration(path)

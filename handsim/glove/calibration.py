@@ -568,6 +568,12 @@ def estimate_calibration(
     except HandsimError as exc:
         raise CalibrationError(str(exc)) from None
     lengths = [s.stop - s.start for s in segments]
+    if not sw.any():
+        raise CalibrationError(
+            f"{provenance}: the switch is never ON in its {len(sw)} samples, so the calibration poses cannot "
+            "be told apart (spec §3.5: the actor presses the switch at each pose); is this a calibration "
+            "sequence?"
+        )
     if segments[0].name != SWITCH_ON:
         raise CalibrationError(
             "a calibration sequence starts with the switch ON (spec §3.5); this one starts OFF"
