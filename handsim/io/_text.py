@@ -55,6 +55,17 @@ def parse_float(token: str, path: str | Path, line: int, field: str, *, finite: 
     return value
 
 
+def parse_int(token: str, path: str | Path, line: int, field: str, minimum: int = 0) -> int:
+    """Parse one integer ≥ ``minimum``, raising :class:`FormatError` with file, line and field on failure."""
+    try:
+        value = int(token)
+    except ValueError:
+        value = None
+    if value is None or value < minimum:
+        raise FormatError(path, f"expected an integer ≥ {minimum}, got {token!r}", line=line, field=field)
+    return value
+
+
 def parse_floats(
     tokens: list[str], path: str | Path, line: int, fields: list[str] | str, *, finite: bool = True
 ) -> list[float]:

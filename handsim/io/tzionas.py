@@ -28,7 +28,7 @@ from pathlib import Path
 import numpy as np
 
 from handsim.errors import FormatError, InputFileError
-from handsim.io._text import numbered_lines, parse_float, parse_floats, read_text
+from handsim.io._text import numbered_lines, parse_float, parse_floats, parse_int, read_text
 from handsim.skeleton import Dof, Joint, Skeleton, SkinnedMesh, mj_name
 
 ROOT_PARENT = "Root_NULL_Bone_0"
@@ -79,16 +79,6 @@ class BoneLimits:
     unlimited: tuple[bool, bool, bool]
 
 
-def _int(token: str, path: Path, line: int, field: str, minimum: int = 0) -> int:
-    try:
-        value = int(token)
-    except ValueError:
-        value = None
-    if value is None or value < minimum:
-        raise FormatError(path, f"expected an integer ≥ {minimum}, got {token!r}", line=line, field=field)
-    return value
-
-
 def read_skel(path: str | Path) -> tuple[int, list[SkelBone]]:
     """Read a ``.SKEL`` file.
 
@@ -105,7 +95,7 @@ def read_skel(path: str | Path) -> tuple[int, list[SkelBone]]:
     lines = numbered_lines(read_text(p))
     if not lines:
         raise FormatError(p, "empty file; expected the frame count", line=1, field="frame count")
-    frames = _int(lines[0][1], p, lines[0][0], "frame count", minimum=1)
+    frames = parse_int(lines[0][1], p, lines[0][0], "frame count", minimum=1)
     rest = lines[1:]
     if not rest or len(rest) % 3:
         start = rest[-(len(rest) % 3)][0] if rest else lines[0][0] + 1
@@ -338,7 +328,9 @@ def read_off(path: str | Path, units_scale: float = 1e-3) -> tuple[np.ndarray, n
         counts, k = lines[1][1].split(), 2
     if len(counts) not in (2, 3):
         raise FormatError(p, f"expected 'nv nf ne', got {counts}", line=lines[k - 1][0], field="counts")
-    nv, nf, *_ = (_int(c, p, lines[k - 1][0], f) for c, f in zip(counts, ("nv", "nf", "ne"), strict=False))
+    nv, nf, *_ = (
+        parse_int(c, p, lines[k - 1][0], f) for c, f in zip(counts, ("nv", "nf", "ne"), strict=False)
+    )
     if len(lines) < k + nv + nf:
         last = lines[-1][0]
         msg = f"file ends after {len(lines) - k} vertex/face lines; expected {nv} vertices and {nf} faces"
@@ -352,11 +344,11 @@ def read_off(path: str | Path, units_scale: float = 1e-3) -> tuple[np.ndarray, n
     tris: list[tuple[int, int, int]] = []
     for ln, s in lines[k + nv : k + nv + nf]:
         tokens = s.split()
-        n = _int(tokens[0], p, ln, "face size", minimum=3)
+        n = parse_int(tokens[0], p, ln, "face size", minimum=3)
         if len(tokens) != n + 1:
             msg = f"face of {n} vertices needs {n + 1} tokens, got {len(tokens)}"
             raise FormatError(p, msg, line=ln, field="face")
-        idx = [_int(t, p, ln, "face index") for t in tokens[1:]]
+        idx = [parse_int(t, p, ln, "face index") for t in tokens[1:]]
         if max(idx) >= nv:
             msg = f"vertex index {max(idx)} out of range; expected 0..{nv - 1}"
             raise FormatError(p, msg, line=ln, field="face index")
@@ -402,7 +394,7 @@ def read_skin(
     lines = numbered_lines(read_text(p))
     if len(lines) < 2:
         raise FormatError(p, "expected the bone count and the bone names", line=1, field="header")
-    count = _int(lines[0][1], p, lines[0][0], "bone count", minimum=1)
+    count = parse_int(lines[0][1], p, lines[0][0], "bone count", minimum=1)
     names = _split_names(p, lines[1][0], lines[1][1], bone_names)
     if len(names) != count or len(set(names)) != len(names):
         msg = f"expected {count} distinct bone names (line {lines[0][0]}), got {names}"
@@ -422,7 +414,7 @@ def read_skin(
 
 
 def _voi_groups(path: Path) -> list[list[tuple[int, int]]]:
-    groups = [[(_int(s, path, ln, "vertex id"), ln) for ln, s in b] for b in _blocks(read_text(path))]
+    groups = [[(parse_int(s, path, ln, "vertex id"), ln) for ln, s in b] for b in _blocks(read_text(path))]
     if not groups:
         raise FormatError(path, "no vertex ids", line=1, field="vertex id")
     return groups

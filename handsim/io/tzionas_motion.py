@@ -49,7 +49,7 @@ import numpy.typing as npt
 from scipy.spatial.transform import Rotation
 
 from handsim.errors import FormatError, InputFileError, TrajectoryError
-from handsim.io._text import numbered_lines, read_bytes, read_text, sha256_of
+from handsim.io._text import numbered_lines, parse_int, read_bytes, read_text, sha256_of
 from handsim.io.tzionas import SkelBone, read_motion, read_skel, read_tzionas_skeleton
 from handsim.skeleton import Skeleton, rotation_about_axis
 from handsim.trajectory import ObjectTrack, Trajectory
@@ -89,16 +89,6 @@ class IndexBounds:
     lines: tuple[int, int, int] = (0, 0, 0)
 
 
-def _parse_int(token: str, path: Path, line: int, field: str, minimum: int) -> int:
-    try:
-        value = int(token)
-    except ValueError:
-        value = None
-    if value is None or value < minimum:
-        raise FormatError(path, f"expected an integer ≥ {minimum}, got {token!r}", line=line, field=field)
-    return value
-
-
 def read_index_bounds(path: str | Path) -> IndexBounds:
     """Read a sequence's ``INDEX_BOUNDS.txt``: ``TotalAlligned N``, ``MotionnOffset m``, ``VideoooOffset v``.
 
@@ -124,7 +114,7 @@ def read_index_bounds(path: str | Path) -> IndexBounds:
         if key in values:
             msg = f"second {key!r} (first at line {values[key][1]})"
             raise FormatError(p, msg, line=ln, field=key)
-        values[key] = (_parse_int(tokens[1], p, ln, key, 1 if key == "TotalAlligned" else 0), ln)
+        values[key] = (parse_int(tokens[1], p, ln, key, 1 if key == "TotalAlligned" else 0), ln)
     missing = [k for k in INDEX_BOUNDS_KEYS if k not in values]
     if missing:
         msg = f"no {missing[0]!r} line; expected the keys {list(INDEX_BOUNDS_KEYS)}, one per line"
@@ -150,7 +140,7 @@ def read_models_info(path: str | Path) -> tuple[tuple[str, int], ...]:
     lines = numbered_lines(read_text(p))
     if not lines:
         raise FormatError(p, "empty file; expected the number of models", line=1, field="model count")
-    count = _parse_int(lines[0][1], p, lines[0][0], "model count", 1)
+    count = parse_int(lines[0][1], p, lines[0][0], "model count", 1)
     names = lines[1:]
     if len(names) != count:
         msg = f"{len(names)} model names follow, expected {count} (the count on line {lines[0][0]})"
