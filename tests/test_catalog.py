@@ -115,3 +115,14 @@ def test_scene_with_two_objects_numbers_their_prefixes(cache_dir):
     objects = [build_object(catalog.get(n), cache_dir=cache_dir) for n in ("cube", "tennis_ball")]
     model = compile_spec(build_scene(None, objects))
     assert model.body("obj0/body") is not None and model.body("obj1/body") is not None
+
+
+def test_resolve_applies_a_given_mass_or_density_to_catalogue_and_tzionas_objects():
+    from handsim.assets import TZIONAS_DIR
+
+    cube = catalog.resolve("cube", mass=0.2)
+    assert cube.mass == 0.2 and cube.density is None
+    assert "mass 0.2 kg given, replacing the default" in cube.notes
+    pipe = catalog.resolve(TZIONAS_DIR / "Models/17/Model_Object_Pipe_Gray.SKEL", density=300.0)
+    assert pipe.density == 300.0
+    assert catalog.resolve("cube") == catalog.get("cube")

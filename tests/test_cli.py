@@ -137,3 +137,13 @@ def test_inspect_bundled_tzionas_motion_reports_root_and_cube_tracks(capsys):
     assert "frames     186 over 6.167 s (30.0 Hz mean" in out
     assert "root pose  recorded" in out and "object     cube: pose track" in out
     assert "95 of 5766 valid samples outside the limits" in out
+
+
+def test_build_hand_mass_and_scene_object_mass_are_separate_options(capsys):
+    assert main(["build", "hand", "--default", "--mass", "0.5"]) == 0
+    assert "mass       0.500 kg" in capsys.readouterr().out
+    args = ["build", "scene", "--object", "cube", "--mass", "0.2", "--hand-mass", "0.4"]
+    assert main(args) == 0
+    out = capsys.readouterr().out
+    assert "mass       200.0 g" in out  # the object
+    assert "mass       0.600 kg" in out  # the scene: hand 0.4 + cube 0.2

@@ -138,8 +138,8 @@ def resolve(
     Args:
         what: The name or path.
         units: A mesh file's units, ``"m"`` or ``"mm"`` (required for mesh files).
-        density: Density in kg/m³ for a mesh file (default 1000, water) or to override an ARCTIC or
-            Tzionas default.
+        density: Density in kg/m³ for a mesh file (default 1000, water), or to override a catalogue,
+            ARCTIC or Tzionas object's own.
         mass: Total mass in kg instead of a density (the mesh may then be open).
 
     Returns:
@@ -155,7 +155,7 @@ def resolve(
     if path.suffix.lower() == ".skel" and path.is_file():
         from handsim.io.tzionas_objects import read_tzionas_object
 
-        return read_tzionas_object(path, density=density)
+        return _with_mass(read_tzionas_object(path), density, mass)
     if path.suffix.lower() in {".obj", ".off", ".stl", ".ply"}:
         from handsim.io.mesh import read_mesh
 
@@ -171,4 +171,13 @@ def resolve(
                 model, notes=(*model.notes, f"no density or mass given; {DEFAULT_DENSITY:g} kg/m³ assumed")
             )
         return model
-    return get(str(what))
+    return _with_mass(get(str(what)), density, mass)
+
+
+def _with_mass(model: ObjectModel, density: float | None, mass: float | None) -> ObjectModel:
+    """The model with a user's density or mass in place of its own (noted), or unchanged."""
+    if density is None and mass is None:
+        return model
+    given = f"mass {mass:g} kg" if mass is not None else f"density {density:g} kg/m³"
+    notes = (*model.notes, f"{given} given, replacing the default")
+    return replace(model, density=density, mass=mass, notes=notes)

@@ -12,9 +12,9 @@ def _hand_spec(skeleton_path: str | None, args: argparse.Namespace):
     from handsim.io import read_skeleton
 
     if skeleton_path is None:
-        return default_hand(args.hand_length, getattr(args, "hand_breadth", None), mass=args.mass), None
+        return default_hand(args.hand_length, args.hand_breadth, mass=args.hand_mass), None
     skeleton = read_skeleton(skeleton_path)
-    return build_hand(skeleton, mass=args.mass, collision=args.collision), skeleton
+    return build_hand(skeleton, mass=args.hand_mass, collision=args.collision), skeleton
 
 
 def _print_model(spec) -> None:
@@ -159,7 +159,7 @@ def register(commands: argparse._SubParsersAction) -> None:
     )
     hand.add_argument("skeleton", nargs="?", metavar="SKELETON_FILE", help=".xmlskel or .SKEL file")
     hand.add_argument("--default", action="store_true", help="use the parametric default hand")
-    _add_hand_options(hand)
+    _add_hand_options(hand, "--mass")
     hand.add_argument("-o", "--output", metavar="XML", help="write the model as MJCF to this file")
     hand.set_defaults(func=_build_hand)
 
@@ -186,7 +186,7 @@ def register(commands: argparse._SubParsersAction) -> None:
         "--hand", default="default", metavar="SKELETON_FILE", help="skeleton file, or 'default' (the default)"
     )
     scene.add_argument("--no-hand", action="store_true", help="objects only")
-    _add_hand_options(scene)
+    _add_hand_options(scene, "--hand-mass")  # --mass is the object's
     scene.add_argument(
         "--hand-pos", type=float, nargs=3, default=(0.0, 0.0, 0.12), metavar=("X", "Y", "Z"),
         help="position of the hand's root, metres (default 0 0 0.12)",
@@ -200,7 +200,7 @@ def register(commands: argparse._SubParsersAction) -> None:
     scene.set_defaults(func=_build_scene)
 
 
-def _add_hand_options(parser: argparse.ArgumentParser) -> None:
+def _add_hand_options(parser: argparse.ArgumentParser, mass_flag: str) -> None:
     add_hand_size(parser)
     parser.add_argument(
         "--hand-breadth",
@@ -209,15 +209,14 @@ def _add_hand_options(parser: argparse.ArgumentParser) -> None:
         metavar="M",
         help="parametric hand: breadth across the metacarpals in metres (default 0.45 × length)",
     )
-    if not any(a.dest == "mass" for a in parser._actions):
-        parser.add_argument(
-            "--hand-mass",
-            dest="mass",
-            type=float,
-            default=None,
-            metavar="KG",
-            help="whole-hand mass in kg (default: 0.45 kg scaled with the cube of hand length)",
-        )
+    parser.add_argument(
+        mass_flag,
+        dest="hand_mass",
+        type=float,
+        default=None,
+        metavar="KG",
+        help="whole-hand mass in kg (default: 0.45 kg scaled with the cube of hand length)",
+    )
     parser.add_argument(
         "--collision",
         choices=("capsules", "mesh"),
