@@ -6,6 +6,7 @@ together: a wrong inertia makes the object spin or jitter, a broken hull lets it
 
 from __future__ import annotations
 
+from collections import deque
 from dataclasses import dataclass
 
 import mujoco
@@ -65,12 +66,11 @@ def drop_test(obj: mujoco.MjSpec, height: float = 0.05, duration: float = 2.0) -
     dof = slice(int(model.jnt_dofadr[free.id]), model.nv)  # the free joint and any hinge after it
     steps = round(duration / model.opt.timestep)
     calm_since: float | None = None
-    recent: list[float] = []
-    hold_steps = max(1, round(REST_HOLD / model.opt.timestep))
+    recent: deque[float] = deque(maxlen=max(1, round(REST_HOLD / model.opt.timestep)))
     for _ in range(steps):
         mujoco.mj_step(model, data)
         speed = float(np.max(np.abs(data.qvel[dof])))
-        recent = [*recent[-hold_steps + 1 :], speed]
+        recent.append(speed)
         if speed < REST_SPEED:
             calm_since = data.time if calm_since is None else calm_since
         else:
