@@ -295,6 +295,18 @@ def object_bounds(spec: mujoco.MjSpec) -> tuple[np.ndarray, np.ndarray]:
     Returns:
         Lower and upper corners, metres.
     """
+    allp = object_points(spec)
+    return allp.min(axis=0), allp.max(axis=0)
+
+
+def object_points(spec: mujoco.MjSpec) -> np.ndarray:
+    """Points whose convex hull bounds the object's collision geometry, in its object frame.
+
+    Hull vertices and primitive bounding-box corners at articulation 0, shape (n, 3), metres.
+
+    Raises:
+        ModelError: The spec has no collision geometry.
+    """
     points: list[np.ndarray] = []
     meshes = {m.name: np.asarray(m.uservert).reshape(-1, 3) for m in spec.meshes}
     for geom in spec.geoms:
@@ -306,8 +318,7 @@ def object_bounds(spec: mujoco.MjSpec) -> tuple[np.ndarray, np.ndarray]:
         points.append(_primitive_corners(geom))
     if not points:
         raise ModelError(f"object spec {spec.modelname!r} has no collision geometry")
-    allp = np.vstack(points)
-    return allp.min(axis=0), allp.max(axis=0)
+    return np.vstack(points)
 
 
 def _primitive_corners(geom: mujoco.MjsGeom) -> np.ndarray:

@@ -20,6 +20,18 @@ from handsim.errors import ModelError
 
 HAND_PREFIX = "hand/"
 OBJECT_PREFIX = "obj/"
+HAND_ROOT_OPTIONS = ("fixed", "weld")
+"""``build_scene(hand_root=…)``: the hand's root fixed where attached, or free and welded to a mocap body."""
+HAND_TARGET = "hand_target"
+"""Name of the mocap body the hand's root is welded to (``hand_root="weld"``)."""
+HAND_WELD = "hand_weld"
+"""Name of the weld between :data:`HAND_TARGET` and the hand's root body."""
+SUPPORT_SUFFIX = "support"
+"""An object's support weld is named ``<prefix>support`` (e.g. ``obj/support``)."""
+SUPPORT_SOLREF = (0.005, 1.0)
+"""Support weld: stiff (2.5 steps of 2 ms), so a held object sags well under a millimetre."""
+HAND_WELD_SOLREF = (0.01, 1.0)
+"""Weld time constant (s) and damping ratio: the root follows its target within ~10 ms; contacts push back."""
 TABLE_RGBA = (0.62, 0.52, 0.42, 1.0)
 FLOOR_RGBA = (0.35, 0.37, 0.40, 1.0)
 TABLE_FRICTION = (
@@ -79,6 +91,8 @@ def build_scene(
     table: bool = True,
     table_size: tuple[float, float] = (1.0, 0.7),
     table_height: float = 0.75,
+    hand_root: str = "fixed",
+    object_support: bool = False,
     options: SceneOptions | None = None,
     name: str = "handsim_scene",
 ) -> mujoco.MjSpec:
@@ -96,6 +110,12 @@ def build_scene(
         table: Add the table (its top is z = 0) and the floor.
         table_size: Table top length (x) and width (y), metres.
         table_height: Table height, metres (the floor is at z = −table_height).
+        hand_root: ``"fixed"``: the hand's root body stays where it is attached (glove data; wrist DoFs
+            stay hinges). ``"weld"``: the root body gets a free joint and is welded (:data:`HAND_WELD`) to
+            the mocap body :data:`HAND_TARGET`, which starts at the root's pose; writing a recorded root
+            pose into ``data.mocap_pos``/``mocap_quat`` drives the hand while contacts still push back.
+        object_support: Weld each object's root body to the world where it is placed (``<prefix>support``,
+            active); switching the equality off (``data.eq_active``) releases the object.
         options: Simulation options (default :class:`SceneOptions`).
         name: Model name.
 
@@ -103,8 +123,11 @@ def build_scene(
         The scene spec; it is not compiled.
 
     Raises:
-        ModelError: ``object_poses`` does not match the objects, or a pose is malformed.
+        ModelError: ``object_poses`` does not match the objects, a pose is malformed, ``hand_root`` is
+            unknown, or ``"weld"`` is asked for a hand whose root body has joints of its own.
     """
+    if hand_root not in HAND_ROOT_OPTIONS:
+        raise ModelError(f"unknown hand_root {hand_root!r}; expected one of {list(HAND_ROOT_OPTIONS)}")
     opts = options or SceneOptions()
     objs = [objects] if isinstance(objects, mujoco.MjSpec) else list(objects)
     spec = mujoco.MjSpec()
@@ -134,17 +157,61 @@ def build_scene(
         child = hand.copy()
         _apply_options(child, opts)
         frame = world.add_frame(pos=_vector(hand_pos, 3, "hand_pos"), quat=_vector(hand_quat, 4, "hand_quat"))
+        root_name = HAND_PREFIX + child.worldbody.first_body().name
         spec.attach(child, prefix=HAND_PREFIX, frame=frame)
+        if hand_root == "weld":
+            _weld_to_mocap(spec, root_name, hand_pos, hand_quat)
 
     poses = _object_poses(objs, object_poses)
     for prefix, obj, pose in zip(object_prefixes(len(objs)), objs, poses, strict=True):
         frame = world.add_frame(pos=pose[:3].tolist(), quat=pose[3:].tolist())
+        root_name = prefix + obj.worldbody.first_body().name
         spec.attach(obj.copy(), prefix=prefix, frame=frame)
+        if object_support:
+            spec.add_equality(
+                name=prefix + SUPPORT_SUFFIX, type=mujoco.mjtEq.mjEQ_WELD, objtype=mujoco.mjtObj.mjOBJ_BODY,
+                name1=root_name, data=[*pose[:3].tolist(), *_AS_COMPILED_WELD[3:]],
+                solref=list(SUPPORT_SOLREF),
+            )  # fmt: skip
 
     target = np.asarray(hand_pos, dtype=float) if hand is not None else np.zeros(3)
     _add_look_at_camera(spec, "hand_cam", target, eye=target + np.array([0.35, -0.35, 0.25]))
     _add_look_at_camera(spec, "overview", np.zeros(3), eye=np.array([0.0, -0.9, 0.6]))
     return spec
+
+
+_IDENTITY_WELD = [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0, 0.0]
+"""Weld ``data``: anchor (3), relative position (3), relative quaternion (4), torque scale, unused.
+
+An identity relative pose holds the two bodies' frames together (the hand's root on its mocap target)."""
+_AS_COMPILED_WELD = [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0]
+"""A zero relative quaternion makes MuJoCo take the relative pose at ``qpos0``: the body stays where placed
+(``name2`` left empty is the world). The anchor (in ``name2``'s frame) goes on the object's origin: anchored
+at the world origin, the weld's position rows hold that point and only its soft rotation rows resist the
+object swinging about it."""
+
+
+def _weld_to_mocap(spec: mujoco.MjSpec, root_name: str, pos: npt.ArrayLike, quat: npt.ArrayLike) -> None:
+    """Free the hand's root body and weld it to a mocap body at the root's initial world pose."""
+    root = spec.body(root_name)
+    if root.first_joint() is not None:
+        raise ModelError(
+            f"hand_root='weld': the hand's root body {root_name!r} has joints of its own "
+            f"({root.first_joint().name!r}); a recorded root pose replaces them, so build the hand without "
+            "root DoFs or use hand_root='fixed'"
+        )
+    frame_rot, frame_pos = np.empty(9), np.asarray(_vector(pos, 3, "hand_pos"))
+    mujoco.mju_quat2Mat(frame_rot, np.asarray(_vector(quat, 4, "hand_quat")))
+    world_pos = frame_pos + frame_rot.reshape(3, 3) @ np.asarray(root.pos)
+    world_quat = np.empty(4)
+    mujoco.mju_mulQuat(world_quat, np.asarray(_vector(quat, 4, "hand_quat")), np.asarray(root.quat))
+    root.add_freejoint(name="root_free")
+    target = spec.worldbody.add_body(name=HAND_TARGET, pos=world_pos.tolist(), quat=world_quat.tolist())
+    target.mocap = True
+    spec.add_equality(
+        name=HAND_WELD, type=mujoco.mjtEq.mjEQ_WELD, objtype=mujoco.mjtObj.mjOBJ_BODY, name1=HAND_TARGET,
+        name2=root_name, data=_IDENTITY_WELD, solref=list(HAND_WELD_SOLREF),
+    )  # fmt: skip
 
 
 def _apply_options(spec: mujoco.MjSpec, opts: SceneOptions) -> None:

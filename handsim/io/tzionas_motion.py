@@ -51,6 +51,7 @@ from scipy.spatial.transform import Rotation
 from handsim.errors import FormatError, InputFileError, TrajectoryError
 from handsim.io._text import numbered_lines, parse_int, read_bytes, read_text, sha256_of
 from handsim.io.tzionas import SkelBone, read_motion, read_skel, read_tzionas_skeleton
+from handsim.poses import quat_conjugate, quat_multiply
 from handsim.skeleton import Skeleton, rotation_about_axis
 from handsim.trajectory import ObjectTrack, Trajectory
 
@@ -163,16 +164,6 @@ def _quat_about(axis: np.ndarray, angles: np.ndarray) -> np.ndarray:
     return np.concatenate([np.cos(half)[..., None], np.sin(half)[..., None] * axis], axis=-1)
 
 
-def _qmul(a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    wa, va, wb, vb = a[..., :1], a[..., 1:], b[..., :1], b[..., 1:]
-    w = wa * wb - np.sum(va * vb, axis=-1, keepdims=True)
-    return np.concatenate([w, wa * vb + wb * va + np.cross(va, vb)], axis=-1)
-
-
-def _conj(q: np.ndarray) -> np.ndarray:
-    return q * np.array([1.0, -1.0, -1.0, -1.0])
-
-
 def _wrap(angles: np.ndarray) -> np.ndarray:
     return np.pi - np.mod(np.pi - angles, 2.0 * np.pi)  # (-π, π]
 
@@ -206,7 +197,7 @@ def _fit_two(q: np.ndarray, a1: np.ndarray, a2: np.ndarray) -> np.ndarray:
 
 def _profile(q: np.ndarray, axes: np.ndarray, x: np.ndarray) -> np.ndarray:
     """Best fit (|⟨q, fit⟩|) of a 3-DoF chain with its outermost angle fixed at ``x``."""
-    rest = _qmul(_conj(_quat_about(axes[0], x)), q)
+    rest = quat_multiply(quat_conjugate(_quat_about(axes[0], x)), q)
     return _largest_singular(_pair_matrix(rest, axes[1], axes[2]))
 
 
@@ -235,7 +226,7 @@ def _fit_three(q: np.ndarray, axes: np.ndarray) -> np.ndarray:
     candidates, fits = [], []
     for c in range(2):  # the two best peaks: a 3-DoF chain generally has two exact solutions
         x = _golden_max(q, axes, grid[ranked[:, c]] - step, grid[ranked[:, c]] + step)
-        inner = _fit_two(_qmul(_conj(_quat_about(axes[0], x)), q), axes[1], axes[2])
+        inner = _fit_two(quat_multiply(quat_conjugate(_quat_about(axes[0], x)), q), axes[1], axes[2])
         candidates.append(np.concatenate([_wrap(x)[:, None], inner], axis=1))
         fits.append(_profile(q, axes, x))
     smaller = np.sum(candidates[1] ** 2, axis=1) < np.sum(candidates[0] ** 2, axis=1)
@@ -249,13 +240,13 @@ def _fit_three(q: np.ndarray, axes: np.ndarray) -> np.ndarray:
 def _chain_quats(axes: np.ndarray, angles: np.ndarray) -> np.ndarray:
     out = np.tile([1.0, 0.0, 0.0, 0.0], (len(angles), 1))
     for i, axis in enumerate(axes):
-        out = _qmul(out, _quat_about(axis, angles[:, i]))
+        out = quat_multiply(out, _quat_about(axis, angles[:, i]))
     return out
 
 
 def _residual(q: np.ndarray, axes: np.ndarray, angles: np.ndarray) -> np.ndarray:
     """Rotation vector (T, 3) taking the chain to ``q``, in the chain's end frame."""
-    diff = _qmul(_conj(_chain_quats(axes, angles)), q)
+    diff = quat_multiply(quat_conjugate(_chain_quats(axes, angles)), q)
     diff *= np.where(diff[:, :1] < 0, -1.0, 1.0)
     norm = np.linalg.norm(diff[:, 1:], axis=1)
     scale = np.where(norm > 1e-300, 2.0 * np.arctan2(norm, diff[:, 0]) / np.maximum(norm, 1e-300), 2.0)

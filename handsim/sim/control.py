@@ -1,0 +1,148 @@
+"""Trajectory → control frames: joint targets per actuator and a root pose per frame, in the scene's world.
+
+The trajectory is resampled (linear, slerp for poses; :func:`handsim.trajectory_ops.resample`) at the
+control rate; a control frame lasts a whole number of simulation steps, so the rate is rounded to
+``1 / (substeps · timestep)`` (noted when it changes). Frame ``k`` holds the targets of time
+``t0 + k / rate`` for its ``substeps`` steps; the state after frame ``k`` is compared with those targets.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from handsim.errors import TrajectoryError
+from handsim.poses import compose
+from handsim.sim.compiled import SimScene
+from handsim.sim.stepper import check_controls
+from handsim.trajectory import ObjectTrack, Trajectory
+from handsim.trajectory_ops import resample
+
+
+@dataclass(frozen=True)
+class ControlSchedule:
+    """Controls for every control frame of a replay.
+
+    Attributes:
+        times: Trajectory time of each frame, s (N,).
+        ctrl: Actuator targets, radians (N, nu), in actuator order.
+        root_pose: Hand root pose in the scene's world per frame (N, 7), or None (fixed root).
+        objects: Recorded object tracks in the scene's world, resampled to the frames, by scene object
+            index (only objects with a track).
+        substeps: Simulation steps per frame.
+        frame_dt: Seconds per frame (``substeps · timestep``).
+        held_dofs: Hand DoFs the trajectory has no column for: held at their initial target.
+        notes: Decisions, for the user to see.
+    """
+
+    times: np.ndarray
+    ctrl: np.ndarray
+    root_pose: np.ndarray | None
+    objects: dict[int, ObjectTrack]
+    substeps: int
+    frame_dt: float
+    held_dofs: tuple[str, ...]
+    notes: tuple[str, ...]
+
+    @property
+    def frames(self) -> int:
+        """Number of control frames."""
+        return int(self.times.shape[0])
+
+    def frame_at(self, time: float) -> int:
+        """Index of the first frame at or after trajectory time ``time`` (clamped to the frames)."""
+        return int(min(np.searchsorted(self.times, time - 1e-9), self.frames - 1))
+
+
+def substeps_for(rate_hz: float, timestep: float) -> int:
+    """Simulation steps per control frame for a control rate (at least 1)."""
+    if not (np.isfinite(rate_hz) and rate_hz > 0):
+        raise ValueError(f"control rate must be a positive number of Hz, got {rate_hz}")
+    return max(1, round(1.0 / (rate_hz * timestep)))
+
+
+def control_schedule(scene: SimScene, trajectory: Trajectory, rate_hz: float) -> ControlSchedule:
+    """Turn a trajectory into control frames for a scene.
+
+    Args:
+        scene: The compiled scene.
+        trajectory: Joint targets named like the hand's DoFs; a root pose when the scene's hand follows
+            one (``hand_root="weld"``); object tracks named in ``scene.setup.object_tracks``.
+        rate_hz: Requested control rate, Hz.
+
+    Returns:
+        The schedule.
+
+    Raises:
+        TrajectoryError: A trajectory DoF is not a hand DoF, the hand follows a root pose the trajectory
+            lacks, a named object track is missing, or a target is not finite after resampling.
+    """
+    layout, setup = scene.layout, scene.setup
+    substeps = substeps_for(rate_hz, scene.timestep)
+    frame_dt = substeps * scene.timestep
+    notes = []
+    if abs(1.0 / frame_dt - rate_hz) > 1e-6 * rate_hz:
+        notes.append(
+            f"control rate {rate_hz:g} Hz rounded to {1.0 / frame_dt:g} Hz ({substeps} steps per frame)"
+        )
+    unknown = [n for n in trajectory.dof_names if n not in layout.dof_names]
+    if unknown:
+        raise TrajectoryError(
+            f"{trajectory.source or 'trajectory'}: DoFs {unknown} are not DoFs of the hand; the hand has "
+            f"{list(layout.dof_names)}"
+        )
+    if layout.mocap >= 0 and trajectory.root_pose is None:
+        raise TrajectoryError(
+            f"{trajectory.source or 'trajectory'}: the hand follows a recorded root pose "
+            "(hand_root='weld') but the trajectory has none"
+        )
+    missing = [k for k in setup.object_tracks if k and k not in trajectory.objects]
+    if missing:
+        raise TrajectoryError(
+            f"{trajectory.source or 'trajectory'}: no object track {missing}; "
+            f"it has {list(trajectory.objects)}"
+        )
+    sampled = resample(trajectory, 1.0 / frame_dt) if trajectory.times.shape[0] > 1 else None
+    traj = sampled.trajectory if sampled is not None else trajectory
+    notes.extend(sampled.notes if sampled is not None else ())
+
+    column = {name: i for i, name in enumerate(traj.dof_names)}
+    held = tuple(n for n in layout.dof_names if n not in column)
+    initial = np.clip(0.0, layout.ctrl_range[:, 0], layout.ctrl_range[:, 1])
+    ctrl = np.tile(initial, (traj.times.shape[0], 1))
+    for a, name in enumerate(layout.dof_names):
+        if name in column:
+            ctrl[:, a] = traj.targets[:, column[name]]
+    check_controls(ctrl, f"{trajectory.source or 'trajectory'} targets after resampling")
+    if held:
+        notes.append(
+            f"hand DoFs without a trajectory column, held at 0 rad (or their nearest limit): {list(held)}"
+        )
+
+    world = np.asarray(setup.world_from_recording, dtype=float)
+    root = None
+    if layout.mocap >= 0:
+        root = compose(world, np.asarray(traj.root_pose, dtype=float))
+        check_controls(root, f"{trajectory.source or 'trajectory'} root pose")
+    elif trajectory.root_pose is not None:
+        notes.append("the trajectory's root pose is not followed: the scene's hand root is fixed")
+    objects = {}
+    for index, key in enumerate(setup.object_tracks):
+        if key:
+            track = traj.objects[key]
+            objects[index] = ObjectTrack(
+                pose=compose(world, np.asarray(track.pose, dtype=float)),
+                articulation=track.articulation,
+                valid=track.valid,
+            )
+    return ControlSchedule(
+        times=np.asarray(traj.times, dtype=float),
+        ctrl=ctrl,
+        root_pose=root,
+        objects=objects,
+        substeps=substeps,
+        frame_dt=frame_dt,
+        held_dofs=held,
+        notes=tuple(notes),
+    )

@@ -1,0 +1,263 @@
+"""Where things are in a compiled scene: the hand's actuators and links, the objects' parts, the sensors.
+
+A scene from :func:`handsim.builders.build_scene` names its elements by prefix (``hand/``, ``obj/`` or
+``obj0/``…); :func:`instrument` adds the sensors the metrics read, and :func:`scene_layout` turns the names
+into index arrays once, so that the stepping loop and the metrics only index numpy arrays.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import mujoco
+import numpy as np
+
+from handsim.builders.scene import HAND_PREFIX, HAND_TARGET, HAND_WELD, SUPPORT_SUFFIX
+from handsim.errors import ModelError
+
+CONTACT_SLOTS = 8
+"""Contacts read per hand link × object part and step; more are counted (and reported) but not summed."""
+_SLOT = 5  # found, force (3, contact frame: normal first), dist
+_FOUND, _FORCE, _DIST = 1, 2, 8  # mjtConDataField bits
+_REDUCE_NONE, _REDUCE_MINDIST = 0, 1
+CONTACT_PREFIX = "contact/"
+PENETRATION_PREFIX = "penetration/"
+
+
+@dataclass(frozen=True)
+class ObjectLayout:
+    """One object of the scene.
+
+    Attributes:
+        prefix: Its name prefix (``obj/``).
+        root_body: Body id of its root part (the one with the free joint).
+        free_qpos: qpos address of the free joint (position 3 + quaternion 4).
+        free_dof: qvel address of the free joint.
+        hinge_qpos: qpos address of the hinge of a two-part object, or -1.
+        part_bodies: Body ids of its parts (root first).
+        part_names: The parts' names without the prefix.
+        support_eq: Equality id of its support weld, or -1 without one.
+    """
+
+    prefix: str
+    root_body: int
+    free_qpos: int
+    free_dof: int
+    hinge_qpos: int
+    part_bodies: tuple[int, ...]
+    part_names: tuple[str, ...]
+    support_eq: int
+
+
+@dataclass(frozen=True)
+class SceneLayout:
+    """Index arrays of a compiled, instrumented scene.
+
+    Attributes:
+        dof_names: The hand's DoF names (joint names without ``hand/``), in actuator order.
+        actuators: Actuator ids, one per DoF.
+        dof_qpos: qpos address of each DoF's joint.
+        ctrl_range: (nu, 2) control range of each actuator (radians).
+        link_names: Hand bodies (without ``hand/``) that have collision geoms, in body order.
+        link_bodies: Their body ids.
+        root_body: Body id of the hand's root.
+        root_free_qpos: qpos address of the root's free joint (``hand_root="weld"``), or -1.
+        mocap: Mocap index of :data:`~handsim.builders.scene.HAND_TARGET`, or -1.
+        tip_names: Fingertip sites (sites on a link named for a leaf joint), without ``hand/``.
+        tip_sites: Their site ids.
+        objects: The objects.
+        contact_adr: (links, parts) sensordata address of each link × part contact sensor; parts are all
+            objects' parts in order.
+        penetration_adr: (parts,) sensordata address of each part's whole-hand ``mindist`` sensor.
+    """
+
+    dof_names: tuple[str, ...]
+    actuators: np.ndarray
+    dof_qpos: np.ndarray
+    ctrl_range: np.ndarray
+    link_names: tuple[str, ...]
+    link_bodies: np.ndarray
+    root_body: int
+    root_free_qpos: int
+    mocap: int
+    tip_names: tuple[str, ...]
+    tip_sites: np.ndarray
+    objects: tuple[ObjectLayout, ...]
+    contact_adr: np.ndarray
+    penetration_adr: np.ndarray
+
+    @property
+    def part_labels(self) -> tuple[str, ...]:
+        """Every object part as ``prefix + part`` (e.g. ``obj/body``), in the order of ``contact_adr``."""
+        return tuple(o.prefix + p for o in self.objects for p in o.part_names)
+
+
+def _hand_links(spec: mujoco.MjSpec) -> list[mujoco.MjsBody]:
+    return [
+        b
+        for b in spec.bodies
+        if b.name.startswith(HAND_PREFIX) and any(g.contype or g.conaffinity for g in b.geoms)
+    ]
+
+
+def _object_parts(spec: mujoco.MjSpec) -> list[mujoco.MjsBody]:
+    return [b for b in spec.bodies if b.name.startswith("obj") and "/" in b.name]
+
+
+def _hand_root(spec: mujoco.MjSpec) -> mujoco.MjsBody | None:
+    roots = [b for b in spec.worldbody.bodies if b.name.startswith(HAND_PREFIX)]
+    return roots[0] if roots else None
+
+
+def instrument(spec: mujoco.MjSpec) -> mujoco.MjSpec:
+    """Add the sensors the metrics read to a scene spec (in place; returned for chaining).
+
+    Per hand link with collision geoms × object part: a contact sensor reporting up to
+    :data:`CONTACT_SLOTS` contacts (count, force in the contact frame, distance). Per object part: a
+    contact sensor between the whole hand (the root's subtree) and the part, reduced to the minimum
+    distance (the deepest penetration when negative). MuJoCo evaluates them inside ``mj_step``; the loop
+    only copies ``sensordata``.
+
+    Args:
+        spec: A scene from :func:`handsim.builders.build_scene`, not yet instrumented.
+
+    Returns:
+        ``spec``.
+
+    Raises:
+        ModelError: The scene is already instrumented.
+    """
+    if any(s.name.startswith((CONTACT_PREFIX, PENETRATION_PREFIX)) for s in spec.sensors):
+        raise ModelError(f"scene {spec.modelname!r} is already instrumented")
+    root = _hand_root(spec)
+    if root is None:
+        return spec
+    body, subtree = mujoco.mjtObj.mjOBJ_BODY, mujoco.mjtObj.mjOBJ_XBODY
+    for part in _object_parts(spec):
+        for link in _hand_links(spec):
+            spec.add_sensor(
+                name=f"{CONTACT_PREFIX}{link.name}|{part.name}",
+                type=mujoco.mjtSensor.mjSENS_CONTACT,
+                objtype=body,
+                objname=link.name,
+                reftype=body,
+                refname=part.name,
+                intprm=[_FOUND | _FORCE | _DIST, _REDUCE_NONE, CONTACT_SLOTS],
+            )
+        spec.add_sensor(
+            name=f"{PENETRATION_PREFIX}{part.name}",
+            type=mujoco.mjtSensor.mjSENS_CONTACT,
+            objtype=subtree,
+            objname=root.name,
+            reftype=body,
+            refname=part.name,
+            intprm=[_FOUND | _DIST, _REDUCE_MINDIST, 1],
+        )
+    return spec
+
+
+def _id(model: mujoco.MjModel, kind: mujoco.mjtObj, name: str) -> int:
+    return int(mujoco.mj_name2id(model, kind, name))
+
+
+def scene_layout(model: mujoco.MjModel) -> SceneLayout:
+    """Find the hand, objects and metric sensors of a compiled, instrumented scene.
+
+    Raises:
+        ModelError: An actuator does not drive a hand joint, or the scene has no hand.
+    """
+    names = [model.actuator(i).name for i in range(model.nu)]
+    dof_names, actuators, dof_qpos = [], [], []
+    for i, name in enumerate(names):
+        if not name.startswith(HAND_PREFIX) or int(model.actuator_trntype[i]) != int(
+            mujoco.mjtTrn.mjTRN_JOINT
+        ):
+            raise ModelError(
+                f"actuator {name!r} is not a hand joint actuator (expected '{HAND_PREFIX}<dof>_act')"
+            )
+        joint = int(model.actuator_trnid[i, 0])
+        dof_names.append(model.joint(joint).name.removeprefix(HAND_PREFIX))
+        actuators.append(i)
+        dof_qpos.append(int(model.jnt_qposadr[joint]))
+    hand_bodies = [i for i in range(model.nbody) if model.body(i).name.startswith(HAND_PREFIX)]
+    if not hand_bodies:
+        raise ModelError(f"the scene has no hand (no body named {HAND_PREFIX}…)")
+    root_body = min(hand_bodies)
+    colliding = {
+        int(model.geom_bodyid[g])
+        for g in range(model.ngeom)
+        if model.geom_contype[g] or model.geom_conaffinity[g]
+    }
+    links = [b for b in hand_bodies if b in colliding]
+    root_joint = int(model.body_jntadr[root_body])
+    free = int(mujoco.mjtJoint.mjJNT_FREE)
+    root_free = (
+        int(model.jnt_qposadr[root_joint])
+        if root_joint >= 0 and int(model.jnt_type[root_joint]) == free
+        else -1
+    )
+    target = _id(model, mujoco.mjtObj.mjOBJ_BODY, HAND_TARGET)
+    mocap = int(model.body_mocapid[target]) if target >= 0 else -1
+    if (mocap >= 0) != (_id(model, mujoco.mjtObj.mjOBJ_EQUALITY, HAND_WELD) >= 0):
+        raise ModelError(f"scene has {HAND_TARGET!r} without {HAND_WELD!r} or the reverse")
+
+    tips = []
+    for s in range(model.nsite):
+        name, body = model.site(s).name, int(model.site_bodyid[s])
+        if name.startswith(HAND_PREFIX) and name != model.body(body).name:
+            tips.append(s)
+
+    objects = []
+    parts_all = []
+    for b in range(1, model.nbody):
+        name = model.body(b).name
+        if not (name.startswith("obj") and "/" in name) or int(model.body_parentid[b]) != 0:
+            continue
+        prefix = name[: name.index("/") + 1]
+        parts = [c for c in range(model.nbody) if model.body(c).name.startswith(prefix)]
+        jnt = int(model.body_jntadr[b])
+        hinge = [j for j in range(model.njnt) if model.joint(j).name == prefix + "hinge"]
+        support = _id(model, mujoco.mjtObj.mjOBJ_EQUALITY, prefix + SUPPORT_SUFFIX)
+        objects.append(
+            ObjectLayout(
+                prefix=prefix,
+                root_body=b,
+                free_qpos=int(model.jnt_qposadr[jnt]) if jnt >= 0 else -1,
+                free_dof=int(model.jnt_dofadr[jnt]) if jnt >= 0 else -1,
+                hinge_qpos=int(model.jnt_qposadr[hinge[0]]) if hinge else -1,
+                part_bodies=tuple(parts),
+                part_names=tuple(model.body(c).name.removeprefix(prefix) for c in parts),
+                support_eq=support,
+            )
+        )
+        parts_all.extend(model.body(c).name for c in parts)
+
+    contact = np.full((len(links), len(parts_all)), -1, dtype=np.int64)
+    penetration = np.full(len(parts_all), -1, dtype=np.int64)
+    for j, part in enumerate(parts_all):
+        for i, link in enumerate(links):
+            contact[i, j] = _sensor_adr(model, f"{CONTACT_PREFIX}{model.body(link).name}|{part}")
+        penetration[j] = _sensor_adr(model, f"{PENETRATION_PREFIX}{part}")
+    return SceneLayout(
+        dof_names=tuple(dof_names),
+        actuators=np.asarray(actuators, dtype=np.int64),
+        dof_qpos=np.asarray(dof_qpos, dtype=np.int64),
+        ctrl_range=np.array(model.actuator_ctrlrange, dtype=float),
+        link_names=tuple(model.body(b).name.removeprefix(HAND_PREFIX) for b in links),
+        link_bodies=np.asarray(links, dtype=np.int64),
+        root_body=root_body,
+        root_free_qpos=root_free,
+        mocap=mocap,
+        tip_names=tuple(model.site(s).name.removeprefix(HAND_PREFIX) for s in tips),
+        tip_sites=np.asarray(tips, dtype=np.int64),
+        objects=tuple(objects),
+        contact_adr=contact,
+        penetration_adr=penetration,
+    )
+
+
+def _sensor_adr(model: mujoco.MjModel, name: str) -> int:
+    sensor = _id(model, mujoco.mjtObj.mjOBJ_SENSOR, name)
+    if sensor < 0:
+        raise ModelError(f"scene has no sensor {name!r}: instrument the spec before compiling")
+    return int(model.sensor_adr[sensor])

@@ -1,0 +1,237 @@
+"""Replay a recorded trajectory in a scene with collisions on and free objects: the one replay core.
+
+``replay(scene, trajectory, config)`` is pure (same inputs, bitwise-same result on one machine), takes
+picklable inputs and returns a small result, so it runs in-process, in a process pool or as a Ray task.
+The gymnasium environments drive the same :class:`~handsim.sim.stepper.Stepper` and schedule.
+"""
+
+from __future__ import annotations
+
+from dataclasses import asdict, dataclass, field
+
+import mujoco
+import numpy as np
+
+from handsim.sim.compiled import SimScene
+from handsim.sim.control import ControlSchedule, control_schedule
+from handsim.sim.metrics import FrameMetrics, MetricSpec, frame_metrics
+from handsim.sim.stepper import Stepper, WarningEvent
+from handsim.sim.summary import HoldOutcome, hold_outcome, summarize
+from handsim.trajectory import Trajectory
+
+DEFAULT_CONTROL_RATE = 100.0
+"""Hz: 5 steps of 2 ms per frame; above the GraspDB14 glove's ~64 Hz and Tzionas' 30 Hz."""
+
+
+@dataclass(frozen=True)
+class ReplayConfig:
+    """How to replay.
+
+    Attributes:
+        control_rate: Control frames per second (rounded to a whole number of steps per frame).
+        metrics: Thresholds and scenario parameters (versioned, written into each result).
+        keep_states: Keep ``qpos`` of every frame in the result (for rendering videos); off by default to
+            keep results small.
+    """
+
+    control_rate: float = DEFAULT_CONTROL_RATE
+    metrics: MetricSpec = field(default_factory=MetricSpec)
+    keep_states: bool = False
+
+    def to_dict(self) -> dict:
+        """JSON-ready parameters."""
+        return {
+            "control_rate": self.control_rate,
+            "metrics": self.metrics.to_dict(),
+            "keep_states": self.keep_states,
+        }
+
+
+@dataclass(frozen=True)
+class ReplayResult:
+    """What a replay measured.
+
+    Attributes:
+        frames: Per-frame metrics of the frames simulated.
+        summary: Per-trial numbers (JSON-ready).
+        warnings: MuJoCo warnings with the step they happened at.
+        diverged: The divergence that stopped the run, or None.
+        hold: Glove scenario: the hold outcome, else None.
+        states: qpos per frame when ``config.keep_states``, else None.
+        frame_dt: Seconds per control frame.
+        substeps: Steps per control frame.
+        steps: MuJoCo steps simulated.
+        config: The configuration (JSON-ready).
+        scene: Scene facts (model hash, scenario, setup notes) (JSON-ready).
+        trajectory: Source file and SHA-256 of the trajectory.
+        notes: Decisions made while replaying.
+    """
+
+    frames: FrameMetrics
+    summary: dict
+    warnings: tuple[WarningEvent, ...]
+    diverged: WarningEvent | None
+    hold: HoldOutcome | None
+    states: np.ndarray | None
+    frame_dt: float
+    substeps: int
+    steps: int
+    config: dict
+    scene: dict
+    trajectory: dict
+    notes: tuple[str, ...]
+
+    def to_dict(self) -> dict:
+        """JSON-ready result without per-frame arrays (those are in ``frames``)."""
+        return {
+            "summary": self.summary,
+            "diverged": None if self.diverged is None else asdict(self.diverged),
+            "warnings": [asdict(w) for w in self.warnings],
+            "hold": None if self.hold is None else self.hold.to_dict(),
+            "frame_dt": self.frame_dt,
+            "substeps": self.substeps,
+            "steps": self.steps,
+            "config": self.config,
+            "scene": self.scene,
+            "trajectory": self.trajectory,
+            "notes": list(self.notes),
+        }
+
+
+def initial_state(stepper: Stepper, schedule: ControlSchedule, frame: int = 0) -> None:
+    """Put the scene in the state the recording starts from.
+
+    The hand at its targets, its root at its recorded pose, recorded objects at their recorded poses,
+    supports on; velocities zero.
+    """
+    scene, data = stepper.scene, stepper.data
+    layout = scene.layout
+    stepper.reset()
+    data.qpos[layout.dof_qpos] = np.clip(
+        schedule.ctrl[frame], layout.ctrl_range[:, 0], layout.ctrl_range[:, 1]
+    )
+    data.ctrl[:] = schedule.ctrl[frame]
+    if schedule.root_pose is not None:
+        data.mocap_pos[layout.mocap] = schedule.root_pose[frame, :3]
+        data.mocap_quat[layout.mocap] = schedule.root_pose[frame, 3:]
+        data.qpos[layout.root_free_qpos : layout.root_free_qpos + 7] = schedule.root_pose[frame]
+    for index, track in schedule.objects.items():
+        obj = layout.objects[index]
+        data.qpos[obj.free_qpos : obj.free_qpos + 7] = track.pose[frame]
+        if track.articulation is not None and obj.hinge_qpos >= 0:
+            data.qpos[obj.hinge_qpos] = track.articulation[frame]
+    for obj in layout.objects:
+        if obj.support_eq >= 0:
+            data.eq_active[obj.support_eq] = 1
+    mujoco.mj_forward(scene.model, data)
+
+
+def run_schedule(
+    stepper: Stepper, schedule: ControlSchedule, release_frame: int = -1
+) -> tuple[np.ndarray, np.ndarray, list[WarningEvent], WarningEvent | None]:
+    """Step through every frame of a schedule from the current state.
+
+    During frame ``k`` (from ``t_k`` to ``t_k+1``) the actuators and the root's mocap target hold the
+    references of ``t_k+1``, so the state at ``t_k+1`` is compared with what it was driven towards.
+
+    Returns:
+        qpos and sensordata at each frame time (rows up to the divergence when there is one), the
+        warnings, and the divergence.
+    """
+    model, data = stepper.model, stepper.data
+    n = schedule.frames
+    qpos = np.empty((n, model.nq))
+    sensors = np.empty((n, model.nsensordata))
+    qpos[0], sensors[0] = data.qpos, data.sensordata
+    ctrl, root = schedule.ctrl, schedule.root_pose
+    mocap = stepper.scene.layout.mocap
+    supports = [o.support_eq for o in stepper.scene.layout.objects if o.support_eq >= 0]
+    warnings: list[WarningEvent] = []
+    step = stepper.step
+    for k in range(n - 1):
+        if k == release_frame:
+            data.eq_active[supports] = 0
+        if root is not None:
+            data.mocap_pos[mocap] = root[k + 1, :3]
+            data.mocap_quat[mocap] = root[k + 1, 3:]
+        events = step(ctrl[k + 1])
+        if events:
+            warnings.extend(events)
+            stop = next((e for e in events if e.diverged), None)
+            if stop is not None:
+                return qpos[: k + 1], sensors[: k + 1], warnings, stop
+        qpos[k + 1] = data.qpos
+        sensors[k + 1] = data.sensordata
+    return qpos, sensors, warnings, None
+
+
+def replay(scene: SimScene, trajectory: Trajectory, config: ReplayConfig | None = None) -> ReplayResult:
+    """Replay ``trajectory`` in ``scene`` and measure it.
+
+    Args:
+        scene: A compiled scene (:func:`handsim.sim.compile_scene`, or a scenario builder in
+            :mod:`handsim.sim.scenarios`).
+        trajectory: Joint targets (and root pose / object tracks as the scene's setup needs).
+        config: Replay parameters (default :class:`ReplayConfig`).
+
+    Returns:
+        The result; a diverged run stops at the divergence and says so (``diverged``).
+
+    Raises:
+        TrajectoryError: The trajectory does not fit the scene (see :func:`control_schedule`).
+        SimulationError: A target is not finite.
+    """
+    config = config or ReplayConfig()
+    spec = config.metrics
+    schedule = control_schedule(scene, trajectory, config.control_rate)
+    stepper = Stepper(scene, schedule.substeps)
+    initial_state(stepper, schedule)
+    setup = scene.setup
+    release = -1
+    if setup.release_time is not None:
+        release = schedule.frame_at(setup.release_time + spec.release_delay)
+    qpos, sensors, warnings, diverged = run_schedule(stepper, schedule, release)
+    frames = frame_metrics(scene, schedule, qpos, sensors)
+    summary = summarize(frames, spec)
+    summary["diverged"] = diverged is not None
+    summary["warnings"] = len(warnings)
+    hold = None
+    if release >= 0 and setup.hold_window is not None and scene.layout.objects:
+        obj = scene.layout.objects[0]
+        hold = hold_outcome(
+            frames, qpos[:, obj.free_qpos + 2], float(schedule.times[release]), setup.hold_window, spec
+        )
+        summary.update(
+            held=hold.held,
+            time_held_s=hold.time_held,
+            max_slip_mm=hold.max_slip * 1000.0,
+            drop_mm=hold.drop * 1000.0,
+        )
+    notes = (*schedule.notes, *([diverged.describe()] if diverged else ()))
+    return ReplayResult(
+        frames=frames,
+        summary=summary,
+        warnings=tuple(warnings),
+        diverged=diverged,
+        hold=hold,
+        states=qpos if config.keep_states else None,
+        frame_dt=schedule.frame_dt,
+        substeps=schedule.substeps,
+        steps=(qpos.shape[0] - 1) * schedule.substeps + (schedule.substeps if diverged else 0),
+        config=config.to_dict(),
+        scene={
+            "model_sha256": scene.model_sha256,
+            "scenario": setup.scenario,
+            "links": list(scene.layout.link_names),
+            "parts": list(scene.layout.part_labels),
+            "tips": list(scene.layout.tip_names),
+            "placement": setup.placement,
+            "notes": list(setup.notes),
+        },
+        trajectory={
+            "source": trajectory.source,
+            "sha256": trajectory.sha256,
+            "frames": int(trajectory.times.shape[0]),
+        },
+        notes=notes,
+    )

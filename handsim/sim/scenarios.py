@@ -1,0 +1,190 @@
+"""Scenes for the two replay scenarios, with the choices they make written into :class:`SceneSetup`.
+
+* **Recorded object** (:func:`recorded_scene`; Tzionas, ARCTIC): the hand's root follows its recorded pose
+  through a mocap weld and each object starts at its recorded pose, free. The recording's frame has no
+  "up": gravity is taken as the object's face direction closest to ``gravity_hint`` at the first frame
+  (where the object rests on its support), and the support plane as the plane under the object's lowest
+  point along it. The scene's world puts that plane at z = 0 (the table top) with z up, the object's first
+  position above the origin.
+* **Glove only** (:func:`glove_scene`; GraspDB14): the hand's root is fixed, palm down, and the object is
+  placed where the grasp closes (:mod:`handsim.sim.placement`), held there by a support weld that the replay
+  switches off :attr:`MetricSpec.release_delay` after the grasp frame.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+
+import mujoco
+import numpy as np
+import numpy.typing as npt
+
+from handsim.builders.objects import object_points
+from handsim.builders.scene import build_scene
+from handsim.errors import TrajectoryError
+from handsim.poses import compose, quat_rotate, transform_points
+from handsim.sim.compiled import SceneSetup, SimScene, compile_scene
+from handsim.sim.metrics import MetricSpec
+from handsim.sim.placement import GraspFrame, grasp_frame, hand_frame, place_object
+from handsim.trajectory import Trajectory
+
+CAMERA_DOWN = (0.0, 1.0, 0.0)
+"""Image down (+y) of a pinhole camera frame, e.g. the Tzionas rigging world (extrinsics identity)."""
+HOLD_HEIGHT = 0.25
+"""Glove scenario: the object's lowest point starts this far above the table top, m."""
+
+
+def _rotation_onto(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """Smallest rotation (quaternion) taking unit vector ``a`` onto unit vector ``b``."""
+    axis = np.cross(a, b)
+    s, c = np.linalg.norm(axis), float(np.dot(a, b))
+    if s < 1e-12:
+        if c > 0:
+            return np.array([1.0, 0.0, 0.0, 0.0])
+        other = np.eye(3)[int(np.argmin(np.abs(a)))]
+        axis = np.cross(a, other)
+        return np.concatenate([[0.0], axis / np.linalg.norm(axis)])
+    angle = np.arctan2(s, c)
+    return np.concatenate([[np.cos(angle / 2)], np.sin(angle / 2) * axis / s])
+
+
+def support_frame(
+    points: np.ndarray, start_pose: np.ndarray, gravity_hint: npt.ArrayLike = CAMERA_DOWN
+) -> tuple[np.ndarray, np.ndarray, str]:
+    """World frame for a recording whose object rests on a support at its first frame.
+
+    Args:
+        points: The object's collision points in its frame (:func:`object_points`), m.
+        start_pose: The object's recorded pose at the first frame (recording frame).
+        gravity_hint: Roughly "down" in the recording frame.
+
+    Returns:
+        ``world_from_recording`` pose (z up, the support plane at z = 0, the object's first position above
+        the origin), the gravity direction in the recording frame, and a note.
+    """
+    hint = np.asarray(gravity_hint, dtype=float)
+    hint = hint / np.linalg.norm(hint)
+    axes = np.vstack([np.eye(3), -np.eye(3)])
+    world_axes = quat_rotate(start_pose[3:], axes)
+    best = int(np.argmax(world_axes @ hint))
+    down = world_axes[best]
+    turn = _rotation_onto(down, np.array([0.0, 0.0, -1.0]))
+    rotated = quat_rotate(turn, transform_points(start_pose, points))
+    origin = quat_rotate(turn, start_pose[:3])
+    shift = np.array([-origin[0], -origin[1], -rotated[:, 2].min()])
+    tilt = np.degrees(np.arccos(np.clip(down @ hint, -1, 1)))
+    label = ["+x", "+y", "+z", "-x", "-y", "-z"][best]
+    note = (
+        f"gravity = the object's {label} axis at the first frame, {tilt:.1f}° from the hint "
+        f"{hint.round(3).tolist()}; "
+        "the support plane (table top, z = 0) is under its lowest point"
+    )
+    return np.concatenate([shift, turn]), down, note
+
+
+def recorded_scene(
+    hand: mujoco.MjSpec,
+    trajectory: Trajectory,
+    objects: Mapping[str, mujoco.MjSpec],
+    *,
+    gravity_hint: npt.ArrayLike = CAMERA_DOWN,
+    table: bool = True,
+) -> SimScene:
+    """Scene for a recording with object tracks: the hand follows its root pose, the objects are free.
+
+    Args:
+        hand: The hand (root without DoFs of its own; its root body's world pose is the trajectory's
+            ``root_pose``).
+        trajectory: With ``root_pose`` and a track in ``objects`` for each key of ``objects``.
+        objects: Object specs (:func:`handsim.builders.build_object`) by track name; the first defines the
+            support plane.
+        gravity_hint: Roughly "down" in the recording frame (default: image down of a camera frame).
+        table: Add the table under the support plane.
+
+    Returns:
+        The compiled scene (scenario ``recorded``).
+
+    Raises:
+        TrajectoryError: No root pose, no objects, or an object without a track.
+    """
+    if trajectory.root_pose is None:
+        raise TrajectoryError(f"{trajectory.source or 'trajectory'}: no root pose to follow")
+    if not objects:
+        raise TrajectoryError("recorded_scene needs at least one object with a recorded track")
+    missing = [k for k in objects if k not in trajectory.objects]
+    if missing:
+        raise TrajectoryError(
+            f"{trajectory.source or 'trajectory'}: no track for objects {missing}; "
+            f"tracks: {list(trajectory.objects)}"
+        )
+    keys = list(objects)
+    first = np.asarray(trajectory.objects[keys[0]].pose[0], dtype=float)
+    world, _, note = support_frame(object_points(objects[keys[0]]), first, gravity_hint)
+    end_note = _end_rest_note(object_points(objects[keys[0]]), trajectory.objects[keys[0]].pose[-1], world)
+    poses = [compose(world, np.asarray(trajectory.objects[k].pose[0], dtype=float)) for k in keys]
+    spec = build_scene(
+        hand,
+        [objects[k] for k in keys],
+        hand_pos=(0.0, 0.0, 0.0),
+        object_poses=poses,
+        table=table,
+        hand_root="weld",
+    )
+    setup = SceneSetup(
+        scenario="recorded",
+        world_from_recording=tuple(world.tolist()),
+        object_tracks=tuple(keys),
+        notes=(note, end_note),
+    )
+    return compile_scene(spec, setup)
+
+
+def _end_rest_note(points: np.ndarray, end_pose: np.ndarray, world: np.ndarray) -> str:
+    lowest = transform_points(compose(world, np.asarray(end_pose, dtype=float)), points)[:, 2].min()
+    return f"at the last frame the object's lowest point is {lowest * 1000:+.1f} mm from the support plane"
+
+
+def glove_scene(
+    hand: mujoco.MjSpec,
+    trajectory: Trajectory,
+    obj: mujoco.MjSpec,
+    *,
+    grasp: GraspFrame | None = None,
+    spec: MetricSpec | None = None,
+) -> SimScene:
+    """Scene for a glove recording: hand fixed palm down, the object placed where the grasp closes.
+
+    Args:
+        hand: The hand the trajectory drives (its root fixed; wrist DoFs stay hinges).
+        trajectory: Joint targets named like the hand's DoFs.
+        obj: The object (:func:`handsim.builders.build_object`).
+        grasp: The grasp frame and hold window; default :func:`grasp_frame` (the ``grasp`` phase, else peak
+            flexion).
+        spec: Placement thresholds (default :class:`MetricSpec`).
+
+    Returns:
+        The compiled scene (scenario ``glove``) with the object on an active support.
+    """
+    spec = spec or MetricSpec()
+    grasp = grasp or grasp_frame(trajectory)
+    probe = compile_scene(build_scene(hand, obj, table=False))
+    quat = hand_frame(probe)
+    search = compile_scene(build_scene(hand, obj, hand_quat=quat, hand_pos=(0.0, 0.0, 0.0), table=False))
+    placement = place_object(search, trajectory, grasp.frame, spec)
+    lift = HOLD_HEIGHT - placement.lowest_z
+    hand_pos = (0.0, 0.0, lift)
+    pose = placement.pose.copy()
+    pose[2] += lift
+    scene = build_scene(
+        hand, obj, hand_pos=hand_pos, hand_quat=quat, object_poses=[pose], object_support=True
+    )
+    times = trajectory.times
+    setup = SceneSetup(
+        scenario="glove",
+        release_time=float(times[grasp.frame]),
+        grasp_time=float(times[grasp.frame]),
+        hold_window=(float(times[grasp.window[0]]), float(times[grasp.window[1]])),
+        placement={**placement.to_dict(), "grasp": grasp.to_dict()},
+        notes=(grasp.note, placement.note, f"hand palm down, the object's lowest point {HOLD_HEIGHT} m up"),
+    )
+    return compile_scene(scene, setup)

@@ -1,0 +1,129 @@
+"""The one stepping loop: control frames of ``substeps`` MuJoCo steps, warnings checked after each frame.
+
+MuJoCo does not raise when a simulation goes wrong: it counts a warning and, for a bad position, velocity
+or acceleration, resets the state and goes on. :class:`Stepper` checks the counters after every control
+frame; a divergence warning stops the run and names the step it happened at.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import mujoco
+import numpy as np
+import numpy.typing as npt
+
+from handsim.errors import SimulationError
+from handsim.sim.compiled import SimScene
+from handsim.sim.warnings import WARNING_NAMES
+
+DIVERGENCE_WARNINGS = frozenset({"mjWARN_BADQPOS", "mjWARN_BADQVEL", "mjWARN_BADQACC", "mjWARN_BADCTRL"})
+"""Warnings after which the state is no longer the simulation of the inputs (MuJoCo reset it, or replaced
+a NaN control by zero)."""
+_RESETTING = frozenset({"mjWARN_BADQPOS", "mjWARN_BADQVEL", "mjWARN_BADQACC"})
+
+
+@dataclass(frozen=True)
+class WarningEvent:
+    """A MuJoCo warning raised during a control frame.
+
+    Attributes:
+        name: MuJoCo's name (``mjWARN_BADQACC`` …).
+        step: Index of the MuJoCo step it happened in (0 = the first step of the run). For warnings that
+            reset the state it is exact; for others it is the frame's first step.
+        frame: Index of the control frame.
+        count: New occurrences in the frame.
+        info: MuJoCo's ``lastinfo`` (e.g. the DoF with a bad acceleration).
+        diverged: The state was reset or a control replaced: the run stops here.
+    """
+
+    name: str
+    step: int
+    frame: int
+    count: int
+    info: int
+    diverged: bool
+
+    def describe(self) -> str:
+        """One line for people."""
+        what = "diverged" if self.diverged else "warning"
+        return f"{what}: {self.name} ×{self.count} at step {self.step} (frame {self.frame}, info {self.info})"
+
+
+class Stepper:
+    """Steps a scene in control frames and records the sensors and the state after each frame.
+
+    Args:
+        scene: The scene.
+        substeps: MuJoCo steps per control frame (≥ 1).
+    """
+
+    def __init__(self, scene: SimScene, substeps: int) -> None:
+        if substeps < 1:
+            raise ValueError(f"substeps must be ≥ 1, got {substeps}")
+        self.scene = scene
+        self.model = scene.model
+        self.data = mujoco.MjData(scene.model)
+        self.substeps = int(substeps)
+        self.frame = 0
+        self._counts = self.data.warning.number  # a view: updated in place by MuJoCo
+        self._seen = np.zeros_like(self._counts)
+
+    def reset(self) -> None:
+        """Back to the model's reference state (``qpos0``), frame 0, warnings cleared."""
+        mujoco.mj_resetData(self.model, self.data)
+        self._counts = self.data.warning.number
+        self._seen[:] = 0
+        self.frame = 0
+
+    def step(self, ctrl: npt.ArrayLike | None = None) -> tuple[WarningEvent, ...]:
+        """Advance one control frame with ``ctrl`` held (zero-order hold).
+
+        Args:
+            ctrl: Actuator controls (nu,), or None to keep the current ones.
+
+        Returns:
+            The warnings of the frame (empty almost always); a run must stop after one that ``diverged``.
+        """
+        if ctrl is not None:
+            self.data.ctrl[:] = ctrl
+        mujoco.mj_step(self.model, self.data, nstep=self.substeps)
+        self.frame += 1
+        if not self._counts.any():
+            return ()
+        return self._new_warnings()
+
+    def _new_warnings(self) -> tuple[WarningEvent, ...]:
+        events = []
+        first = (self.frame - 1) * self.substeps
+        for i in np.flatnonzero(self._counts != self._seen):
+            name = WARNING_NAMES[i]
+            step = first
+            if name in _RESETTING:
+                # the reset sets time to 0; the steps after it, the reset's own included, advanced it
+                after = round(self.data.time / self.model.opt.timestep)
+                step = first + self.substeps - after
+            events.append(
+                WarningEvent(
+                    name=name,
+                    step=step,
+                    frame=self.frame - 1,
+                    count=int(self._counts[i] - self._seen[i]),
+                    info=int(self.data.warning[i].lastinfo),
+                    diverged=name in DIVERGENCE_WARNINGS,
+                )
+            )
+        self._seen[:] = self._counts
+        return tuple(events)
+
+
+def check_controls(values: np.ndarray, what: str) -> None:
+    """Raise if controls hold NaN or Inf (MuJoCo would silently replace them by zero).
+
+    Raises:
+        SimulationError: Naming the first bad frame and column.
+    """
+    bad = ~np.isfinite(values)
+    if bad.any():
+        frame, column = (int(x[0]) for x in np.nonzero(bad))
+        raise SimulationError(f"{what}: non-finite value at frame {frame}, column {column}")

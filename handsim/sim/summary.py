@@ -1,0 +1,144 @@
+"""Per-trial numbers from per-frame metrics: the hold outcome of a glove trial and a JSON-ready summary."""
+
+from __future__ import annotations
+
+import math
+from dataclasses import asdict, dataclass
+
+import numpy as np
+
+from handsim.sim.metrics import FrameMetrics, MetricSpec
+
+
+@dataclass(frozen=True)
+class HoldOutcome:
+    """Did the hand hold the released object through the hold window?
+
+    Attributes:
+        released_at: Trajectory time the support was switched off, s.
+        window: Trajectory times (start, stop) the hold is judged over, s (start ≥ release).
+        held: The object was not lost before the window's end.
+        time_held: From release until lost (or the window's end), s.
+        lost_at: Time it was lost, s, or None.
+        reason: Why it counts as lost (slip or contact gap), or None.
+        max_slip: Largest displacement relative to the hand root from release until lost or the window's
+            end, m.
+        drop: How far the object's origin fell in the world (−z) from release to the window's end, m.
+    """
+
+    released_at: float
+    window: tuple[float, float]
+    held: bool
+    time_held: float
+    lost_at: float | None
+    reason: str | None
+    max_slip: float
+    drop: float
+
+    def to_dict(self) -> dict:
+        """JSON-ready fields."""
+        return asdict(self)
+
+
+def hold_outcome(
+    frames: FrameMetrics,
+    object_z: np.ndarray,
+    release_time: float,
+    window: tuple[float, float],
+    spec: MetricSpec,
+    object_index: int = 0,
+) -> HoldOutcome:
+    """Judge holding after release.
+
+    The object is lost at the first slip beyond ``spec.slip_limit`` or contact gap longer than
+    ``spec.contact_gap``.
+
+    Args:
+        frames: Per-frame metrics (the run may have stopped early: then the object counts as lost there).
+        object_z: World height of the object's origin per frame, m.
+        release_time: When the support was switched off, s.
+        window: The hold window (trajectory times), s.
+        spec: Thresholds.
+        object_index: Which object.
+    """
+    t = frames.times
+    start = max(release_time, window[0])
+    r = int(np.searchsorted(t, release_time - 1e-9))
+    stop_index = int(np.searchsorted(t, window[1] + 1e-9))
+    if r >= t.shape[0]:
+        return HoldOutcome(
+            release_time, (start, window[1]), False, 0.0, release_time, "never released", 0.0, 0.0
+        )
+    rel = frames.object_in_hand[:, object_index]
+    slip = np.linalg.norm(rel - rel[r], axis=1)
+    contact = frames.hand_contact[:, object_index]
+    lost, reason = None, None
+    gap_start = None
+    for k in range(r, min(stop_index, t.shape[0])):
+        if slip[k] > spec.slip_limit:
+            lost, reason = k, f"slipped {slip[k] * 100:.1f} cm relative to the hand"
+            break
+        if contact[k]:
+            gap_start = None
+        else:
+            gap_start = k if gap_start is None else gap_start
+            if t[k] - t[gap_start] >= spec.contact_gap:
+                lost, reason = gap_start, f"no hand contact for {spec.contact_gap:g} s"
+                break
+    last = min(stop_index, t.shape[0]) - 1
+    if lost is None and stop_index > t.shape[0]:
+        lost, reason = t.shape[0] - 1, "the run stopped before the window ended"
+    end = last if lost is None else lost
+    return HoldOutcome(
+        released_at=float(t[r]),
+        window=(float(start), float(window[1])),
+        held=lost is None,
+        time_held=float(t[end] - t[r]),
+        lost_at=None if lost is None else float(t[lost]),
+        reason=reason,
+        max_slip=float(slip[r : end + 1].max()),
+        drop=float(object_z[r] - object_z[last]),
+    )
+
+
+def _finite(x: np.ndarray, fn) -> float | None:
+    x = np.asarray(x, dtype=float)
+    x = x[np.isfinite(x)]
+    return float(fn(x)) if x.size else None
+
+
+def summarize(frames: FrameMetrics, spec: MetricSpec) -> dict:
+    """JSON-ready per-trial numbers (SI units in the key names: ``_mm``, ``_deg``, ``_n``, ``_s``)."""
+    mm, deg = 1000.0, 180.0 / math.pi
+    n = frames.times.shape[0]
+    summary = {
+        "frames": int(n),
+        "duration_s": float(frames.times[-1] - frames.times[0]) if n else 0.0,
+        "max_penetration_mm": float(frames.penetration.max() * mm) if n else 0.0,
+        "p95_penetration_mm": float(np.percentile(frames.penetration, 95) * mm) if n else 0.0,
+        "frames_penetrating_over_1mm": int((frames.penetration > 0.001).sum()),
+        "contact_frames": int(frames.hand_contact.any(axis=1).sum()) if frames.hand_contact.size else 0,
+        "max_contact_links": int((frames.contact_count.sum(axis=2) > 0).sum(axis=1).max())
+        if n and frames.contact_count.size
+        else 0,
+        "max_total_normal_force_n": float(frames.normal_force.sum(axis=(1, 2)).max())
+        if n and frames.normal_force.size
+        else 0.0,
+        "truncated_contact_pairs": int(frames.truncated_pairs.sum()),
+        "mean_tracking_error_deg": _finite(np.abs(frames.tracking_error) * deg, np.mean),
+        "max_tracking_error_deg": _finite(np.abs(frames.tracking_error) * deg, np.max),
+        "mean_tip_error_mm": _finite(frames.tip_error * mm, np.mean),
+        "max_tip_error_mm": _finite(frames.tip_error * mm, np.max),
+    }
+    if np.isfinite(frames.object_position_error).any():
+        pos = frames.object_position_error
+        summary.update(
+            mean_drift_mm=_finite(pos * mm, np.mean),
+            max_drift_mm=_finite(pos * mm, np.max),
+            final_drift_mm=_finite(pos[-1] * mm, np.max),
+            within_tolerance=float(np.mean(pos[np.isfinite(pos)] <= spec.drift_tolerance)),
+            mean_rotation_drift_deg=_finite(frames.object_rotation_error * deg, np.mean),
+            max_rotation_drift_deg=_finite(frames.object_rotation_error * deg, np.max),
+            max_articulation_drift_deg=_finite(np.abs(frames.articulation_error) * deg, np.max),
+        )
+    return summary
