@@ -18,6 +18,7 @@ from handsim.poses import compose, inverse, quat_angle
 from handsim.sim.compiled import SimScene
 from handsim.sim.control import ControlSchedule
 from handsim.sim.layout import _SLOT, CONTACT_SLOTS
+from handsim.sim.stability import StabilitySpec
 
 METRIC_SPEC_VERSION = "1"
 
@@ -37,6 +38,7 @@ class MetricSpec:
         contact_gap: Glove scenario: the object is lost once no hand link touched it for this long, s.
         placement_penetration: Glove placement: largest penetration allowed at the grasp frame, m.
         placement_touch: Glove placement: a link within this distance of the object counts as touching, m.
+        stability: The grasp stability tests' parameters (:class:`~handsim.sim.stability.StabilitySpec`).
     """
 
     version: str = METRIC_SPEC_VERSION
@@ -46,6 +48,7 @@ class MetricSpec:
     contact_gap: float = 0.1
     placement_penetration: float = 0.002
     placement_touch: float = 0.002
+    stability: StabilitySpec = field(default_factory=StabilitySpec)
 
     def to_dict(self) -> dict:
         """JSON-ready parameters."""
@@ -111,10 +114,11 @@ def _contacts(scene: SimScene, sensors: np.ndarray) -> tuple[np.ndarray, np.ndar
 def _kinematic_targets(scene: SimScene, schedule: ControlSchedule, qpos: np.ndarray) -> np.ndarray:
     """Qpos of each frame with the hand put where the targets (and the recorded root pose) say."""
     layout = scene.layout
+    n = qpos.shape[0]
     target = qpos.copy()
-    target[:, layout.dof_qpos] = np.clip(schedule.ctrl, layout.ctrl_range[:, 0], layout.ctrl_range[:, 1])
+    target[:, layout.dof_qpos] = np.clip(schedule.ctrl[:n], layout.ctrl_range[:, 0], layout.ctrl_range[:, 1])
     if schedule.root_pose is not None and layout.root_free_qpos >= 0:
-        target[:, layout.root_free_qpos : layout.root_free_qpos + 7] = schedule.root_pose
+        target[:, layout.root_free_qpos : layout.root_free_qpos + 7] = schedule.root_pose[:n]
     return target
 
 
@@ -152,7 +156,7 @@ def frame_metrics(
     count, normal, truncated, penetration = _contacts(scene, sensors)
     targets = schedule.ctrl[:n]
     tracking = qpos[:, layout.dof_qpos] - np.clip(targets, layout.ctrl_range[:, 0], layout.ctrl_range[:, 1])
-    target_tips, _ = _sites_and_bodies(scene, _kinematic_targets(scene, schedule, qpos)[:n])
+    target_tips, _ = _sites_and_bodies(scene, _kinematic_targets(scene, schedule, qpos))
     tips, bodies = _sites_and_bodies(scene, qpos)
     tip_error = np.linalg.norm(tips - target_tips, axis=-1)
 

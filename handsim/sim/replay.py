@@ -15,6 +15,7 @@ import numpy as np
 from handsim.sim.compiled import SimScene
 from handsim.sim.control import ControlSchedule, control_schedule
 from handsim.sim.metrics import FrameMetrics, MetricSpec, frame_metrics
+from handsim.sim.stability import StabilityResult, stability_test
 from handsim.sim.stepper import Stepper, WarningEvent
 from handsim.sim.summary import HoldOutcome, hold_outcome, summarize
 from handsim.trajectory import Trajectory
@@ -32,11 +33,21 @@ class ReplayConfig:
         metrics: Thresholds and scenario parameters (versioned, written into each result).
         keep_states: Keep ``qpos`` of every frame in the result (for rendering videos); off by default to
             keep results small.
+        stability_at: Run the grasp stability tests (:func:`~handsim.sim.stability.stability_test`) on the
+            state at this trajectory time, s; ``"grasp"``: at the end of the scene's hold window (glove
+            scenario); None: no test.
     """
 
     control_rate: float = DEFAULT_CONTROL_RATE
     metrics: MetricSpec = field(default_factory=MetricSpec)
     keep_states: bool = False
+    stability_at: float | str | None = None
+
+    def __post_init__(self) -> None:
+        if isinstance(self.stability_at, str) and self.stability_at != "grasp":
+            raise ValueError(
+                f"stability_at must be a time in seconds, 'grasp' or None, got {self.stability_at!r}"
+            )
 
     def to_dict(self) -> dict:
         """JSON-ready parameters."""
@@ -44,6 +55,7 @@ class ReplayConfig:
             "control_rate": self.control_rate,
             "metrics": self.metrics.to_dict(),
             "keep_states": self.keep_states,
+            "stability_at": self.stability_at,
         }
 
 
@@ -57,6 +69,7 @@ class ReplayResult:
         warnings: MuJoCo warnings with the step they happened at.
         diverged: The divergence that stopped the run, or None.
         hold: Glove scenario: the hold outcome, else None.
+        stability: The grasp stability tests (``config.stability_at``), else None.
         states: qpos per frame when ``config.keep_states``, else None.
         frame_dt: Seconds per control frame.
         substeps: Steps per control frame.
@@ -72,6 +85,7 @@ class ReplayResult:
     warnings: tuple[WarningEvent, ...]
     diverged: WarningEvent | None
     hold: HoldOutcome | None
+    stability: StabilityResult | None
     states: np.ndarray | None
     frame_dt: float
     substeps: int
@@ -88,6 +102,7 @@ class ReplayResult:
             "diverged": None if self.diverged is None else asdict(self.diverged),
             "warnings": [asdict(w) for w in self.warnings],
             "hold": None if self.hold is None else self.hold.to_dict(),
+            "stability": None if self.stability is None else self.stability.to_dict(),
             "frame_dt": self.frame_dt,
             "substeps": self.substeps,
             "steps": self.steps,
@@ -207,6 +222,13 @@ def replay(scene: SimScene, trajectory: Trajectory, config: ReplayConfig | None 
             max_slip_mm=hold.max_slip * 1000.0,
             drop_mm=hold.drop * 1000.0,
         )
+    stability = _stability(scene, schedule, qpos, config)
+    if stability is not None:
+        displacement = stability.simulation_displacement
+        summary.update(
+            stable=stability.success,
+            simulation_displacement_mm=None if displacement is None else displacement * 1000.0,
+        )
     notes = (*schedule.notes, *([diverged.describe()] if diverged else ()))
     return ReplayResult(
         frames=frames,
@@ -214,6 +236,7 @@ def replay(scene: SimScene, trajectory: Trajectory, config: ReplayConfig | None 
         warnings=tuple(warnings),
         diverged=diverged,
         hold=hold,
+        stability=stability,
         states=qpos if config.keep_states else None,
         frame_dt=schedule.frame_dt,
         substeps=schedule.substeps,
@@ -234,4 +257,29 @@ def replay(scene: SimScene, trajectory: Trajectory, config: ReplayConfig | None 
             "frames": int(trajectory.times.shape[0]),
         },
         notes=notes,
+    )
+
+
+def _stability(
+    scene: SimScene, schedule: ControlSchedule, qpos: np.ndarray, config: ReplayConfig
+) -> StabilityResult | None:
+    """The stability tests at ``config.stability_at`` (None when not asked, or the run diverged before)."""
+    at = config.stability_at
+    if at is None or not scene.layout.objects:
+        return None
+    if at == "grasp":
+        if scene.setup.hold_window is None:
+            raise ValueError("stability_at='grasp' needs a scene with a hold window (the glove scenario)")
+        at = scene.setup.hold_window[1]
+    frame = schedule.frame_at(float(at))
+    if frame >= qpos.shape[0]:
+        return None  # the run diverged before that frame
+    root = schedule.root_pose
+    return stability_test(
+        scene,
+        qpos[frame],
+        schedule.ctrl[frame],
+        spec=config.metrics.stability,
+        mocap_pos=None if root is None else root[frame, :3],
+        mocap_quat=None if root is None else root[frame, 3:],
     )

@@ -7,6 +7,7 @@ frame; a divergence warning stops the run and names the step it happened at.
 
 from __future__ import annotations
 
+import collections
 from dataclasses import dataclass
 
 import mujoco
@@ -21,6 +22,18 @@ DIVERGENCE_WARNINGS = frozenset({"mjWARN_BADQPOS", "mjWARN_BADQVEL", "mjWARN_BAD
 """Warnings after which the state is no longer the simulation of the inputs (MuJoCo reset it, or replaced
 a NaN control by zero)."""
 _RESETTING = frozenset({"mjWARN_BADQPOS", "mjWARN_BADQVEL", "mjWARN_BADQACC"})
+_MESSAGES: collections.deque[str] = collections.deque(maxlen=64)
+
+
+def _record_warning(message: str) -> None:
+    """MuJoCo's warning hook: only record (printing would clutter; raising inside a hook aborts)."""
+    _MESSAGES.append(message.strip())
+
+
+def capture_mujoco_warnings() -> None:
+    """Route MuJoCo's warning messages (process-wide) into a buffer the stepper attaches to its events."""
+    if mujoco.get_mju_user_warning() is not _record_warning:
+        mujoco.set_mju_user_warning(_record_warning)
 
 
 @dataclass(frozen=True)
@@ -35,6 +48,7 @@ class WarningEvent:
         count: New occurrences in the frame.
         info: MuJoCo's ``lastinfo`` (e.g. the DoF with a bad acceleration).
         diverged: The state was reset or a control replaced: the run stops here.
+        message: MuJoCo's message text, when its warning hook caught one during the frame.
     """
 
     name: str
@@ -43,6 +57,7 @@ class WarningEvent:
     count: int
     info: int
     diverged: bool
+    message: str = ""
 
     def describe(self) -> str:
         """One line for people."""
@@ -68,6 +83,7 @@ class Stepper:
         self.frame = 0
         self._counts = self.data.warning.number  # a view: updated in place by MuJoCo
         self._seen = np.zeros_like(self._counts)
+        capture_mujoco_warnings()
 
     def reset(self) -> None:
         """Back to the model's reference state (``qpos0``), frame 0, warnings cleared."""
@@ -95,6 +111,8 @@ class Stepper:
 
     def _new_warnings(self) -> tuple[WarningEvent, ...]:
         events = []
+        message = " | ".join(_MESSAGES)
+        _MESSAGES.clear()
         first = (self.frame - 1) * self.substeps
         for i in np.flatnonzero(self._counts != self._seen):
             name = WARNING_NAMES[i]
@@ -111,6 +129,7 @@ class Stepper:
                     count=int(self._counts[i] - self._seen[i]),
                     info=int(self.data.warning[i].lastinfo),
                     diverged=name in DIVERGENCE_WARNINGS,
+                    message=message,
                 )
             )
         self._seen[:] = self._counts

@@ -1,0 +1,410 @@
+"""Grasp stability at one state: gravity along ±x ±y ±z with the hand frozen, and ObMan's displacement.
+
+:func:`stability_test` starts from a given state (``qpos``, zero velocity) six times, once per direction of
+gravity along the world axes, and once more for the ObMan simulation displacement. In every run:
+
+* the hand is **frozen at its targets**: its position actuators hold ``ctrl`` (and, for a welded root,
+  the mocap target holds ``mocap_pos``/``mocap_quat``) and the hand is weightless. Only the objects
+  carry weight: the model's gravity is switched off on a copy and each object body gets its weight
+  ``m · g · direction`` applied at its centre of mass (``xfrc_applied``), which is exactly what gravity
+  would apply to it. A hand whose targets press into the object squeezes it, as a real grip does;
+* the objects' supports (``<prefix>support`` welds) are switched off;
+* contacts of the environment (table and floor: the world body's geoms) are switched off unless the spec
+  says otherwise, so that only the hand can hold the object — neither original protocol has a table.
+
+A run that diverges (a MuJoCo warning after which the state is no longer the simulation of the inputs)
+stops there and fails, with the warning recorded. Every parameter sits in a versioned
+:class:`StabilitySpec` that is written into each result. See ``docs/stability.md`` for the protocols
+this follows (DexGraspNet's six-direction test and ObMan's simulation displacement) and how ours differ.
+"""
+
+from __future__ import annotations
+
+import copy
+import math
+from collections.abc import Mapping
+from dataclasses import asdict, dataclass, field, replace
+from types import MappingProxyType
+
+import mujoco
+import numpy as np
+import numpy.typing as npt
+
+from handsim.errors import SimulationError
+from handsim.poses import quat_angle
+from handsim.sim.compiled import SimScene
+from handsim.sim.stepper import Stepper
+
+STABILITY_SPEC_VERSION = "1"
+"""Version of :class:`StabilitySpec`: bumped whenever a parameter's meaning or a default changes."""
+DIRECTIONS: Mapping[str, tuple[float, float, float]] = MappingProxyType(
+    {
+        "+x": (1.0, 0.0, 0.0),
+        "-x": (-1.0, 0.0, 0.0),
+        "+y": (0.0, 1.0, 0.0),
+        "-y": (0.0, -1.0, 0.0),
+        "+z": (0.0, 0.0, 1.0),
+        "-z": (0.0, 0.0, -1.0),
+    }
+)
+"""The six directions of gravity, world frame (unit vectors), in the order they are tested."""
+
+
+@dataclass(frozen=True)
+class StabilitySpec:
+    """Every parameter of a stability test; written into each :class:`StabilityResult`.
+
+    Attributes:
+        version: :data:`STABILITY_SPEC_VERSION`; a result is comparable with another only at the same
+            version.
+        duration: Simulated time per gravity direction, s (rounded to whole simulation steps).
+        gravity: Magnitude of the gravity applied to the objects, m/s².
+        max_displacement: Success threshold on the object's centre-of-mass displacement between the start
+            and the end of a direction's run, m (strict: displacement < threshold).
+        max_rotation_deg: Success threshold on the object's rotation over a run, degrees; None: not judged.
+        require_contact: A direction succeeds only if the object still touches the hand at its end.
+        obman_duration: Simulated time of the ObMan simulation displacement, s (ObMan: 35 steps of
+            1/240 s).
+        obman_direction: Direction of gravity for the ObMan displacement, world frame (normalised).
+        environment_contacts: Keep the contacts of the world body's geoms (table, floor). False: only the
+            hand can hold the object.
+    """
+
+    version: str = STABILITY_SPEC_VERSION
+    duration: float = 1.0
+    gravity: float = 9.81
+    max_displacement: float = 0.02
+    max_rotation_deg: float | None = None
+    require_contact: bool = True
+    obman_duration: float = 35.0 / 240.0
+    obman_direction: tuple[float, float, float] = (0.0, 0.0, -1.0)
+    environment_contacts: bool = False
+
+    def __post_init__(self) -> None:
+        if self.version != STABILITY_SPEC_VERSION:
+            raise ValueError(
+                f"unknown stability spec version {self.version!r}; "
+                f"this handsim knows {STABILITY_SPEC_VERSION!r}"
+            )
+        for name in ("duration", "gravity", "max_displacement", "obman_duration"):
+            value = getattr(self, name)
+            if not (math.isfinite(value) and value > 0):
+                raise ValueError(f"{name} must be a positive finite number, got {value}")
+        if self.max_rotation_deg is not None and not (
+            math.isfinite(self.max_rotation_deg) and self.max_rotation_deg > 0
+        ):
+            raise ValueError(f"max_rotation_deg must be positive or None, got {self.max_rotation_deg}")
+        direction = np.asarray(self.obman_direction, dtype=float)
+        if direction.shape != (3,) or not np.all(np.isfinite(direction)) or not np.linalg.norm(direction) > 0:
+            raise ValueError(
+                f"obman_direction must be 3 finite numbers, not all zero, got {self.obman_direction}"
+            )
+        object.__setattr__(self, "obman_direction", tuple(float(x) for x in direction))
+
+    def to_dict(self) -> dict:
+        """The parameters, JSON-ready."""
+        result = asdict(self)
+        result["obman_direction"] = list(self.obman_direction)
+        return result
+
+
+@dataclass(frozen=True)
+class DirectionResult:
+    """One run of a stability test: gravity along one direction.
+
+    Attributes:
+        direction: ``"+x"`` … ``"-z"`` (world frame), or ``"obman"`` for the ObMan run.
+        gravity: The gravity vector applied to the objects, m/s².
+        success: The object stayed in contact (if required), moved less than the threshold (and turned
+            less, if judged), and the run did not diverge.
+        displacement: Distance between the object's centre of mass at the start and at the end, m; None if
+            the run diverged.
+        rotation_deg: Angle of the object's rotation between the start and the end, degrees; None if the
+            run diverged.
+        in_contact_at_end: The object touches the hand at the end.
+        links_in_contact: Hand links touching the object at the end (names without ``hand/``).
+        simulated_time: Seconds simulated (the duration rounded to whole steps, or less if it diverged).
+        failure: Why it failed, for people; empty on success.
+        warnings: MuJoCo warnings raised during the run, one line each.
+    """
+
+    direction: str
+    gravity: tuple[float, float, float]
+    success: bool
+    displacement: float | None
+    rotation_deg: float | None
+    in_contact_at_end: bool
+    links_in_contact: tuple[str, ...]
+    simulated_time: float
+    failure: str
+    warnings: tuple[str, ...]
+
+    def to_dict(self) -> dict:
+        """The result, JSON-ready."""
+        result = asdict(self)
+        result["gravity"] = list(self.gravity)
+        result["links_in_contact"] = list(self.links_in_contact)
+        result["warnings"] = list(self.warnings)
+        return result
+
+
+@dataclass(frozen=True)
+class StabilityResult:
+    """Outcome of :func:`stability_test`.
+
+    Attributes:
+        directions: One result per gravity direction, in the order of :data:`DIRECTIONS`.
+        success: Every direction succeeded.
+        simulation_displacement: ObMan's metric: the object's centre-of-mass displacement after
+            ``spec.obman_duration`` under gravity along ``spec.obman_direction`` with the hand static, m;
+            None if that run diverged.
+        obman: The ObMan run in full (its ``success`` applies this spec's thresholds; ObMan has none).
+        object: Prefix of the tested object (``obj/``).
+        in_contact_at_start: The object touched the hand in the given state.
+        initial_penetration: Deepest hand–object penetration in the given state, m (≥ 0).
+        spec: The :class:`StabilitySpec` as a dict (with its version).
+        model_sha256: The scene's :attr:`~handsim.sim.compiled.SimScene.model_sha256`.
+        mujoco_version: The MuJoCo that simulated it.
+    """
+
+    directions: tuple[DirectionResult, ...]
+    success: bool
+    simulation_displacement: float | None
+    obman: DirectionResult
+    object: str
+    in_contact_at_start: bool
+    initial_penetration: float
+    spec: dict
+    model_sha256: str
+    mujoco_version: str = field(default=mujoco.__version__)
+
+    def direction(self, label: str) -> DirectionResult:
+        """The result of one direction (``"+x"`` …).
+
+        Raises:
+            KeyError: No such direction; the message lists the valid labels.
+        """
+        for result in self.directions:
+            if result.direction == label:
+                return result
+        raise KeyError(f"no direction {label!r}; expected one of {list(DIRECTIONS)}")
+
+    def to_dict(self) -> dict:
+        """The result, JSON-ready."""
+        return {
+            "success": self.success,
+            "simulation_displacement": self.simulation_displacement,
+            "directions": [d.to_dict() for d in self.directions],
+            "obman": self.obman.to_dict(),
+            "object": self.object,
+            "in_contact_at_start": self.in_contact_at_start,
+            "initial_penetration": self.initial_penetration,
+            "spec": dict(self.spec),
+            "model_sha256": self.model_sha256,
+            "mujoco_version": self.mujoco_version,
+        }
+
+
+def stability_test(
+    scene: SimScene,
+    qpos: npt.ArrayLike,
+    ctrl: npt.ArrayLike,
+    *,
+    spec: StabilitySpec | None = None,
+    object_index: int = 0,
+    mocap_pos: npt.ArrayLike | None = None,
+    mocap_quat: npt.ArrayLike | None = None,
+) -> StabilityResult:
+    """Test whether the hand holds an object against gravity along ±x ±y ±z, and ObMan's displacement.
+
+    Each run starts from ``qpos`` at rest, with the hand frozen at its targets and the objects under
+    gravity (see the module docstring); the scene's model is not modified.
+
+    Args:
+        scene: A compiled scene with a hand and at least one object.
+        qpos: The state to test (nq,), e.g. a replay's state at the grasp frame.
+        ctrl: The hand's actuator targets (nu,), radians, held during every run.
+        spec: The parameters (default :class:`StabilitySpec`).
+        object_index: Which object of the scene is judged (layout order).
+        mocap_pos: Position (3,) of the hand's mocap target, metres (``hand_root="weld"`` only); default:
+            the root's position in ``qpos``, so the weld holds the hand where it is.
+        mocap_quat: Orientation (4,) of the mocap target (w, x, y, z); default: the root's in ``qpos``.
+
+    Returns:
+        The per-direction results, the overall success, the ObMan simulation displacement and the spec.
+
+    Raises:
+        ValueError: An array has the wrong shape, ``object_index`` names no object, or mocap values are
+            given for a scene without a mocap target.
+        SimulationError: ``qpos``, ``ctrl`` or a mocap value is not finite (MuJoCo would silently reset
+            the state or replace the control).
+    """
+    spec = spec or StabilitySpec()
+    layout = scene.layout
+    model = scene.model
+    objects = layout.objects
+    if not 0 <= object_index < len(objects):
+        raise ValueError(f"object_index {object_index} names no object; the scene has {len(objects)}")
+    qpos = _array(qpos, (model.nq,), "qpos")
+    ctrl = _array(ctrl, (model.nu,), "ctrl")
+    mocap = _mocap_pose(scene, qpos, mocap_pos, mocap_quat)
+
+    frozen = _frozen_model(model, spec)
+    run = _Run(replace(scene, model=frozen), qpos, ctrl, mocap, object_index)
+    steps = max(1, round(spec.duration / frozen.opt.timestep))
+    directions = tuple(
+        run.direction(label, spec.gravity * np.asarray(unit), steps, spec)
+        for label, unit in DIRECTIONS.items()
+    )
+    obman_dir = np.asarray(spec.obman_direction) / np.linalg.norm(spec.obman_direction)
+    obman_steps = max(1, round(spec.obman_duration / frozen.opt.timestep))
+    obman = run.direction("obman", spec.gravity * obman_dir, obman_steps, spec)
+    return StabilityResult(
+        directions=directions,
+        success=all(d.success for d in directions),
+        simulation_displacement=obman.displacement,
+        obman=obman,
+        object=objects[object_index].prefix,
+        in_contact_at_start=run.start_contact,
+        initial_penetration=run.start_penetration,
+        spec=spec.to_dict(),
+        model_sha256=scene.model_sha256,
+    )
+
+
+def _array(value: npt.ArrayLike, shape: tuple[int, ...], what: str) -> np.ndarray:
+    array = np.asarray(value, dtype=float)
+    if array.shape != shape:
+        raise ValueError(f"{what} must have shape {shape}, got {array.shape}")
+    if not np.all(np.isfinite(array)):
+        raise SimulationError(
+            f"stability test {what}: non-finite value at index {int(np.flatnonzero(~np.isfinite(array))[0])}"
+        )
+    return array.copy()
+
+
+def _mocap_pose(
+    scene: SimScene, qpos: np.ndarray, pos: npt.ArrayLike | None, quat: npt.ArrayLike | None
+) -> tuple[np.ndarray, np.ndarray] | None:
+    layout = scene.layout
+    if layout.mocap < 0:
+        if pos is not None or quat is not None:
+            raise ValueError(
+                "mocap_pos/mocap_quat given, but the scene's hand has no mocap target (hand_root='fixed')"
+            )
+        return None
+    root = qpos[layout.root_free_qpos : layout.root_free_qpos + 7]
+    position = root[:3] if pos is None else _array(pos, (3,), "mocap_pos")
+    orientation = root[3:] if quat is None else _array(quat, (4,), "mocap_quat")
+    norm = np.linalg.norm(orientation)
+    if not norm > 0:
+        raise ValueError("mocap_quat must be a non-zero quaternion (w, x, y, z)")
+    return position.copy(), orientation / norm
+
+
+def _frozen_model(model: mujoco.MjModel, spec: StabilitySpec) -> mujoco.MjModel:
+    """A copy of the model without gravity and, unless the spec keeps them, without environment contacts.
+
+    The objects' weight is applied as a force instead (:meth:`_Run._start`), so the hand is weightless.
+    """
+    frozen = copy.deepcopy(model)
+    frozen.opt.gravity[:] = 0.0
+    if not spec.environment_contacts:
+        world = frozen.geom_bodyid == 0
+        frozen.geom_contype[world] = 0
+        frozen.geom_conaffinity[world] = 0
+    return frozen
+
+
+class _Run:
+    """Runs of one stability test: the same start state, one gravity vector per run."""
+
+    def __init__(
+        self,
+        scene: SimScene,
+        qpos: np.ndarray,
+        ctrl: np.ndarray,
+        mocap: tuple[np.ndarray, np.ndarray] | None,
+        object_index: int,
+    ) -> None:
+        self.scene = scene
+        self.model = scene.model
+        self.stepper = Stepper(scene, substeps=1)
+        self.qpos, self.ctrl, self.mocap = qpos, ctrl, mocap
+        layout = scene.layout
+        self.object = layout.objects[object_index]
+        first = sum(len(o.part_bodies) for o in layout.objects[:object_index])
+        self.parts = np.arange(first, first + len(self.object.part_bodies))
+        self.weighted = np.array([b for o in layout.objects for b in o.part_bodies], dtype=np.int64)
+        self._start()
+        data = self.stepper.data
+        self.start_contact = bool(self._links_in_contact())
+        found = data.sensordata[layout.penetration_adr[self.parts]]
+        dist = data.sensordata[layout.penetration_adr[self.parts] + 1]
+        depth = np.where(found > 0, np.maximum(-dist, 0.0), 0.0)
+        self.start_penetration = float(depth.max()) if depth.size else 0.0
+
+    def _start(self, gravity: np.ndarray | None = None) -> None:
+        """Reset to the start state at rest, supports off, objects weighted by ``gravity``; forward."""
+        self.stepper.reset()
+        data, model = self.stepper.data, self.model
+        data.qpos[:] = self.qpos
+        data.ctrl[:] = self.ctrl
+        if self.mocap is not None:
+            data.mocap_pos[self.scene.layout.mocap] = self.mocap[0]
+            data.mocap_quat[self.scene.layout.mocap] = self.mocap[1]
+        for obj in self.scene.layout.objects:
+            if obj.support_eq >= 0:
+                data.eq_active[obj.support_eq] = 0
+        if gravity is not None:
+            data.xfrc_applied[self.weighted, :3] = model.body_mass[self.weighted, None] * gravity
+        mujoco.mj_forward(model, data)
+
+    def _links_in_contact(self) -> tuple[str, ...]:
+        layout = self.scene.layout
+        found = self.stepper.data.sensordata[layout.contact_adr[:, self.parts]]
+        return tuple(name for name, n in zip(layout.link_names, found.sum(axis=1), strict=True) if n > 0)
+
+    def _pose(self) -> tuple[np.ndarray, np.ndarray]:
+        data = self.stepper.data
+        root = self.object.root_body
+        return data.subtree_com[root].copy(), data.xquat[root].copy()
+
+    def direction(self, label: str, gravity: np.ndarray, steps: int, spec: StabilitySpec) -> DirectionResult:
+        self._start(gravity)
+        com0, quat0 = self._pose()
+        warnings: list[str] = []
+        diverged = False
+        done = 0
+        for _ in range(steps):
+            events = self.stepper.step()
+            done += 1
+            warnings.extend(e.describe() for e in events)
+            if any(e.diverged for e in events):
+                diverged = True
+                break
+        vector = tuple(float(x) for x in gravity)
+        simulated = done * float(self.model.opt.timestep)
+        if diverged:
+            return DirectionResult(
+                direction=label, gravity=vector, success=False, displacement=None, rotation_deg=None,
+                in_contact_at_end=False, links_in_contact=(), simulated_time=simulated,
+                failure=warnings[-1], warnings=tuple(warnings),
+            )  # fmt: skip
+        mujoco.mj_forward(self.model, self.stepper.data)  # sensors and contacts of the final state
+        com1, quat1 = self._pose()
+        displacement = float(np.linalg.norm(com1 - com0))
+        rotation = float(np.degrees(quat_angle(quat0, quat1)))
+        links = self._links_in_contact()
+        failures = []
+        if spec.require_contact and not links:
+            failures.append("lost contact with the hand")
+        if not displacement < spec.max_displacement:
+            failures.append(f"moved {displacement * 1000:.1f} mm ≥ {spec.max_displacement * 1000:.1f} mm")
+        if spec.max_rotation_deg is not None and not rotation < spec.max_rotation_deg:
+            failures.append(f"turned {rotation:.1f}° ≥ {spec.max_rotation_deg:.1f}°")
+        return DirectionResult(
+            direction=label, gravity=vector, success=not failures, displacement=displacement,
+            rotation_deg=rotation, in_contact_at_end=bool(links), links_in_contact=links,
+            simulated_time=simulated, failure="; ".join(failures), warnings=tuple(warnings),
+        )  # fmt: skip

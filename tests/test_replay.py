@@ -1,0 +1,201 @@
+"""The replay core: recorded-object and glove scenarios on real data, divergence, determinism, pickling."""
+
+from __future__ import annotations
+
+import pickle
+from dataclasses import fields, replace
+from functools import cache
+
+import mujoco
+import numpy as np
+import pytest
+
+from handsim.assets import TZIONAS_DIR
+from handsim.builders import build_hand, build_scene, default_hand
+from handsim.builders.catalog import get, get_graspdb
+from handsim.builders.objects import build_object
+from handsim.errors import SimulationError, TrajectoryError
+from handsim.glove.phases import attach_phases, find_annotation_file
+from handsim.io import read_skeleton, read_trajectory
+from handsim.io.tzionas_motion import read_tzionas_sequence
+from handsim.io.tzionas_objects import read_tzionas_object
+from handsim.sim.compiled import compile_scene
+from handsim.sim.control import control_schedule
+from handsim.sim.replay import ReplayConfig, initial_state, replay
+from handsim.sim.scenarios import glove_scene, recorded_scene
+from handsim.sim.stepper import Stepper
+from handsim.trajectory import Trajectory
+
+SEQ20 = TZIONAS_DIR / "Models" / "20"
+
+
+@cache
+def _tzionas() -> tuple:
+    trajectory = read_tzionas_sequence(SEQ20)
+    hand = build_hand(read_skeleton(SEQ20 / "Model_Hand_R.SKEL"))
+    cube = build_object(read_tzionas_object(SEQ20 / "Model_Object_Cube.SKEL"))
+    return recorded_scene(hand, trajectory, {"cube": cube}), trajectory
+
+
+@cache
+def _tzionas_result():
+    scene, trajectory = _tzionas()
+    return replay(scene, trajectory)
+
+
+def _assert_results_equal(a, b) -> None:
+    for f in fields(a.frames):
+        assert np.array_equal(getattr(a.frames, f.name), getattr(b.frames, f.name), equal_nan=True), f.name
+    assert a.to_dict() == b.to_dict()
+
+
+def test_tzionas_seq20_replays_end_to_end_with_zero_warnings_and_reports_cube_drift_per_frame():
+    result = _tzionas_result()
+    scene, trajectory = _tzionas()
+    assert result.warnings == () and result.diverged is None
+    n = result.frames.times.shape[0]
+    assert n == control_schedule(scene, trajectory, 100.0).frames == 617
+    drift = result.frames.object_position_error[:, 0]
+    assert drift.shape == (n,) and np.all(np.isfinite(drift))
+    assert drift[0] == pytest.approx(0.0, abs=1e-9)  # the cube starts at its recorded pose
+    assert 0.0 <= result.summary["within_tolerance"] <= 1.0
+    assert result.summary["within_tolerance"] == pytest.approx(float(np.mean(drift <= 0.01)))
+    assert result.summary["max_drift_mm"] == pytest.approx(drift.max() * 1000)
+    assert result.summary["contact_frames"] > 0  # the hand touches the cube it moves
+
+
+def test_tzionas_hand_root_follows_the_recorded_root_pose_through_the_weld():
+    result = _tzionas_result()
+    # fingertips follow their kinematic targets (recorded root pose + fitted joint angles) within ~1 cm
+    assert result.summary["mean_tip_error_mm"] < 10.0
+    assert result.summary["max_tracking_error_deg"] < 10.0
+
+
+def test_recorded_scene_puts_the_support_plane_under_the_cube_at_z0_and_gravity_near_image_down():
+    scene, trajectory = _tzionas()
+    assert scene.setup.scenario == "recorded" and scene.setup.object_tracks == ("cube",)
+    assert "+y axis" in scene.setup.notes[0] and "22.6°" in scene.setup.notes[0]
+    stepper = Stepper(scene, 1)
+    initial_state(stepper, control_schedule(scene, trajectory, 100.0))
+    data, model = stepper.data, scene.model
+    cube = [g for g in range(model.ngeom) if model.geom_bodyid[g] == scene.layout.objects[0].root_body]
+    lowest = min(
+        (model.mesh_vert[model.mesh_vertadr[m] : model.mesh_vertadr[m] + model.mesh_vertnum[m]]
+         @ data.geom_xmat[g].reshape(3, 3).T + data.geom_xpos[g])[:, 2].min()
+        for g in cube if (m := model.geom_dataid[g]) >= 0 and model.geom_contype[g]
+    )  # fmt: skip
+    assert lowest == pytest.approx(0.0, abs=1e-6)  # MuJoCo stores mesh vertices as float32
+
+
+def test_replaying_twice_gives_bitwise_identical_results():
+    scene, trajectory = _tzionas()
+    _assert_results_equal(replay(scene, trajectory), _tzionas_result())
+
+
+def test_scene_pickles_and_an_unpickled_scene_replays_identically():
+    scene, trajectory = _tzionas()
+    clone = pickle.loads(pickle.dumps(scene))
+    assert clone.model_sha256 == scene.model_sha256
+    _assert_results_equal(replay(clone, trajectory), _tzionas_result())
+
+
+def test_a_diverging_replay_is_reported_as_diverged_at_the_step_it_happened():
+    scene, trajectory = _tzionas()
+    root = trajectory.root_pose.copy()
+    root[60:, 0] += 1e9  # the root's target jumps 10⁶ km away: the weld blows up
+    bad = replace(trajectory, root_pose=root)
+    result = replay(scene, bad)
+    assert result.diverged is not None and result.diverged.name == "mjWARN_BADQACC"
+    assert result.summary["diverged"] is True
+
+    # independent check: one step at a time, the first step whose warning counters move
+    schedule = control_schedule(scene, bad, 100.0)
+    stepper = Stepper(scene, 1)
+    initial_state(stepper, schedule)
+    data, step, first = stepper.data, 0, None
+    for k in range(schedule.frames - 1):
+        data.mocap_pos[0], data.mocap_quat[0] = schedule.root_pose[k + 1, :3], schedule.root_pose[k + 1, 3:]
+        for _ in range(schedule.substeps):
+            if stepper.step(schedule.ctrl[k + 1]):
+                first = step
+                break
+            step += 1
+        if first is not None:
+            break
+    assert result.diverged.step == first
+    assert result.diverged.frame == first // schedule.substeps
+    assert result.frames.times.shape[0] == result.diverged.frame + 1  # frames up to the divergence only
+    assert "QACC" in result.diverged.message
+
+
+def test_non_finite_targets_are_refused_before_stepping():
+    scene, trajectory = _tzionas()
+    targets = trajectory.targets.copy()
+    targets[:, 3] = np.inf
+    with pytest.raises(SimulationError, match="non-finite value at frame 0, column"):
+        replay(scene, replace(trajectory, targets=targets))
+
+
+def test_a_trajectory_dof_the_hand_lacks_is_an_error_listing_the_hand_dofs():
+    scene, trajectory = _tzionas()
+    names = ("wrong_dof", *trajectory.dof_names[1:])
+    with pytest.raises(TrajectoryError, match=r"DoFs \['wrong_dof'\] are not DoFs of the hand"):
+        replay(scene, replace(trajectory, dof_names=names))
+
+
+def test_a_welded_hand_needs_a_root_pose():
+    scene, trajectory = _tzionas()
+    with pytest.raises(TrajectoryError, match="has none"):
+        replay(scene, replace(trajectory, root_pose=None, objects={}))
+
+
+def test_keep_states_returns_qpos_per_frame():
+    scene, trajectory = _tzionas()
+    result = replay(scene, trajectory, ReplayConfig(keep_states=True))
+    assert result.states.shape == (result.frames.times.shape[0], scene.model.nq)
+
+
+def _ball_trajectory(layout, frames: int = 120) -> Trajectory:
+    t = np.arange(frames) / 60.0
+    closing = np.clip(t / 1.0, 0, 1)[:, None]
+    flex = np.array(["flex" in n and not n.startswith("root") for n in layout.dof_names])
+    targets = closing * np.where(flex, 0.6 * layout.ctrl_range[:, 1], 0.0)
+    return Trajectory(times=t, dof_names=layout.dof_names, targets=targets, valid=np.ones_like(targets, bool))
+
+
+def test_glove_scene_places_the_object_supports_it_and_releases_it_after_the_grasp_frame():
+    hand, ball = default_hand(), build_object(get("tennis_ball"))
+    probe = compile_scene(build_scene(hand, ball))
+    trajectory = _ball_trajectory(probe.layout)
+    scene = glove_scene(hand, trajectory, ball)
+    setup = scene.setup
+    assert setup.scenario == "glove" and setup.placement["grasp"]["source"] == "peak flexion"
+    assert setup.placement["links"], setup.notes
+    assert setup.placement["penetration_m"] <= 0.002
+    result = replay(scene, trajectory)
+    assert result.hold is not None
+    assert result.hold.released_at == pytest.approx(setup.release_time + 0.1, abs=0.011)
+    assert result.summary["held"] == result.hold.held
+    # before release the support holds the object still
+    release = int(np.searchsorted(result.frames.times, result.hold.released_at - 1e-9))
+    inside = result.frames.object_in_hand[:release, 0]
+    assert np.abs(inside - inside[0]).max() < 2e-3  # the stiff weld gives ~1 mm under finger forces
+
+
+def test_graspdb_power_sphere_trial_places_the_ball_and_reports_the_hold_through_the_grasp_phase(graspdb_dir):
+    path = graspdb_dir / "r_01_11_ex03-rad-004-grasp-su04.txt"
+    skeleton = read_skeleton(graspdb_dir / "default.xmlskel")
+    trajectory = attach_phases(read_trajectory(path, skeleton=skeleton), find_annotation_file(path))
+    ball = build_object(get_graspdb(1))
+    scene = glove_scene(build_hand(skeleton), trajectory, ball)
+    grasp = scene.setup.placement["grasp"]
+    assert grasp == {"frame": 81, "window": [81, 163], "source": "phase"}  # annotated 82–164, 1-based
+    assert len(scene.setup.placement["links"]) >= 3
+    result = replay(scene, trajectory)
+    assert result.diverged is None and result.warnings == ()
+    hold = result.hold
+    assert hold.window[1] == pytest.approx(trajectory.times[163])
+    assert hold.released_at == pytest.approx(trajectory.times[81] + 0.1, abs=0.011)
+    assert isinstance(hold.held, bool) and 0.0 <= hold.time_held <= hold.window[1] - hold.released_at + 1e-9
+    if not hold.held:
+        assert hold.reason and hold.lost_at is not None
