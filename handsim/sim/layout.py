@@ -22,6 +22,8 @@ _FOUND, _FORCE, _DIST = 1, 2, 8  # mjtConDataField bits
 _REDUCE_NONE, _REDUCE_MINDIST = 0, 1
 CONTACT_PREFIX = "contact/"
 PENETRATION_PREFIX = "penetration/"
+POSITION_PREFIX = "pos/"
+ORIENTATION_PREFIX = "quat/"
 
 
 @dataclass(frozen=True)
@@ -69,6 +71,9 @@ class SceneLayout:
         contact_adr: (links, parts) sensordata address of each link × part contact sensor; parts are all
             objects' parts in order.
         penetration_adr: (parts,) sensordata address of each part's whole-hand ``mindist`` sensor.
+        tip_adr: (tips,) sensordata address of each fingertip's world position (3).
+        root_pose_adr: sensordata addresses of the hand root's world position (3) and quaternion (4).
+        object_pose_adr: (objects, 2) addresses of each object root's world position and quaternion.
     """
 
     dof_names: tuple[str, ...]
@@ -85,6 +90,9 @@ class SceneLayout:
     objects: tuple[ObjectLayout, ...]
     contact_adr: np.ndarray
     penetration_adr: np.ndarray
+    tip_adr: np.ndarray
+    root_pose_adr: tuple[int, int]
+    object_pose_adr: np.ndarray
 
     @property
     def part_labels(self) -> tuple[str, ...]:
@@ -115,8 +123,10 @@ def instrument(spec: mujoco.MjSpec) -> mujoco.MjSpec:
     Per hand link with collision geoms × object part: a contact sensor reporting up to
     :data:`CONTACT_SLOTS` contacts (count, force in the contact frame, distance). Per object part: a
     contact sensor between the whole hand (the root's subtree) and the part, reduced to the minimum
-    distance (the deepest penetration when negative). MuJoCo evaluates them inside ``mj_step``; the loop
-    only copies ``sensordata``.
+    distance (the deepest penetration when negative). World positions of the fingertip sites, and world
+    poses of the hand's root and each object's root body. MuJoCo evaluates them inside ``mj_step`` (in
+    the forward pass of its last step, 2 ms before the state it leaves); the loop only copies
+    ``sensordata``.
 
     Args:
         spec: A scene from :func:`handsim.builders.build_scene`, not yet instrumented.
@@ -133,6 +143,18 @@ def instrument(spec: mujoco.MjSpec) -> mujoco.MjSpec:
     if root is None:
         return spec
     body, subtree = mujoco.mjtObj.mjOBJ_BODY, mujoco.mjtObj.mjOBJ_XBODY
+    frame_bodies = [root] + [b for b in spec.worldbody.bodies if b.name.startswith("obj")]
+    for b in frame_bodies:  # xbody: the body frame (body would be its inertial frame)
+        for prefix, kind in ((POSITION_PREFIX, mujoco.mjtSensor.mjSENS_FRAMEPOS),
+                             (ORIENTATION_PREFIX, mujoco.mjtSensor.mjSENS_FRAMEQUAT)):  # fmt: skip
+            spec.add_sensor(name=prefix + b.name, type=kind, objtype=subtree, objname=b.name)
+    for site in spec.sites:
+        parent = site.parent
+        if site.name.startswith(HAND_PREFIX) and site.name != parent.name:
+            spec.add_sensor(
+                name=POSITION_PREFIX + site.name, type=mujoco.mjtSensor.mjSENS_FRAMEPOS,
+                objtype=mujoco.mjtObj.mjOBJ_SITE, objname=site.name,
+            )  # fmt: skip
     for part in _object_parts(spec):
         for link in _hand_links(spec):
             spec.add_sensor(
@@ -238,6 +260,12 @@ def scene_layout(model: mujoco.MjModel) -> SceneLayout:
         for i, link in enumerate(links):
             contact[i, j] = _sensor_adr(model, f"{CONTACT_PREFIX}{model.body(link).name}|{part}")
         penetration[j] = _sensor_adr(model, f"{PENETRATION_PREFIX}{part}")
+    root_name = model.body(root_body).name
+    pose_adr = np.array(
+        [[_sensor_adr(model, POSITION_PREFIX + model.body(o.root_body).name),
+          _sensor_adr(model, ORIENTATION_PREFIX + model.body(o.root_body).name)] for o in objects],
+        dtype=np.int64,
+    ).reshape(-1, 2)  # fmt: skip
     return SceneLayout(
         dof_names=tuple(dof_names),
         actuators=np.asarray(actuators, dtype=np.int64),
@@ -253,6 +281,14 @@ def scene_layout(model: mujoco.MjModel) -> SceneLayout:
         objects=tuple(objects),
         contact_adr=contact,
         penetration_adr=penetration,
+        tip_adr=np.array(
+            [_sensor_adr(model, POSITION_PREFIX + model.site(s).name) for s in tips], dtype=np.int64
+        ),
+        root_pose_adr=(
+            _sensor_adr(model, POSITION_PREFIX + root_name),
+            _sensor_adr(model, ORIENTATION_PREFIX + root_name),
+        ),
+        object_pose_adr=pose_adr,
     )
 
 

@@ -1,7 +1,8 @@
 """Per-frame physics-plausibility metrics of a replay, and their summary.
 
 Everything is computed from what the stepping loop recorded: the state (``qpos``) at every frame time and
-the metric sensors (:mod:`handsim.sim.layout`). Conventions: frame ``k`` is trajectory time ``t_k``; the
+the metric sensors (:mod:`handsim.sim.layout`); only the fingertips' kinematic targets need forward
+kinematics here. Conventions: frame ``k`` is trajectory time ``t_k``; the
 state at ``t_k`` results from the targets of frame ``k − 1``; errors compare it with the references at
 ``t_k``. Contact sensors are evaluated by MuJoCo in the last step's forward pass, one step (2 ms) before the
 recorded state.
@@ -122,19 +123,20 @@ def _kinematic_targets(scene: SimScene, schedule: ControlSchedule, qpos: np.ndar
     return target
 
 
-def _sites_and_bodies(scene: SimScene, qpos: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Fingertip site positions (N, tips, 3) and body poses (N, nbody, 7) for each qpos row."""
-    model, layout = scene.model, scene.layout
+def _target_tips(scene: SimScene, qpos: np.ndarray) -> np.ndarray:
+    """Fingertip site positions (N, tips, 3) for each qpos row (kinematics only)."""
+    model, sites = scene.model, scene.layout.tip_sites
     data = mujoco.MjData(model)
-    tips = np.empty((qpos.shape[0], layout.tip_sites.size, 3))
-    poses = np.empty((qpos.shape[0], model.nbody, 7))
+    tips = np.empty((qpos.shape[0], sites.size, 3))
     for k, q in enumerate(qpos):
         data.qpos[:] = q
         mujoco.mj_kinematics(model, data)
-        tips[k] = data.site_xpos[layout.tip_sites]
-        poses[k, :, :3] = data.xpos
-        poses[k, :, 3:] = data.xquat
-    return tips, poses
+        tips[k] = data.site_xpos[sites]
+    return tips
+
+
+def _poses(sensors: np.ndarray, pos_adr: int, quat_adr: int) -> np.ndarray:
+    return np.concatenate([sensors[:, pos_adr : pos_adr + 3], sensors[:, quat_adr : quat_adr + 4]], axis=1)
 
 
 def frame_metrics(
@@ -156,8 +158,8 @@ def frame_metrics(
     count, normal, truncated, penetration = _contacts(scene, sensors)
     targets = schedule.ctrl[:n]
     tracking = qpos[:, layout.dof_qpos] - np.clip(targets, layout.ctrl_range[:, 0], layout.ctrl_range[:, 1])
-    target_tips, _ = _sites_and_bodies(scene, _kinematic_targets(scene, schedule, qpos))
-    tips, bodies = _sites_and_bodies(scene, qpos)
+    target_tips = _target_tips(scene, _kinematic_targets(scene, schedule, qpos))
+    tips = sensors[:, layout.tip_adr[:, None] + np.arange(3)]
     tip_error = np.linalg.norm(tips - target_tips, axis=-1)
 
     nobj = len(layout.objects)
@@ -165,7 +167,7 @@ def frame_metrics(
     rot_err = np.full((n, nobj), np.nan)
     art_err = np.full((n, nobj), np.nan)
     in_hand = np.empty((n, nobj, 3))
-    hand_root = bodies[:, layout.root_body]
+    hand_root = _poses(sensors, *layout.root_pose_adr)
     part_object = (
         np.concatenate([np.full(len(o.part_bodies), i) for i, o in enumerate(layout.objects)])
         if nobj
@@ -173,7 +175,7 @@ def frame_metrics(
     )
     touching = np.zeros((n, nobj), dtype=bool)
     for i, obj in enumerate(layout.objects):
-        pose = bodies[:, obj.root_body]
+        pose = _poses(sensors, *layout.object_pose_adr[i])
         in_hand[:, i] = compose(inverse(hand_root), pose)[:, :3]
         touching[:, i] = count[:, :, part_object == i].sum(axis=(1, 2)) > 0
         track = schedule.objects.get(i)

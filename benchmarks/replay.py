@@ -1,0 +1,175 @@
+"""Benchmark: replay and env.step throughput against raw ``mj_step`` on the same compiled scene, same run.
+
+Run: python benchmarks/replay.py [--repeats N]
+
+Scenes: the Tzionas hand + cube (sequence 20, bundled) and a glove + ball (the GraspDB14 power-sphere trial
+on its skeleton when ``../shared/data`` is present, else the default hand closing on the tennis ball).
+
+For each scene, in the same process and interleaved (median of ``--repeats``):
+
+* raw: ``mj_step`` from the replay's initial state with only the replay's inputs (controls, mocap root
+  pose, support release) set once per frame, ``nstep = substeps`` per call — the same simulation with
+  nothing recorded or checked: the floor any replay loop can reach on this model;
+* loop: :func:`handsim.sim.replay.run_schedule` (the stepping loop: controls, mocap root, support
+  release, warning checks, sensor and state copies);
+* replay: the whole :func:`handsim.sim.replay.replay` call (schedule, loop and metrics);
+* env (when the gymnasium env is available): ``env.step`` of ``handsim/Replay-v0`` with zero residuals
+  against raw ``mj_step × frame_skip`` on the env's own model.
+
+Prints steps per second, the real-time factor and the ratios; the last two lines are
+``replay_vs_raw=<ratio>`` and ``env_vs_raw=<ratio>`` (worst scene) for tracking over time.
+"""
+
+from __future__ import annotations
+
+import argparse
+import statistics
+import time
+from pathlib import Path
+
+import mujoco
+import numpy as np
+
+from handsim.assets import TZIONAS_DIR
+from handsim.builders import build_hand, build_scene, default_hand
+from handsim.builders.catalog import get, get_graspdb
+from handsim.builders.objects import build_object
+from handsim.io import read_skeleton, read_trajectory
+from handsim.io.tzionas_motion import read_tzionas_sequence
+from handsim.io.tzionas_objects import read_tzionas_object
+from handsim.sim.compiled import compile_scene
+from handsim.sim.control import control_schedule
+from handsim.sim.replay import initial_state, replay, run_schedule
+from handsim.sim.scenarios import glove_scene, recorded_scene
+from handsim.sim.stepper import Stepper
+from handsim.trajectory import Trajectory
+
+GRASPDB = Path(__file__).resolve().parents[1].parent / "shared" / "data" / "graspdb14"
+
+
+def tzionas_case():
+    seq = TZIONAS_DIR / "Models" / "20"
+    trajectory = read_tzionas_sequence(seq)
+    hand = build_hand(read_skeleton(seq / "Model_Hand_R.SKEL"))
+    cube = build_object(read_tzionas_object(seq / "Model_Object_Cube.SKEL"))
+    return "Tzionas hand + cube", recorded_scene(hand, trajectory, {"cube": cube}), trajectory
+
+
+def glove_case():
+    if GRASPDB.exists():
+        from handsim.glove.phases import attach_phases, find_annotation_file
+
+        path = GRASPDB / "r_01_11_ex03-rad-004-grasp-su04.txt"
+        skeleton = read_skeleton(GRASPDB / "default.xmlskel")
+        trajectory = attach_phases(read_trajectory(path, skeleton=skeleton), find_annotation_file(path))
+        return "glove + ball (GraspDB14)", glove_scene(build_hand(skeleton), trajectory, build_object(get_graspdb(1))), trajectory
+    hand, ball = default_hand(), build_object(get("tennis_ball"))
+    layout = compile_scene(build_scene(hand, ball)).layout
+    t = np.arange(300) / 64.0
+    flex = np.array(["flex" in n and not n.startswith("root") for n in layout.dof_names])
+    targets = np.clip(t / 2.0, 0, 1)[:, None] * np.where(flex, 0.6 * layout.ctrl_range[:, 1], 0.0)
+    trajectory = Trajectory(t, layout.dof_names, targets, np.ones_like(targets, bool))
+    return "glove + ball (default hand, synthetic)", glove_scene(hand, trajectory, ball), trajectory
+
+
+def raw_seconds(scene, schedule, release: int) -> float:
+    """The same simulation with nothing but the inputs: controls, mocap root, support release."""
+    stepper = Stepper(scene, schedule.substeps)
+    initial_state(stepper, schedule)
+    model, data = scene.model, stepper.data
+    ctrl, root, k = schedule.ctrl, schedule.root_pose, schedule.substeps
+    supports = [o.support_eq for o in scene.layout.objects if o.support_eq >= 0]
+    start = time.perf_counter()
+    for i in range(1, schedule.frames):
+        if i - 1 == release:
+            data.eq_active[supports] = 0
+        if root is not None:
+            data.mocap_pos[0] = root[i, :3]
+            data.mocap_quat[0] = root[i, 3:]
+        data.ctrl[:] = ctrl[i]
+        mujoco.mj_step(model, data, nstep=k)
+    return time.perf_counter() - start
+
+
+def loop_seconds(scene, schedule, release: int) -> float:
+    stepper = Stepper(scene, schedule.substeps)
+    initial_state(stepper, schedule)
+    start = time.perf_counter()
+    run_schedule(stepper, schedule, release)
+    return time.perf_counter() - start
+
+
+def replay_seconds(scene, trajectory) -> float:
+    start = time.perf_counter()
+    replay(scene, trajectory)
+    return time.perf_counter() - start
+
+
+def env_ratio(repeats: int) -> tuple[float, float, float] | None:
+    try:
+        import gymnasium
+
+        import handsim  # noqa: F401  registers the envs
+
+        env = gymnasium.make("handsim/Replay-v0").unwrapped
+    except Exception as exc:  # the env is optional for this benchmark's replay part
+        print(f"env: not measured ({type(exc).__name__}: {exc})")
+        return None
+    env.reset(seed=0)
+    action = np.zeros(env.action_space.shape, dtype=env.action_space.dtype)
+    model, skip = env.unwrapped.model, env.unwrapped.frame_skip
+    steps = 300
+    env_times, raw_times = [], []
+    for _ in range(repeats):
+        env.reset(seed=0)
+        start = time.perf_counter()
+        for _ in range(steps):
+            _, _, terminated, truncated, _ = env.step(action)
+            if terminated or truncated:
+                env.reset(seed=0)
+        env_times.append(time.perf_counter() - start)
+        data = mujoco.MjData(model)
+        data.qpos[:] = env.unwrapped.data.qpos
+        start = time.perf_counter()
+        for _ in range(steps):
+            mujoco.mj_step(model, data, nstep=skip)
+        raw_times.append(time.perf_counter() - start)
+    env_rate = steps * skip / statistics.median(env_times)
+    raw_rate = steps * skip / statistics.median(raw_times)
+    return env_rate, raw_rate, env_rate / raw_rate
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--repeats", type=int, default=7)
+    args = parser.parse_args()
+    worst_replay = np.inf
+    for build in (tzionas_case, glove_case):
+        name, scene, trajectory = build()
+        schedule = control_schedule(scene, trajectory, 100.0)
+        release = -1
+        if scene.setup.release_time is not None:
+            release = schedule.frame_at(scene.setup.release_time + 0.1)
+        steps = (schedule.frames - 1) * schedule.substeps
+        raw, loop, full = [], [], []
+        replay_seconds(scene, trajectory)  # warm up
+        for _ in range(args.repeats):
+            raw.append(raw_seconds(scene, schedule, release))
+            loop.append(loop_seconds(scene, schedule, release))
+            full.append(replay_seconds(scene, trajectory))
+        raw_s, loop_s, full_s = (statistics.median(x) for x in (raw, loop, full))
+        simulated = steps * scene.timestep
+        print(f"{name}: {schedule.frames} frames × {schedule.substeps} steps = {steps} steps ({simulated:.2f} s simulated)")
+        print(f"  raw mj_step   {steps / raw_s:9.0f} steps/s  real-time ×{simulated / raw_s:6.1f}")
+        print(f"  replay loop   {steps / loop_s:9.0f} steps/s  real-time ×{simulated / loop_s:6.1f}  loop/raw = {raw_s / loop_s:.3f}")
+        print(f"  replay()      {steps / full_s:9.0f} steps/s  real-time ×{simulated / full_s:6.1f}  replay/raw = {raw_s / full_s:.3f}")
+        worst_replay = min(worst_replay, raw_s / full_s)
+    env = env_ratio(args.repeats)
+    if env is not None:
+        print(f"Replay-v0 env.step: {env[0]:.0f} steps/s vs raw mj_step×frame_skip {env[1]:.0f} steps/s")
+    print(f"replay_vs_raw={worst_replay:.3f}")
+    print(f"env_vs_raw={env[2]:.3f}" if env is not None else "env_vs_raw=nan")
+
+
+if __name__ == "__main__":
+    main()
