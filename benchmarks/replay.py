@@ -62,7 +62,8 @@ def glove_case():
         path = GRASPDB / "r_01_11_ex03-rad-004-grasp-su04.txt"
         skeleton = read_skeleton(GRASPDB / "default.xmlskel")
         trajectory = attach_phases(read_trajectory(path, skeleton=skeleton), find_annotation_file(path))
-        return "glove + ball (GraspDB14)", glove_scene(build_hand(skeleton), trajectory, build_object(get_graspdb(1))), trajectory
+        scene = glove_scene(build_hand(skeleton), trajectory, build_object(get_graspdb(1)))
+        return "glove + ball (GraspDB14)", scene, trajectory
     hand, ball = default_hand(), build_object(get("tennis_ball"))
     layout = compile_scene(build_scene(hand, ball)).layout
     t = np.arange(300) / 64.0
@@ -159,10 +160,12 @@ def main() -> None:
             full.append(replay_seconds(scene, trajectory))
         raw_s, loop_s, full_s = (statistics.median(x) for x in (raw, loop, full))
         simulated = steps * scene.timestep
-        print(f"{name}: {schedule.frames} frames × {schedule.substeps} steps = {steps} steps ({simulated:.2f} s simulated)")
-        print(f"  raw mj_step   {steps / raw_s:9.0f} steps/s  real-time ×{simulated / raw_s:6.1f}")
-        print(f"  replay loop   {steps / loop_s:9.0f} steps/s  real-time ×{simulated / loop_s:6.1f}  loop/raw = {raw_s / loop_s:.3f}")
-        print(f"  replay()      {steps / full_s:9.0f} steps/s  real-time ×{simulated / full_s:6.1f}  replay/raw = {raw_s / full_s:.3f}")
+        print(f"{name}: {schedule.frames} frames × {schedule.substeps} steps = {steps} ({simulated:.2f} s)")
+        for label, seconds in (("raw mj_step", raw_s), ("replay loop", loop_s), ("replay()", full_s)):
+            rate, realtime = steps / seconds, simulated / seconds
+            print(
+                f"  {label:12s} {rate:9.0f} steps/s  real-time ×{realtime:6.1f}  vs raw {raw_s / seconds:.3f}"
+            )
         worst_replay = min(worst_replay, raw_s / full_s)
     env = env_ratio(args.repeats)
     if env is not None:

@@ -5,3 +5,5 @@ Data flows one way: ``handsim.io`` readers → plain data (:class:`~handsim.skel
 """
 
 __version__ = "0.1.0"
+
+import handsim.envs  # noqa: F401  registers handsim/Replay-v0 and handsim/Grasp-v0 (cheap: no mujoco)

@@ -6,7 +6,6 @@ import pickle
 from dataclasses import fields, replace
 from functools import cache
 
-import mujoco
 import numpy as np
 import pytest
 

@@ -11,7 +11,7 @@ import sys
 from collections.abc import Sequence
 
 from handsim import __version__
-from handsim.cli import build, catalog, demo, trajectory
+from handsim.cli import build, catalog, demo, replay, trajectory
 from handsim.errors import HandsimError
 
 DESCRIPTION = """\
@@ -30,7 +30,7 @@ def build_parser() -> argparse.ArgumentParser:
     )
     parser.add_argument("--version", action="version", version=f"handsim {__version__}")
     commands = parser.add_subparsers(dest="command", metavar="COMMAND")
-    for module in (demo, build, catalog, trajectory):
+    for module in (demo, build, catalog, trajectory, replay):
         module.register(commands)
     return parser
 

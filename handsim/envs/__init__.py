@@ -1,1 +1,54 @@
-"""Gymnasium environments of handsim (none are registered yet)."""
+"""Gymnasium environments of handsim, registered when ``handsim`` is imported.
+
+* ``handsim/Replay-v0`` (:class:`~handsim.envs.replay_env.ReplayEnv`): follow a recorded trajectory; the
+  action corrects the recorded joint targets.
+* ``handsim/Grasp-v0`` (:class:`~handsim.envs.grasp_env.GraspEnv`): a hand above a catalogue object; the
+  action sets joint targets and moves the hand; lift the object and hold it.
+
+Importing this package is cheap: it registers entry points by name and imports neither ``mujoco`` nor
+the environment modules. On Linux without a display it first selects MuJoCo's EGL backend
+(``MUJOCO_GL=egl``) unless ``MUJOCO_GL`` is set, so that ``render()`` works headless.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+from handsim.envs._render import prefer_headless_gl
+
+prefer_headless_gl()  # before anything imports mujoco
+
+import gymnasium  # noqa: E402
+
+ENVS = {
+    "handsim/Replay-v0": "handsim.envs.replay_env:ReplayEnv",
+    "handsim/Grasp-v0": "handsim.envs.grasp_env:GraspEnv",
+}
+"""Registered environment ids and their entry points."""
+
+
+def register_envs() -> None:
+    """Register the environments with gymnasium (again after a registry reset; never twice)."""
+    for env_id, entry_point in ENVS.items():
+        if env_id not in gymnasium.registry:
+            gymnasium.register(id=env_id, entry_point=entry_point)
+
+
+register_envs()
+
+_LAZY = {
+    "ReplayEnv": "handsim.envs.replay_env",
+    "GraspEnv": "handsim.envs.grasp_env",
+    "RenderError": "handsim.envs._render",
+}
+
+
+def __getattr__(name: str) -> Any:
+    if name in _LAZY:
+        import importlib
+
+        return getattr(importlib.import_module(_LAZY[name]), name)
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+
+
+__all__ = ["ENVS", "GraspEnv", "RenderError", "ReplayEnv", "register_envs"]

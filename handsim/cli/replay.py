@@ -1,0 +1,286 @@
+"""``handsim replay``: replay a recorded trial in MuJoCo and print how physical it was.
+
+Exit codes: 0 replayed; 1 a handsim error (bad file, trajectory that does not fit the hand …);
+2 a usage error, including a file that is no kind of trial and options that do not apply to it;
+3 the simulation diverged (the summary covers the frames before the divergence, which is named).
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import os
+import sys
+
+from handsim.cli._common import write_text
+
+EXIT_DIVERGED = 3
+LABEL = 12  # width of the label column
+
+
+def _line(label: str, text: str) -> None:
+    print(f"{label:<{LABEL}}{text}")
+
+
+def _num(value: float | None, fmt: str = ".2f", unit: str = "") -> str:
+    return "n/a" if value is None else f"{value:{fmt}}{unit}"
+
+
+def _headless_gl() -> None:
+    """Pick EGL for offscreen rendering when there is no display and nobody chose (before mujoco loads)."""
+    headless = sys.platform.startswith("linux") and not (
+        os.environ.get("DISPLAY") or os.environ.get("WAYLAND_DISPLAY")
+    )
+    if headless and "mujoco" not in sys.modules:
+        os.environ.setdefault("MUJOCO_GL", "egl")
+
+
+def _print_trial(loaded) -> None:
+    trial = loaded.trial
+    _line("trial", f"{trial.kind}  {trial.trajectory_path}")
+    _line("hand", loaded.hand)
+    for obj in loaded.objects:
+        track = f", follows track {obj.track!r}" if obj.track else ""
+        _line("object", f"{obj.name} ({obj.origin}{track}), {obj.mass * 1000:.1f} g")
+
+
+def _print_summary(result) -> None:
+    s = result.summary
+    scene = result.scene
+    _line("scenario", scene["scenario"])
+    _line(
+        "frames",
+        f"{s['frames']} at {1.0 / result.frame_dt:g} Hz ({result.substeps} steps of "
+        f"{result.frame_dt / result.substeps * 1000:g} ms), {s['duration_s']:.2f} s",
+    )
+    if result.warnings:
+        names = sorted({w.name for w in result.warnings})
+        _line(
+            "warnings", f"{len(result.warnings)} ({', '.join(names)}); first: {result.warnings[0].describe()}"
+        )
+    else:
+        _line("warnings", "none")
+    if result.diverged is not None:
+        d = result.diverged
+        at = result.frames.times[-1] if result.frames.times.size else 0.0
+        said = f"; MuJoCo: {d.message}" if d.message else ""
+        _line(
+            "DIVERGED",
+            f"{d.name} at step {d.step} (frame {d.frame}, after t = {at:.3f} s, info {d.info}){said}",
+        )
+        _line("", "the numbers below cover the frames before the divergence")
+    else:
+        _line("diverged", "no")
+    _line(
+        "penetration",
+        f"max {s['max_penetration_mm']:.2f} mm, p95 {s['p95_penetration_mm']:.2f} mm, "
+        f"{s['frames_penetrating_over_1mm']} frames over 1 mm",
+    )
+    _line(
+        "contact",
+        f"{s['contact_frames']} of {s['frames']} frames; up to {s['max_contact_links']} links at once; "
+        f"peak total normal force {s['max_total_normal_force_n']:.2f} N",
+    )
+    _line(
+        "tracking",
+        f"mean {_num(s['mean_tracking_error_deg'])}°, max {_num(s['max_tracking_error_deg'])}° (joint angle)",
+    )
+    _line(
+        "tips", f"mean {_num(s['mean_tip_error_mm'], '.1f')} mm, max {_num(s['max_tip_error_mm'], '.1f')} mm"
+    )
+    if "mean_drift_mm" in s:
+        tolerance = result.config["metrics"]["drift_tolerance"] * 100
+        _line(
+            "drift",
+            f"mean {_num(s['mean_drift_mm'], '.1f')} mm, max {_num(s['max_drift_mm'], '.1f')} mm, "
+            f"final {_num(s['final_drift_mm'], '.1f')} mm; within {tolerance:g} cm in "
+            f"{s['within_tolerance'] * 100:.1f}% of frames",
+        )
+        mean, top = _num(s["mean_rotation_drift_deg"], ".1f"), _num(s["max_rotation_drift_deg"], ".1f")
+        rotation = f"mean {mean}°, max {top}°"
+        if s.get("max_articulation_drift_deg") is not None:
+            rotation += f"; hinge max {s['max_articulation_drift_deg']:.1f}°"
+        _line("rotation", rotation)
+    placement = scene.get("placement") or {}
+    if placement:
+        links = placement.get("links", [])
+        grasp = placement.get("grasp", {})
+        _line(
+            "placement",
+            f"{len(links)} links touching ({', '.join(links)}), penetration "
+            f"{placement.get('penetration_m', 0.0) * 1000:.2f} mm at grasp frame {grasp.get('frame')} "
+            f"({grasp.get('source')})",
+        )
+    hold = result.hold
+    if hold is not None:
+        _line(
+            "release", f"at {hold.released_at:.2f} s; hold window {hold.window[0]:.2f}–{hold.window[1]:.2f} s"
+        )
+        verdict = "yes" if hold.held else f"no: lost at {hold.lost_at:.2f} s ({hold.reason})"
+        _line("held", f"{verdict}; held {hold.time_held:.2f} s")
+        _line("slip", f"max {hold.max_slip * 1000:.1f} mm relative to the hand")
+        _line("drop", f"{hold.drop * 1000:.1f} mm (object origin, release to the window's end)")
+    stability = result.stability
+    if stability is not None:
+        passed = sum(d.success for d in stability.directions)
+        displacement = stability.simulation_displacement
+        moved = None if displacement is None else displacement * 1000
+        _line(
+            "stability",
+            f"{'stable' if stability.success else 'not stable'} ({passed} of {len(stability.directions)} "
+            f"gravity directions held); ObMan displacement {_num(moved, '.1f')} mm",
+        )
+
+
+def _stability_at(text: str) -> float | str:
+    if text == "grasp":
+        return text
+    try:
+        return float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected 'grasp' or a time in seconds, got {text!r}") from None
+
+
+def _json_ready(value):
+    """NaN and infinities as None, numpy scalars and tuples as plain JSON values."""
+    if isinstance(value, dict):
+        return {str(k): _json_ready(v) for k, v in value.items()}
+    if isinstance(value, (list, tuple)):
+        return [_json_ready(v) for v in value]
+    if hasattr(value, "tolist"):
+        return _json_ready(value.tolist())
+    if isinstance(value, float) and not math.isfinite(value):
+        return None
+    return value
+
+
+def _replay(args: argparse.Namespace) -> int:
+    if args.video:
+        _headless_gl()
+        from handsim.sim.render import check_video
+
+        check_video(args.video, *args.size)  # before the replay: a missing encoder is known at once
+    from handsim.sim.replay import ReplayConfig, replay
+    from handsim.sim.trial import TrialError, load_trial
+
+    config = ReplayConfig(control_rate=args.rate, keep_states=bool(args.video), stability_at=args.stability)
+    try:
+        loaded = load_trial(
+            args.trajectory,
+            metrics=config.metrics,
+            progress=True,
+            skeleton=args.skeleton,
+            obj=args.object,
+            calibration=args.calibration,
+            units=args.units,
+            density=args.density,
+            mass=args.mass,
+            hand_length=args.hand_length,
+            collision=args.collision,
+        )
+    except TrialError as exc:
+        print(f"handsim replay: error: {exc}", file=sys.stderr)
+        return 2
+    _print_trial(loaded)
+    if args.stability == "grasp" and loaded.scene.setup.hold_window is None:
+        print(
+            "handsim replay: error: --stability grasp is for glove trials; give a time in s", file=sys.stderr
+        )
+        return 2
+    result = replay(loaded.scene, loaded.trajectory, config)
+    _print_summary(result)
+    notes = [*loaded.notes, *loaded.scene.setup.notes, *result.notes]
+    if args.verbose:
+        notes = [*loaded.trajectory.notes, *notes]
+    for note in notes:
+        _line("note", note)
+    if args.json:
+        from handsim.replay_plots import replay_curves
+
+        record = {
+            **result.to_dict(),
+            "trial": loaded.trial.to_dict(),
+            "curves": replay_curves(result).to_dict(),
+        }
+        text = json.dumps(_json_ready(record), indent=1, allow_nan=False)
+        _line("wrote", str(write_text(args.json, text + "\n")))
+    if args.plot:
+        from handsim.replay_plots import plot_replay
+
+        _line("plot", str(plot_replay(result, args.plot)))
+    if args.video:
+        from handsim.sim.render import write_video
+
+        width, height = args.size
+        video = write_video(
+            loaded.scene, result.states, result.frame_dt, args.video, camera=args.camera, width=width,
+            height=height, shadows=not args.no_shadows,
+        )  # fmt: skip
+        _line(
+            "video",
+            f"{video.path} ({video.frames} frames at {video.fps:.1f} fps, {video.codec}, "
+            f"camera {video.camera})",
+        )
+    return EXIT_DIVERGED if result.diverged is not None else 0
+
+
+def register(commands: argparse._SubParsersAction) -> None:
+    """Add the ``replay`` command."""
+    replay = commands.add_parser(
+        "replay",
+        help="replay a recorded trial in MuJoCo: penetration, contacts, tracking, object drift or hold",
+        description="Replay a recording with collisions on and free objects and print how physical it was. "
+        "A Tzionas Model_Hand_*.MOTION brings its hand (.SKEL/.LIMITS/.OFF/.SKIN beside it) and the "
+        "sequence's objects (Configs/NN/MODELS_INFO.txt), which follow their recorded tracks: the summary "
+        "gives their drift. A GraspDB14 glove recording drives the parametric default hand (or --skeleton), "
+        "fixed palm down, holding the object (--object, else the one whose id the file name carries) placed "
+        "where the grasp closes and released after it: the summary says whether it was held. "
+        f"Exit codes: 0 done, 1 handsim error, 2 usage error or not a trial, {EXIT_DIVERGED} diverged.",
+    )
+    replay.add_argument(
+        "trajectory", metavar="TRAJECTORY", help="GraspDB14 .txt or Tzionas Model_Hand_*.MOTION"
+    )
+    replay.add_argument("--skeleton", metavar="SKELETON_FILE", help="GraspDB14: the hand (.xmlskel or .SKEL)")
+    replay.add_argument(
+        "--object", metavar="NAME|MESH", help="GraspDB14: a catalogue name or a mesh file (give --units)"
+    )
+    replay.add_argument(
+        "--calibration", metavar="JSON", help="GraspDB14: calibration of a raw-count recording"
+    )
+    replay.add_argument("--units", choices=("m", "mm"), help="units of a mesh file given as --object")
+    mass = replay.add_mutually_exclusive_group()
+    mass.add_argument("--density", type=float, metavar="KG_M3", help="object density instead of its own")
+    mass.add_argument("--mass", type=float, metavar="KG", help="object mass instead of its own")
+    replay.add_argument(
+        "--hand-length", type=float, default=None, metavar="M",
+        help="GraspDB14 without --skeleton: parametric hand length, wrist crease to middle fingertip (0.19)",
+    )  # fmt: skip
+    replay.add_argument(
+        "--collision", choices=("capsules", "mesh"), default="capsules",
+        help="hand collision shapes (mesh: per-bone hulls of a skinned .SKEL hand)",
+    )  # fmt: skip
+    replay.add_argument("--rate", type=float, default=100.0, metavar="HZ", help="control rate (default 100)")
+    replay.add_argument(
+        "--stability", type=_stability_at, metavar="grasp|SECONDS",
+        help="also run the grasp stability tests on the state at this time (grasp: the hold window's end)",
+    )  # fmt: skip
+    replay.add_argument("--json", metavar="JSON", help="write the result and per-frame curves as JSON")
+    replay.add_argument(
+        "--plot", metavar="PNG", help="plot penetration, contacts, errors, drift/slip over time"
+    )
+    replay.add_argument("--video", metavar="MP4|GIF", help="render the replay (mp4 needs handsim[video])")
+    replay.add_argument(
+        "--camera", default="track", choices=("track", "hand_cam", "overview"),
+        help="video camera: track (follows the hand; default), hand_cam or overview (the scene's)",
+    )  # fmt: skip
+    replay.add_argument(
+        "--size", type=int, nargs=2, default=(640, 480), metavar=("W", "H"), help="video size (640 480)"
+    )
+    replay.add_argument(
+        "--no-shadows", action="store_true", help="video without shadows (3-4x faster with software OpenGL)"
+    )
+    replay.add_argument(
+        "-v", "--verbose", action="store_true", help="also print the recording reader's notes"
+    )
+    replay.set_defaults(func=_replay)

@@ -1,0 +1,147 @@
+"""What both environments share: a stepper on a private model copy, checks, rendering, pickling.
+
+The stepper is :class:`~handsim.sim.stepper.Stepper`, the one stepping loop of the replay core.
+"""
+
+from __future__ import annotations
+
+import copy
+import dataclasses
+import math
+from typing import Any
+
+import gymnasium as gym
+import mujoco
+import numpy as np
+import numpy.typing as npt
+
+from handsim.envs._render import OffscreenRenderer
+from handsim.sim.compiled import SimScene
+from handsim.sim.stepper import Stepper
+
+RENDER_MODES = ("rgb_array",)
+DEFAULT_SIZE = 480
+"""Rendered image width and height, pixels."""
+DEFAULT_CAMERA = "hand_cam"
+
+
+class HandEnv(gym.Env[np.ndarray, np.ndarray]):
+    """Base of the handsim environments (not registered).
+
+    Subclasses call :meth:`_setup_sim` in ``__init__`` and rebuild their views into ``self.data`` and
+    the observation buffer in :meth:`_bind` (called again after unpickling).
+    """
+
+    metadata: dict[str, Any] = {"render_modes": list(RENDER_MODES), "render_fps": 100}  # noqa: RUF012
+
+    def _setup_sim(
+        self,
+        scene: SimScene,
+        substeps: int,
+        *,
+        render_mode: str | None,
+        width: int,
+        height: int,
+        camera: str | None,
+    ) -> None:
+        if render_mode is not None and render_mode not in RENDER_MODES:
+            raise ValueError(f"unknown render_mode {render_mode!r}; expected one of {[None, *RENDER_MODES]}")
+        # a private model: changing one env's model (e.g. domain randomisation) leaves the others alone
+        self._scene = dataclasses.replace(scene, model=copy.deepcopy(scene.model))
+        self._substeps = int(substeps)
+        self._stepper = Stepper(self._scene, self._substeps)
+        self.render_mode = render_mode
+        self._renderer = OffscreenRenderer(self._scene.model, width, height, camera)
+        self.metadata = {**type(self).metadata, "render_fps": round(1.0 / self.dt)}
+
+    # ---- properties -------------------------------------------------------------------------------------
+    @property
+    def scene(self) -> SimScene:
+        """The simulated scene (its model is this environment's own copy)."""
+        return self._scene
+
+    @property
+    def model(self) -> mujoco.MjModel:
+        """The MuJoCo model."""
+        return self._scene.model
+
+    @property
+    def data(self) -> mujoco.MjData:
+        """The MuJoCo data."""
+        return self._stepper.data
+
+    @property
+    def frame_skip(self) -> int:
+        """MuJoCo steps per environment step (the control frame's substeps)."""
+        return self._stepper.substeps
+
+    @property
+    def dt(self) -> float:
+        """Seconds per environment step."""
+        return self._stepper.substeps * float(self._scene.model.opt.timestep)
+
+    # ---- helpers ----------------------------------------------------------------------------------------
+    def _bind(self) -> None:
+        """(Re)create views into ``self.data`` and the observation buffer."""
+
+    def _action(self, action: npt.ArrayLike) -> tuple[np.ndarray, float]:
+        """The action as float64 and its sum of squares.
+
+        Raises:
+            ValueError: Wrong shape, or a value that is NaN or infinite (MuJoCo would silently replace a
+                non-finite control by zero).
+        """
+        a = np.asarray(action, dtype=np.float64)
+        if a.shape != self.action_space.shape:
+            raise ValueError(
+                f"{type(self).__name__}: action must have shape {self.action_space.shape} "
+                f"({self._action_doc}), got shape {a.shape}"
+            )
+        squares = float(np.dot(a, a))
+        if not math.isfinite(squares):
+            raise ValueError(f"{type(self).__name__}: action has NaN or infinite values: {a.tolist()}")
+        return a, squares
+
+    _action_doc = ""
+
+    # ---- rendering --------------------------------------------------------------------------------------
+    def render(self) -> np.ndarray | None:  # type: ignore[override]
+        """An RGB frame (height, width, 3) uint8 when ``render_mode="rgb_array"``, else None (warned).
+
+        Raises:
+            RenderError: No offscreen OpenGL context could be created.
+        """
+        if self.render_mode is None:
+            gym.logger.warn(
+                f"{type(self).__name__}.render() called without a render_mode: create the env with "
+                "render_mode='rgb_array'"
+            )
+            return None
+        return self._renderer.render(self.model, self.data)
+
+    def close(self) -> None:
+        """Free the renderer's GL context (idempotent)."""
+        self._renderer.close()
+
+    # ---- pickling ---------------------------------------------------------------------------------------
+    def __getstate__(self) -> dict:
+        state = self.__dict__.copy()
+        stepper = state.pop("_stepper")
+        state["_pickled_data"] = stepper.data  # MjData pickles with its state (mujoco ≥ 3)
+        state["_pickled_frame"] = stepper.frame
+        # views into data and buffers would unpickle as copies: _bind() recreates them
+        for name in getattr(self, "_views", ()):
+            state.pop(name, None)
+        return state
+
+    def __setstate__(self, state: dict) -> None:
+        saved = state.pop("_pickled_data")
+        frame = state.pop("_pickled_frame")
+        self.__dict__.update(state)
+        self._stepper = Stepper(self._scene, self._substeps)
+        mujoco.mj_copyData(self._stepper.data, self._scene.model, saved)
+        # warnings already reported by the original were counted there; start the copy's counters afresh
+        # so that the next step reports only new ones (the counters play no part in the dynamics)
+        self._stepper.data.warning.number[:] = 0
+        self._stepper.frame = frame
+        self._bind()

@@ -1,0 +1,474 @@
+"""``handsim/Grasp-v0``: a hand above a catalogue object on the table; lift the object and hold it.
+
+The hand is handsim's parametric default hand without its wrist DoFs, palm down
+(:func:`handsim.sim.placement.hand_frame`: fingers along +x), its root welded to a mocap target
+(``hand_root="weld"``): the weld replaces the arm, so the hand can carry the object up while contacts
+still push back. The object rests on the table with its centre under a point
+:data:`GRASP_AHEAD` ahead of the palm's centre, the palm ``hand_clearance`` above its top.
+
+Two ways to move the root (``root_control``):
+
+* ``"velocity"`` (default): the last 3 action elements command the root target's velocity (x, y, z, at
+  most ``root_speed`` m/s each); the target is integrated every step, kept within ``root_range`` of its
+  start (x, y either way, z up; down to the palm touching the table), and its orientation is held.
+* ``"scripted"``: the action holds joint targets only; the root target goes down by ``hand_clearance``
+  (the palm onto the object) in the first :data:`SCRIPT_DESCEND` s, waits until :data:`SCRIPT_LIFT_START`
+  s and then rises at :data:`SCRIPT_LIFT_SPEED` m/s by ``lift_height`` + 5 cm: a finger-only task.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import functools
+import math
+
+import gymnasium as gym
+import mujoco
+import numpy as np
+import numpy.typing as npt
+from gymnasium import spaces
+
+from handsim.envs._base import DEFAULT_CAMERA, DEFAULT_SIZE, HandEnv
+from handsim.envs._observation import ContactSummary, ObservationLayout, add_state
+from handsim.sim.compiled import SceneSetup, SimScene, compile_scene
+from handsim.sim.control import substeps_for
+from handsim.sim.replay import DEFAULT_CONTROL_RATE
+
+ROOT_CONTROLS = ("velocity", "scripted")
+GRASP_AHEAD = 0.03
+"""The object's centre starts under the point this far ahead of the palm's centre along the fingers, m."""
+CONTACT_LINKS = 3
+"""``reward_contact`` is full when this many hand links touch the object."""
+REACH_SCALE = 10.0
+"""1/m: ``reward_reach = reach_weight · (1 − tanh(REACH_SCALE · distance))``."""
+FALL_HEIGHT = -0.05
+"""m: the episode terminates when the object's origin drops below this height (off the table)."""
+SCRIPT_DESCEND = 0.3
+"""Scripted root: seconds to lower the palm onto the object."""
+SCRIPT_LIFT_START = 1.0
+"""Scripted root: time the lift starts, s."""
+SCRIPT_LIFT_SPEED = 0.1
+"""Scripted root: lift speed, m/s."""
+
+
+@dataclasses.dataclass(frozen=True)
+class GraspScene:
+    """A grasping scene and where things are in it.
+
+    Attributes:
+        scene: The compiled scene: the hand (root welded to a mocap target, palm down) and the object.
+        grasp_offset: World offset from the hand root to the grasp point, m: under the palm where the
+            object's centre sits when the object touches the palm (the root's orientation is held).
+        root_floor: Lowest root height: the palm's lowest point on the table top, m.
+        object_name: Catalogue name of the object.
+    """
+
+    scene: SimScene
+    grasp_offset: np.ndarray
+    root_floor: float
+    object_name: str
+
+
+def _wristless_default_hand() -> mujoco.MjSpec:
+    """The default hand without its wrist DoFs (the mocap weld moves and turns the root instead)."""
+    from handsim.builders.default_hand import DEFAULT_BREADTH_RATIO, DEFAULT_HAND_LENGTH_M, default_skeleton
+    from handsim.builders.hand import build_hand
+
+    skeleton = default_skeleton()
+    root = skeleton.joints[0].name
+    skeleton = dataclasses.replace(skeleton, dofs=tuple(d for d in skeleton.dofs if d.joint != root))
+    return build_hand(skeleton, breadth=DEFAULT_BREADTH_RATIO * DEFAULT_HAND_LENGTH_M)
+
+
+def _palm(scene: SimScene) -> tuple[np.ndarray, float]:
+    """Centre of the root's collision geoms, and the height of the palm's lowest point under it.
+
+    Measured with the hand open at rest (every DoF at 0 rad or its nearest limit).
+    """
+    model, layout = scene.model, scene.layout
+    data = mujoco.MjData(model)
+    data.qpos[layout.dof_qpos] = np.clip(0.0, layout.ctrl_range[:, 0], layout.ctrl_range[:, 1])
+    mujoco.mj_kinematics(model, data)
+    geoms = [
+        g
+        for g in range(model.ngeom)
+        if model.geom_bodyid[g] == layout.root_body and (model.geom_contype[g] or model.geom_conaffinity[g])
+    ]
+    centre = data.geom_xpos[geoms].mean(axis=0)
+    groups = np.zeros(mujoco.mjNGROUP, dtype=np.uint8)
+    groups[np.unique(model.geom_group[geoms])] = 1
+    hit = np.zeros(1, dtype=np.int32)
+    below = 1.0
+    dist = mujoco.mj_ray(
+        model, data, centre - [0.0, 0.0, below], np.array([0.0, 0.0, 1.0]), groups, 1, -1, hit
+    )
+    bottom = centre[2] - below + dist if dist >= 0 else centre[2]
+    return centre, float(bottom)
+
+
+@functools.lru_cache(maxsize=8)
+def grasp_scene(object_name: str = "tennis_ball", hand_clearance: float = 0.02) -> GraspScene:
+    """Build (once per process and arguments) the scene of ``handsim/Grasp-v0``.
+
+    Args:
+        object_name: A catalogue object (:func:`handsim.builders.catalog.names`).
+        hand_clearance: Gap between the palm's lowest point and the object's top at the start, m.
+
+    Returns:
+        The scene and its grasp geometry.
+
+    Raises:
+        UnknownObjectError: ``object_name`` is not in the catalogue (the message lists the names).
+    """
+    from handsim.builders import build_object, build_scene
+    from handsim.builders.catalog import get
+    from handsim.builders.objects import object_bounds
+    from handsim.builders.scene import resting_position
+    from handsim.sim.placement import hand_frame
+
+    obj = build_object(get(object_name))
+    hand = _wristless_default_hand()
+    quat = hand_frame(compile_scene(build_scene(hand, obj, table=False)))
+    probe = compile_scene(build_scene(hand, [], hand_pos=(0.0, 0.0, 0.0), hand_quat=quat, table=False))
+    centre, bottom = _palm(probe)
+    lower, upper = object_bounds(obj)
+    mid = (lower + upper) / 2
+    rest = resting_position(obj, xy=(-mid[0], -mid[1]))
+    top = rest[2] + upper[2]
+    grasp_xy = centre[:2] + np.array([GRASP_AHEAD, 0.0])  # fingers point along +x
+    root = np.array([-grasp_xy[0], -grasp_xy[1], top + hand_clearance - bottom])
+    spec = build_scene(
+        hand,
+        obj,
+        hand_pos=root,
+        hand_quat=quat,
+        object_poses=[np.concatenate([rest, [1.0, 0.0, 0.0, 0.0]])],
+        table=True,
+        hand_root="weld",
+    )
+    half_height = (upper[2] - lower[2]) / 2
+    offset = np.array([grasp_xy[0], grasp_xy[1], bottom - half_height - mid[2]])
+    setup = SceneSetup(
+        scenario="free",
+        notes=(
+            f"{object_name} on the table under the palm (centre {GRASP_AHEAD * 100:g} cm ahead of the "
+            f"palm's centre), the palm {hand_clearance * 1000:g} mm above its top; "
+            "hand root welded to a mocap target",
+        ),
+    )
+    return GraspScene(
+        scene=compile_scene(spec, setup), grasp_offset=offset, root_floor=-bottom, object_name=object_name
+    )
+
+
+def _check(name: str, value: float, *, positive: bool = False) -> float:
+    value = float(value)
+    ok = math.isfinite(value) and (value > 0 if positive else value >= 0)
+    if not ok:
+        raise ValueError(f"{name} must be a finite number {'>' if positive else '≥'} 0, got {value}")
+    return value
+
+
+class GraspEnv(HandEnv):
+    """Lift a catalogue object off the table and hold it (``handsim/Grasp-v0``).
+
+    **Action** ``Box(-1, 1, (nu + 3,), float32)`` (``root_control="velocity"``) or ``(nu,)``
+    (``"scripted"``): per hand DoF (actuator order, :attr:`dof_names`) a joint target, −1 … 1 mapped
+    linearly onto the joint's range; then the root target's velocity along world x, y, z as a fraction
+    of ``root_speed``. Values are clipped to [−1, 1].
+
+    **Observation** ``Box(-inf, inf, (n,), float64)``, named in :attr:`observation_names` and
+    :attr:`observation_slices`: ``hand_qpos`` (nu, rad), ``root_pose`` (7), ``obj/pose`` (7: position m,
+    quaternion w x y z); ``hand_qvel``, ``root_velocity`` (6), ``obj/velocity`` (6); ``root_target`` (3,
+    the mocap target's position, m); ``object_to_grasp`` (3: the object's origin minus the grasp point
+    under the palm, m); ``contact_force`` (per hand link, total normal force on the object, N);
+    ``penetration`` (deepest, m); ``lift`` (the object's rise above its start, m); ``hold`` (time held
+    so far / ``hold_time``, ≤ 1); ``progress`` (step / steps per episode).
+
+    **Reward** = the sum of the terms in ``info``:
+
+    * ``reward_reach = reach_weight · (1 − tanh(10 · |object_to_grasp|))``;
+    * ``reward_contact = contact_weight · min(links touching, 3) / 3``;
+    * ``reward_lift = lift_weight · clip(lift / lift_height, 0, 1)``;
+    * ``reward_hold = hold_weight`` while the object is ``lift_height`` up and touched, else 0.
+
+    **Success** (``info["success"]``, also ``info["is_success"]``): the object has been ``lift_height``
+    above its start, touched by the hand, for the last ``hold_time`` seconds.
+
+    **Episode**: the object starts at a seeded random offset (±``object_xy_noise``) on the table;
+    truncated after ``duration`` seconds; terminated when MuJoCo diverges, the object falls off the table,
+    or on success with ``terminate_on_success``.
+
+    Args:
+        object_name: Catalogue object (:func:`handsim.builders.catalog.names`).
+        control_rate: Environment steps per second; rounded to whole MuJoCo steps.
+        duration: Episode length, s.
+        root_control: ``"velocity"`` or ``"scripted"`` (see the module).
+        root_speed: Largest root target speed per axis, m/s (``"velocity"``).
+        root_range: How far the root target may move from its start along x and y (either way) and up
+            along z, m; down, it goes as far as the palm touching the table top.
+        hand_clearance: Palm-to-object gap at the start, m.
+        object_xy_noise: Half-width of the uniform random object offset at reset, m.
+        lift_height: Height above its start the object must reach, m.
+        hold_time: How long it must stay there, s.
+        reach_weight: Weight of the reach term.
+        contact_weight: Weight of the contact term.
+        lift_weight: Weight of the lift term.
+        hold_weight: Reward per step while holding.
+        terminate_on_success: End the episode at success.
+        render_mode: None or ``"rgb_array"``.
+        width: Rendered image width, pixels.
+        height: Rendered image height, pixels.
+        camera: Scene camera (``"hand_cam"``, ``"overview"``) or None (free camera).
+
+    Raises:
+        ValueError: A parameter is out of range.
+        UnknownObjectError: ``object_name`` is not in the catalogue.
+    """
+
+    def __init__(
+        self,
+        object_name: str = "tennis_ball",
+        *,
+        control_rate: float = DEFAULT_CONTROL_RATE,
+        duration: float = 3.0,
+        root_control: str = "velocity",
+        root_speed: float = 0.2,
+        root_range: tuple[float, float, float] = (0.1, 0.1, 0.15),
+        hand_clearance: float = 0.02,
+        object_xy_noise: float = 0.01,
+        lift_height: float = 0.05,
+        hold_time: float = 0.5,
+        reach_weight: float = 0.1,
+        contact_weight: float = 0.1,
+        lift_weight: float = 1.0,
+        hold_weight: float = 1.0,
+        terminate_on_success: bool = False,
+        render_mode: str | None = None,
+        width: int = DEFAULT_SIZE,
+        height: int = DEFAULT_SIZE,
+        camera: str | None = DEFAULT_CAMERA,
+    ) -> None:
+        if root_control not in ROOT_CONTROLS:
+            raise ValueError(f"unknown root_control {root_control!r}; expected one of {list(ROOT_CONTROLS)}")
+        extent = np.asarray(root_range, dtype=float)
+        if extent.shape != (3,) or not np.all(np.isfinite(extent)) or np.any(extent < 0):
+            raise ValueError(f"root_range must be 3 finite numbers ≥ 0 (x, y, z), got {extent.tolist()}")
+        clearance = _check("hand_clearance", hand_clearance)
+        built = grasp_scene(object_name, clearance)
+        substeps = substeps_for(control_rate, built.scene.timestep)
+        self._setup_sim(
+            built.scene, substeps, render_mode=render_mode, width=width, height=height, camera=camera
+        )
+        self.object_name = object_name
+        layout = self._scene.layout
+        nu = len(layout.dof_names)
+        self._nu = nu
+        self._steps = max(1, round(_check("duration", duration, positive=True) / self.dt))
+        self._lift_height = _check("lift_height", lift_height, positive=True)
+        self._hold_steps = max(1, math.ceil(_check("hold_time", hold_time) / self.dt - 1e-9))
+        self._noise = _check("object_xy_noise", object_xy_noise)
+        self._w_reach = _check("reach_weight", reach_weight)
+        self._w_contact = _check("contact_weight", contact_weight) / CONTACT_LINKS
+        self._w_lift = _check("lift_weight", lift_weight) / self._lift_height
+        self._w_hold = _check("hold_weight", hold_weight)
+        self._terminate_on_success = bool(terminate_on_success)
+        self._scripted = root_control == "scripted"
+        self.root_control = root_control
+        lo, hi = layout.ctrl_range[:, 0], layout.ctrl_range[:, 1]
+        self._ctrl_mid, self._ctrl_half = (lo + hi) / 2, (hi - lo) / 2
+        self._ctrl = np.zeros(nu)
+        self._a = np.zeros(nu if root_control == "scripted" else nu + 3)
+        self._mocap = layout.mocap
+        self._obj = layout.objects[0]
+        target_body = int(np.flatnonzero(self.model.body_mocapid == self._mocap)[0])
+        self._root_start = np.array(self.model.body_pos[target_body], dtype=float)
+        self._root_lo = self._root_start - extent
+        self._root_lo[2] = built.root_floor  # down to the palm on the table top
+        self._root_hi = self._root_start + extent
+        self._root_step = _check("root_speed", root_speed) * self.dt
+        self._target = self._root_start.copy()
+        self._script = self._scripted_targets(clearance) if self._scripted else None
+        self._grasp_offset = np.asarray(built.grasp_offset, dtype=float)
+        self._object_start_z = float(self.model.qpos0[self._obj.free_qpos + 2])
+
+        obs = ObservationLayout()
+        self._pos_slice, self._qpos_adr, self._vel_slice, self._qvel_adr = add_state(obs, self._scene)
+        self._target_slice = obs.add("root_target", ("x", "y", "z"))
+        self._rel_slice = obs.add("object_to_grasp", ("x", "y", "z"))
+        self._contacts = ContactSummary(self._scene)
+        self._force_slice = obs.add("contact_force", layout.link_names)
+        self._pen_index = obs.add("penetration", ("depth",)).start
+        self._lift_index = obs.add("lift", ("height",)).start
+        self._hold_index = obs.add("hold", ("fraction",)).start
+        self._progress_index = obs.add("progress", ("fraction",)).start
+        root = obs.slices["root_pose"].start
+        self._root_slice = slice(root, root + 3)
+        pose = obs.slices[f"{self._obj.prefix}pose"].start
+        self._object_slice = slice(pose, pose + 3)
+        self.observation_names = tuple(obs.names)
+        self.observation_slices = dict(obs.slices)
+        self.observation_space = spaces.Box(-np.inf, np.inf, (obs.size,), np.float64)
+        size = nu if self._scripted else nu + 3
+        self.action_space = spaces.Box(-1.0, 1.0, (size,), np.float32)
+        self._action_doc = (
+            f"{nu} joint targets" + ("" if self._scripted else " then 3 root velocities") + " in [-1, 1]"
+        )
+        self._obs = np.zeros(obs.size)
+        self._step_count = 0
+        self._held = 0
+        self._started = False
+        self._views = (
+            "_qpos",
+            "_qvel",
+            "_sensordata",
+            "_data_ctrl",
+            "_mocap_pos",
+            "_obs_pos",
+            "_obs_vel",
+            "_obs_target",
+            "_obs_rel",
+            "_obs_force",
+            "_obs_root",
+            "_obs_object",
+        )
+        self._bind()
+
+    def _scripted_targets(self, clearance: float) -> np.ndarray:
+        """Root target per step (steps + 1, 3) of the scripted root."""
+        t = np.arange(self._steps + 1) * self.dt
+        down = np.clip(t / SCRIPT_DESCEND, 0.0, 1.0) * clearance
+        up = np.clip((t - SCRIPT_LIFT_START) * SCRIPT_LIFT_SPEED, 0.0, self._lift_height + 0.05)
+        targets = np.tile(self._root_start, (t.size, 1))
+        targets[:, 2] += up - down
+        return targets
+
+    def _bind(self) -> None:
+        data, obs = self._stepper.data, self._obs
+        self._qpos, self._qvel, self._sensordata = data.qpos, data.qvel, data.sensordata
+        self._data_ctrl, self._mocap_pos = data.ctrl, data.mocap_pos
+        self._obs_pos, self._obs_vel = obs[self._pos_slice], obs[self._vel_slice]
+        self._obs_target, self._obs_rel = obs[self._target_slice], obs[self._rel_slice]
+        self._obs_force = obs[self._force_slice]
+        self._obs_root, self._obs_object = obs[self._root_slice], obs[self._object_slice]
+
+    @property
+    def dof_names(self) -> tuple[str, ...]:
+        """Hand DoFs in action order."""
+        return self._scene.layout.dof_names
+
+    @property
+    def max_steps(self) -> int:
+        """Steps per episode."""
+        return self._steps
+
+    # ---- gymnasium API ----------------------------------------------------------------------------------
+    def reset(self, *, seed: int | None = None, options: dict | None = None) -> tuple[np.ndarray, dict]:
+        """Open hand at its start pose above the object; the object at a seeded random offset."""
+        super().reset(seed=seed)
+        stepper, layout = self._stepper, self._scene.layout
+        stepper.reset()
+        data = stepper.data
+        rest = np.clip(0.0, layout.ctrl_range[:, 0], layout.ctrl_range[:, 1])
+        data.qpos[layout.dof_qpos] = rest
+        data.ctrl[:] = rest
+        if self._noise > 0:
+            data.qpos[self._obj.free_qpos : self._obj.free_qpos + 2] += self.np_random.uniform(
+                -self._noise, self._noise, 2
+            )
+        self._target[:] = self._root_start
+        self._mocap_pos[self._mocap] = self._target
+        mujoco.mj_forward(self.model, data)
+        self._step_count = 0
+        self._held = 0
+        self._started = True
+        self._observe()
+        return self._obs.copy(), {"success": False, "is_success": False}
+
+    def step(self, action: npt.ArrayLike) -> tuple[np.ndarray, float, bool, bool, dict]:
+        """Set the joint targets (and move the root target), then advance one control frame.
+
+        Raises:
+            ValueError: ``action`` has the wrong shape or a non-finite value.
+            ResetNeeded: The episode is over (or was never started).
+        """
+        a, _ = self._action(action)
+        if not self._started:
+            raise gym.error.ResetNeeded("the episode is over or was never started: call reset()")
+        # clipped into a buffer, not in place: ``a`` may be the caller's array
+        a = np.minimum(np.maximum(a, -1.0, out=self._a), 1.0, out=self._a)
+        nu = self._nu
+        np.multiply(a[:nu], self._ctrl_half, out=self._ctrl)
+        np.add(self._ctrl, self._ctrl_mid, out=self._data_ctrl)
+        n = self._step_count + 1
+        target = self._target
+        if self._script is not None:
+            target[:] = self._script[n]
+        else:
+            target += a[nu:] * self._root_step
+            np.maximum(target, self._root_lo, out=target)
+            np.minimum(target, self._root_hi, out=target)
+        self._mocap_pos[self._mocap] = target
+        events = self._stepper.step()  # the controls are in data.ctrl already
+        self._step_count = n
+
+        rel = self._obs_rel
+        lift = self._object_lift()
+        penetration, touching = self._observe(lift)
+        distance = math.sqrt(float(np.dot(rel, rel)))
+        lifted = lift >= self._lift_height and touching > 0
+        self._held = self._held + 1 if lifted else 0
+        self._obs[self._hold_index] = min(1.0, self._held / self._hold_steps)
+        success = self._held >= self._hold_steps
+        r_reach = self._w_reach * (1.0 - math.tanh(REACH_SCALE * distance))
+        r_contact = self._w_contact * min(touching, CONTACT_LINKS)
+        r_lift = self._w_lift * min(max(lift, 0.0), self._lift_height)
+        r_hold = self._w_hold if lifted else 0.0
+        reward = r_reach + r_contact + r_lift + r_hold
+
+        diverged = any(e.diverged for e in events) if events else False
+        fell = float(self._obs_object[2]) < FALL_HEIGHT
+        terminated = diverged or fell or (success and self._terminate_on_success)
+        truncated = n >= self._steps and not terminated
+        if terminated or truncated:
+            self._started = False
+        info = {
+            "reward_reach": r_reach,
+            "reward_contact": r_contact,
+            "reward_lift": r_lift,
+            "reward_hold": r_hold,
+            "success": success,
+            "is_success": success,
+            "lift": lift,
+            "links_touching": touching,
+            "penetration": penetration,
+            "fell": fell,
+            "diverged": diverged,
+        }
+        if events:
+            info["warnings"] = tuple(e.describe() for e in events)
+        return self._obs.copy(), reward, terminated, truncated, info
+
+    def _object_lift(self) -> float:
+        return float(self._qpos[self._obj.free_qpos + 2]) - self._object_start_z
+
+    def _observe(self, lift: float | None = None) -> tuple[float, int]:
+        """Fill the observation buffer (``hold`` only at reset: the step sets it).
+
+        Returns:
+            The penetration (m) and the number of hand links touching the object.
+        """
+        obs = self._obs
+        self._obs_pos[:] = self._qpos[self._qpos_adr]
+        self._obs_vel[:] = self._qvel[self._qvel_adr]
+        self._obs_target[:] = self._target
+        np.subtract(self._obs_object, self._obs_root, out=self._obs_rel)
+        self._obs_rel -= self._grasp_offset
+        self._contacts.link_forces(self._sensordata, self._obs_force)
+        penetration = self._contacts.penetration(self._sensordata)
+        obs[self._pen_index] = penetration
+        obs[self._lift_index] = self._object_lift() if lift is None else lift
+        obs[self._progress_index] = self._step_count / self._steps
+        if lift is None:
+            obs[self._hold_index] = 0.0
+        return penetration, int(np.count_nonzero(self._obs_force))

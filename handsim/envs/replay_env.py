@@ -1,0 +1,402 @@
+"""``handsim/Replay-v0``: follow a recorded trajectory; the policy corrects the recorded joint targets.
+
+One environment step is one control frame of :func:`handsim.sim.control.control_schedule`: the hand's
+actuators hold the recorded targets of the next frame plus the policy's residual, the mocap root (a
+recorded root pose) moves to the next frame's pose, and MuJoCo runs ``frame_skip`` steps in one
+``mj_step`` call of :class:`~handsim.sim.stepper.Stepper` — the same stepping, targets and sensors as
+:func:`handsim.sim.replay.replay`. With zero actions the environment reproduces ``replay`` bitwise.
+
+Default scene: the bundled Tzionas et al. sequence 20 (MIT): the right hand following its recorded root
+pose through a mocap weld, the 53 mm cube free on the table (:func:`default_replay_inputs`).
+"""
+
+from __future__ import annotations
+
+import functools
+import math
+
+import gymnasium as gym
+import mujoco
+import numpy as np
+import numpy.typing as npt
+from gymnasium import spaces
+
+from handsim.envs._base import DEFAULT_CAMERA, DEFAULT_SIZE, HandEnv
+from handsim.envs._observation import POSE_LABELS, ContactSummary, ObservationLayout, add_state
+from handsim.sim.compiled import SimScene
+from handsim.sim.control import ControlSchedule, control_schedule
+from handsim.sim.metrics import MetricSpec
+from handsim.sim.replay import DEFAULT_CONTROL_RATE, initial_state
+from handsim.trajectory import Trajectory
+
+DEFAULT_SEQUENCE = ("Models", "20")
+"""The bundled Tzionas sequence under :data:`handsim.assets.TZIONAS_DIR`."""
+
+
+@functools.lru_cache(maxsize=1)
+def default_replay_inputs() -> tuple[SimScene, Trajectory]:
+    """The default scene and trajectory, built once per process (about 2 s).
+
+    Returns:
+        The bundled Tzionas sequence 20 as a recorded-object scene (:func:`~handsim.sim.scenarios.
+        recorded_scene`: the hand of ``Model_Hand_R.SKEL`` and the cube) and its trajectory.
+    """
+    from handsim.assets import TZIONAS_DIR
+    from handsim.builders import build_hand, build_object
+    from handsim.io import read_skeleton
+    from handsim.io.tzionas_motion import read_tzionas_sequence
+    from handsim.io.tzionas_objects import read_tzionas_object
+    from handsim.sim.scenarios import recorded_scene
+
+    folder = TZIONAS_DIR.joinpath(*DEFAULT_SEQUENCE)
+    trajectory = read_tzionas_sequence(folder)
+    hand = build_hand(read_skeleton(folder / "Model_Hand_R.SKEL"))
+    cube = build_object(read_tzionas_object(folder / "Model_Object_Cube.SKEL"))
+    return recorded_scene(hand, trajectory, {"cube": cube}), trajectory
+
+
+def release_frame(scene: SimScene, schedule: ControlSchedule, release_delay: float) -> int:
+    """The frame at whose start the objects' supports are switched off; -1 when they never are.
+
+    As :func:`handsim.sim.replay.replay` computes it: the scene's ``release_time`` plus ``release_delay``.
+    """
+    if scene.setup.release_time is None:
+        return -1
+    return schedule.frame_at(scene.setup.release_time + release_delay)
+
+
+def _nonnegative(name: str, value: float) -> float:
+    value = float(value)
+    if not (math.isfinite(value) and value >= 0):
+        raise ValueError(f"{name} must be a finite number ≥ 0, got {value}")
+    return value
+
+
+def _positive(name: str, value: float) -> float:
+    value = float(value)
+    if not (math.isfinite(value) and value > 0):
+        raise ValueError(f"{name} must be a finite number > 0, got {value}")
+    return value
+
+
+class ReplayEnv(HandEnv):
+    """Follow a recorded hand trajectory in a scene with free objects (``handsim/Replay-v0``).
+
+    **Action** ``Box(-1, 1, (nu,), float32)``: a residual per hand DoF (actuator order,
+    :attr:`dof_names`). The actuators get ``clip(ref + residual_scale · clip(action, -1, 1), ctrl range)``
+    where ``ref`` is the recorded target of the frame the step drives towards.
+
+    **Observation** ``Box(-inf, inf, (n,), float64)``, named element by element in
+    :attr:`observation_names` and group by group in :attr:`observation_slices`:
+
+    * ``hand_qpos`` (nu, rad), then ``root_pose`` (7: position m, quaternion w x y z; scenes whose hand
+      root follows a recorded pose), then per object ``<prefix>pose`` (7) and ``<prefix>hinge`` (rad,
+      articulated objects);
+    * ``hand_qvel`` (nu, rad/s), ``root_velocity`` (6), per object ``<prefix>velocity`` (6: linear m/s in
+      the world frame, angular rad/s in the body frame) and ``<prefix>hinge_velocity``;
+    * the references of the next step: ``ref_ctrl`` (nu, the recorded targets clipped to the joint
+      ranges), ``ref_root_pose`` (7), per recorded object ``ref_<prefix>pose`` (7) and
+      ``ref_<prefix>hinge``;
+    * ``contact_force`` (one per hand link with collision geometry: the total contact normal force on
+      every object part, N), ``penetration`` (the deepest hand–object penetration, m);
+    * ``progress``: frame index / last frame index, in [0, 1].
+
+    **Reward** = the sum of the terms in ``info`` (errors measured at the frame reached):
+
+    * ``reward_tracking = tracking_weight · exp(−mean((q − ref)²) / tracking_sigma²)``;
+    * ``reward_object = object_weight · mean over recorded objects of exp(−d² / object_sigma²)``, d the
+      distance of the object's origin from its recording (0 on frames where no track is valid);
+    * ``reward_penetration = −penetration_weight · penetration in mm``;
+    * ``reward_action = −action_weight · mean(action²)``.
+
+    **Episode**: starts at frame 0 (or a random frame with ``random_start``, or ``options={"frame": k}``);
+    truncated at the schedule's last frame; terminated when MuJoCo diverges (``info["diverged"]``) or a
+    recorded object ends up more than ``max_object_drift`` from its recording (``info["object_drift"]``).
+
+    Args:
+        scene: A compiled scene (:mod:`handsim.sim.scenarios`), or None with ``trajectory`` None for the
+            bundled Tzionas sequence 20 (:func:`default_replay_inputs`).
+        trajectory: The trajectory the scene replays.
+        control_rate: Control frames (environment steps) per second; rounded to whole MuJoCo steps.
+        residual_scale: Largest residual, rad: a number or one per DoF.
+        tracking_weight: Weight of the joint tracking term.
+        tracking_sigma: Joint error scale of the tracking term, rad.
+        object_weight: Weight of the object term.
+        object_sigma: Distance scale of the object term, m.
+        penetration_weight: Penalty per millimetre of penetration.
+        action_weight: Penalty on the mean squared action.
+        max_object_drift: Terminate when a recorded object is farther than this from its recording, m;
+            None never terminates for it.
+        release_delay: Scenes with supports (glove scenario): they are switched off this long after the
+            scene's ``release_time``, s (:attr:`handsim.sim.metrics.MetricSpec.release_delay`).
+        random_start: Reset to a frame drawn from the environment's seeded ``np_random``.
+        render_mode: None or ``"rgb_array"``.
+        width: Rendered image width, pixels.
+        height: Rendered image height, pixels.
+        camera: Scene camera to render from (``"hand_cam"``, ``"overview"``) or None (free camera).
+
+    Raises:
+        ValueError: A parameter is out of range, or only one of ``scene`` and ``trajectory`` is given.
+        TrajectoryError: The trajectory does not fit the scene (see
+            :func:`~handsim.sim.control.control_schedule`).
+    """
+
+    _action_doc = "one residual in [-1, 1] per hand DoF"
+
+    def __init__(
+        self,
+        scene: SimScene | None = None,
+        trajectory: Trajectory | None = None,
+        *,
+        control_rate: float = DEFAULT_CONTROL_RATE,
+        residual_scale: float | npt.ArrayLike = 0.1,
+        tracking_weight: float = 1.0,
+        tracking_sigma: float = 0.05,
+        object_weight: float = 1.0,
+        object_sigma: float = 0.01,
+        penetration_weight: float = 0.1,
+        action_weight: float = 0.01,
+        max_object_drift: float | None = 0.1,
+        release_delay: float = MetricSpec.release_delay,
+        random_start: bool = False,
+        render_mode: str | None = None,
+        width: int = DEFAULT_SIZE,
+        height: int = DEFAULT_SIZE,
+        camera: str | None = DEFAULT_CAMERA,
+    ) -> None:
+        if scene is None and trajectory is None:
+            scene, trajectory = default_replay_inputs()
+        elif scene is None or trajectory is None:
+            raise ValueError(
+                "pass both scene and trajectory, or neither for the bundled Tzionas sequence 20; "
+                f"got scene={'None' if scene is None else 'a scene'}, "
+                f"trajectory={'None' if trajectory is None else 'a trajectory'}"
+            )
+        schedule = control_schedule(scene, trajectory, control_rate)
+        if schedule.frames < 2:
+            raise ValueError(f"the trajectory gives {schedule.frames} control frame; an episode needs ≥ 2")
+        self._setup_sim(
+            scene, schedule.substeps, render_mode=render_mode, width=width, height=height, camera=camera
+        )
+        self._schedule = schedule
+        self._w_track = _nonnegative("tracking_weight", tracking_weight)
+        self._inv_sigma2_track = 1.0 / _positive("tracking_sigma", tracking_sigma) ** 2
+        self._w_object = _nonnegative("object_weight", object_weight)
+        self._inv_sigma2_object = 1.0 / _positive("object_sigma", object_sigma) ** 2
+        self._w_pen = _nonnegative("penetration_weight", penetration_weight) * 1000.0  # per m
+        self._max_drift = (
+            math.inf if max_object_drift is None else _positive("max_object_drift", max_object_drift)
+        )
+        self._random_start = bool(random_start)
+        layout = self._scene.layout
+        nu = len(layout.dof_names)
+        self._w_action = _nonnegative("action_weight", action_weight) / max(nu, 1)
+        scale = np.asarray(residual_scale, dtype=float)
+        if scale.shape not in ((), (nu,)) or not np.all(np.isfinite(scale)) or np.any(scale < 0):
+            raise ValueError(
+                f"residual_scale must be a number ≥ 0 or {nu} of them (one per DoF), got {scale.tolist()}"
+            )
+        self._scale = np.broadcast_to(scale, (nu,)).copy()
+
+        # per frame: the recorded targets, and the bounds that clip(ref + residual) stays within
+        lo, hi = layout.ctrl_range[:, 0], layout.ctrl_range[:, 1]
+        ctrl = np.ascontiguousarray(schedule.ctrl, dtype=float)
+        self._ref_ctrl = np.clip(ctrl, lo, hi)
+        self._ctrl_lo = np.clip(ctrl - self._scale, lo, hi)
+        self._ctrl_hi = np.clip(ctrl + self._scale, lo, hi)
+        self._ctrl_ref = ctrl
+        self._ctrl = np.zeros(nu)
+        self._err = np.zeros(nu)
+        self._delta = np.zeros(3)
+        self._last = schedule.frames - 1
+        self._times = schedule.times
+        self._mocap = layout.mocap
+        root = schedule.root_pose
+        self._root_pos = None if root is None else np.ascontiguousarray(root[:, :3])
+        self._root_quat = None if root is None else np.ascontiguousarray(root[:, 3:])
+        self._release = release_frame(self._scene, schedule, _nonnegative("release_delay", release_delay))
+        self._supports = np.array([o.support_eq for o in layout.objects if o.support_eq >= 0], dtype=np.int64)
+
+        obs = ObservationLayout()
+        self._pos_slice, self._qpos_adr, self._vel_slice, self._qvel_adr = add_state(obs, self._scene)
+        refs = [self._ref_ctrl]
+        first = obs.add("ref_ctrl", layout.dof_names)
+        if root is not None:
+            obs.add("ref_root_pose", POSE_LABELS)
+            refs.append(root)
+        self._tracks = []  # (observation index of the object's x, recorded positions, valid)
+        for index, track in sorted(schedule.objects.items()):
+            obj = layout.objects[index]
+            obs.add(f"ref_{obj.prefix}pose", POSE_LABELS)
+            refs.append(track.pose)
+            if track.articulation is not None and obj.hinge_qpos >= 0:
+                obs.add(f"ref_{obj.prefix}hinge", ("angle",))
+                refs.append(np.asarray(track.articulation, dtype=float)[:, None])
+            valid = np.ones(schedule.frames, bool) if track.valid is None else np.asarray(track.valid, bool)
+            start = obs.slices[f"{obj.prefix}pose"].start
+            self._tracks.append((start, np.ascontiguousarray(track.pose[:, :3]), valid))
+        self._ref_slice = slice(first.start, obs.size)
+        # a track without any valid sample may hold NaN: observed as 0 (its reward term skips those frames)
+        self._refs = np.nan_to_num(np.hstack(refs).astype(float), nan=0.0, posinf=0.0, neginf=0.0)
+        self._contacts = ContactSummary(self._scene)
+        self._force_slice = obs.add("contact_force", layout.link_names)
+        self._pen_index = obs.add("penetration", ("depth",)).start
+        self._progress_index = obs.add("progress", ("fraction",)).start
+        self._hand_slice = obs.slices["hand_qpos"]
+        self.observation_names = tuple(obs.names)
+        self.observation_slices = dict(obs.slices)
+        self.observation_space = spaces.Box(-np.inf, np.inf, (obs.size,), np.float64)
+        self.action_space = spaces.Box(-1.0, 1.0, (nu,), np.float32)
+        self._obs = np.zeros(obs.size)
+        self._frame = 0
+        self._started = False
+        self._views = (
+            "_qpos",
+            "_qvel",
+            "_sensordata",
+            "_data_ctrl",
+            "_mocap_pos",
+            "_mocap_quat",
+            "_eq_active",
+            "_obs_pos",
+            "_obs_vel",
+            "_obs_refs",
+            "_obs_force",
+            "_obs_hand",
+            "_obs_objects",
+        )
+        self._bind()
+
+    def _bind(self) -> None:
+        data, obs = self._stepper.data, self._obs
+        self._qpos, self._qvel, self._sensordata = data.qpos, data.qvel, data.sensordata
+        self._data_ctrl = data.ctrl
+        self._mocap_pos, self._mocap_quat, self._eq_active = data.mocap_pos, data.mocap_quat, data.eq_active
+        self._obs_pos, self._obs_vel = obs[self._pos_slice], obs[self._vel_slice]
+        self._obs_refs, self._obs_force = obs[self._ref_slice], obs[self._force_slice]
+        self._obs_hand = obs[self._hand_slice]
+        self._obs_objects = [obs[start : start + 3] for start, _, _ in self._tracks]
+
+    # ---- public facts -----------------------------------------------------------------------------------
+    @property
+    def schedule(self) -> ControlSchedule:
+        """The control frames the episode follows."""
+        return self._schedule
+
+    @property
+    def dof_names(self) -> tuple[str, ...]:
+        """Hand DoFs in action order."""
+        return self._scene.layout.dof_names
+
+    @property
+    def frame(self) -> int:
+        """Index of the control frame the simulation is at."""
+        return self._frame
+
+    # ---- gymnasium API ----------------------------------------------------------------------------------
+    def reset(self, *, seed: int | None = None, options: dict | None = None) -> tuple[np.ndarray, dict]:
+        """Put the scene at its recorded state of frame 0 (or of ``options["frame"]``, or a random frame).
+
+        Raises:
+            ValueError: ``options["frame"]`` is not a frame before the last.
+        """
+        super().reset(seed=seed)
+        options = options or {}
+        if "frame" in options:
+            start = int(options["frame"])
+            if not 0 <= start < self._last:
+                raise ValueError(f"options['frame'] must be a frame in [0, {self._last - 1}], got {start}")
+        elif self._random_start:
+            start = int(self.np_random.integers(0, self._last))
+        else:
+            start = 0
+        initial_state(self._stepper, self._schedule, start)
+        if 0 <= self._release < start:
+            self._eq_active[self._supports] = 0
+            mujoco.mj_forward(self.model, self._stepper.data)
+        self._frame = start
+        self._started = True
+        self._observe()
+        return self._obs.copy(), {"frame": start, "time": float(self._times[start])}
+
+    def step(self, action: npt.ArrayLike) -> tuple[np.ndarray, float, bool, bool, dict]:
+        """Advance one control frame with the recorded targets plus the residual ``action``.
+
+        Raises:
+            ValueError: ``action`` has the wrong shape or a non-finite value.
+            ResetNeeded: The episode is over (or was never started).
+        """
+        a, squares = self._action(action)
+        k = self._frame
+        if k >= self._last or not self._started:
+            raise gym.error.ResetNeeded(
+                "the episode is over (last frame reached or terminated): call reset()"
+                if self._started
+                else "call reset() before step()"
+            )
+        n = k + 1
+        ctrl = self._ctrl
+        np.multiply(a, self._scale, out=ctrl)
+        ctrl += self._ctrl_ref[n]
+        np.maximum(ctrl, self._ctrl_lo[n], out=ctrl)
+        np.minimum(ctrl, self._ctrl_hi[n], out=self._data_ctrl)
+        if k == self._release:
+            self._eq_active[self._supports] = 0
+        if self._root_pos is not None:
+            self._mocap_pos[self._mocap] = self._root_pos[n]
+            self._mocap_quat[self._mocap] = self._root_quat[n]
+        events = self._stepper.step()  # the controls are in data.ctrl already
+        self._frame = n
+        penetration = self._observe()
+
+        err = np.subtract(self._obs_hand, self._ref_ctrl[n], out=self._err)
+        mean_sq = float(np.dot(err, err)) / err.size if err.size else 0.0
+        r_track = self._w_track * math.exp(-mean_sq * self._inv_sigma2_track)
+        r_object, drift, tracked = 0.0, 0.0, 0
+        delta = self._delta
+        for view, (_, positions, valid) in zip(self._obs_objects, self._tracks, strict=True):
+            if not valid[n]:
+                continue
+            np.subtract(view, positions[n], out=delta)
+            d2 = float(np.dot(delta, delta))
+            r_object += math.exp(-d2 * self._inv_sigma2_object)
+            drift = max(drift, math.sqrt(d2))
+            tracked += 1
+        if tracked:
+            r_object *= self._w_object / tracked
+        r_pen = -self._w_pen * penetration
+        r_action = -self._w_action * squares
+        reward = r_track + r_object + r_pen + r_action
+
+        diverged = any(e.diverged for e in events) if events else False
+        terminated = diverged or drift > self._max_drift
+        truncated = n >= self._last and not terminated
+        if terminated:
+            self._started = False
+        info = {
+            "frame": n,
+            "time": float(self._times[n]),
+            "reward_tracking": r_track,
+            "reward_object": r_object,
+            "reward_penetration": r_pen,
+            "reward_action": r_action,
+            "tracking_error": math.sqrt(mean_sq),
+            "object_drift": drift,
+            "penetration": penetration,
+            "diverged": diverged,
+        }
+        if events:
+            info["warnings"] = tuple(e.describe() for e in events)
+        return self._obs.copy(), reward, terminated, truncated, info
+
+    def _observe(self) -> float:
+        """Fill the observation buffer from the state; returns the penetration, m."""
+        obs = self._obs
+        self._obs_pos[:] = self._qpos[self._qpos_adr]
+        self._obs_vel[:] = self._qvel[self._qvel_adr]
+        self._obs_refs[:] = self._refs[min(self._frame + 1, self._last)]
+        self._contacts.link_forces(self._sensordata, self._obs_force)
+        penetration = self._contacts.penetration(self._sensordata)
+        obs[self._pen_index] = penetration
+        obs[self._progress_index] = self._frame / self._last
+        return penetration

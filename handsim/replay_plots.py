@@ -1,0 +1,248 @@
+"""Per-frame curves of a replay, JSON-ready, and their plot (matplotlib: ``pip install "handsim[plot]"``).
+
+:func:`replay_curves` reduces a :class:`~handsim.sim.replay.ReplayResult`'s per-frame metrics to the curves
+people look at (penetration, contacts per hand link, tracking and fingertip errors, object drift or slip);
+:func:`plot_replay` draws them over time with the hold window and the release marked.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from handsim.plotting import _pyplot
+from handsim.sim.replay import ReplayResult
+
+MM, DEG = 1000.0, 180.0 / math.pi
+
+
+@dataclass(frozen=True)
+class ReplayCurves:
+    """Per-frame curves of a replay (N frames; NaN where a value does not exist).
+
+    Attributes:
+        times: Trajectory time of each frame, s (N,).
+        penetration: Deepest hand–object penetration, m (N,).
+        links: Hand links with collision geometry.
+        link_contacts: Contacts per hand link with any object part (N, links).
+        tracking_error_norm: Euclidean norm over the hand's DoFs of achieved minus target angle, rad (N,).
+        tips: Fingertip sites.
+        tip_error: Distance of each fingertip from where the targets put it, m (N, tips).
+        objects: Object labels (their scene prefixes without ``/``: ``obj``, ``obj0`` …).
+        drift: Recorded scenario: object position error against its track, m (N, objects), else None.
+        rotation_drift: Recorded scenario: object rotation error, rad (N, objects), else None.
+        slip: Glove scenario: the object's displacement relative to the hand root since release, m (N,);
+            NaN before release; None without a hold outcome.
+        release: Time the object's support was switched off, s, or None.
+        hold_window: The hold window (start, stop), s, or None.
+        lost_at: Time the object was lost, s, or None.
+        diverged_at: Time of the last frame before the divergence, s, or None.
+    """
+
+    times: np.ndarray
+    penetration: np.ndarray
+    links: tuple[str, ...]
+    link_contacts: np.ndarray
+    tracking_error_norm: np.ndarray
+    tips: tuple[str, ...]
+    tip_error: np.ndarray
+    objects: tuple[str, ...]
+    drift: np.ndarray | None
+    rotation_drift: np.ndarray | None
+    slip: np.ndarray | None
+    release: float | None
+    hold_window: tuple[float, float] | None
+    lost_at: float | None
+    diverged_at: float | None
+
+    def to_dict(self) -> dict:
+        """JSON-ready curves in the units their keys name (``_s``, ``_mm``, ``_deg``); NaN is None."""
+
+        def col(x: np.ndarray, scale: float = 1.0) -> list:
+            return [None if not math.isfinite(v) else v for v in (np.asarray(x, float) * scale).tolist()]
+
+        out = {
+            "times_s": col(self.times),
+            "penetration_mm": col(self.penetration, MM),
+            "contacts_per_link": {
+                n: self.link_contacts[:, i].astype(int).tolist() for i, n in enumerate(self.links)
+            },
+            "tracking_error_norm_deg": col(self.tracking_error_norm, DEG),
+            "tip_error_mm": {n: col(self.tip_error[:, i], MM) for i, n in enumerate(self.tips)},
+            "max_tip_error_mm": col(_nanmax(self.tip_error), MM),
+            "drift_mm": None,
+            "rotation_drift_deg": None,
+            "slip_mm": None if self.slip is None else col(self.slip, MM),
+            "release_s": self.release,
+            "hold_window_s": None if self.hold_window is None else list(self.hold_window),
+            "lost_at_s": self.lost_at,
+            "diverged_at_s": self.diverged_at,
+        }
+        if self.drift is not None and self.rotation_drift is not None:
+            out["drift_mm"] = {n: col(self.drift[:, i], MM) for i, n in enumerate(self.objects)}
+            out["rotation_drift_deg"] = {
+                n: col(self.rotation_drift[:, i], DEG) for i, n in enumerate(self.objects)
+            }
+        return out
+
+
+def _nanmax(x: np.ndarray) -> np.ndarray:
+    """Row maximum ignoring NaN; NaN for an all-NaN or empty row."""
+    x = np.asarray(x, dtype=float)
+    if x.shape[1] == 0:
+        return np.full(x.shape[0], np.nan)
+    finite = np.isfinite(x)
+    return np.where(finite.any(axis=1), np.where(finite, x, -np.inf).max(axis=1), np.nan)
+
+
+def _object_labels(parts: list[str], part_object: np.ndarray, count: int) -> tuple[str, ...]:
+    labels = []
+    for i in range(count):
+        first = next((p for p, o in zip(parts, part_object, strict=False) if o == i), f"obj{i}/")
+        labels.append(first.split("/", 1)[0])
+    return tuple(labels)
+
+
+def replay_curves(result: ReplayResult) -> ReplayCurves:
+    """The per-frame curves of a replay result.
+
+    Args:
+        result: A replay's result.
+
+    Returns:
+        The curves.
+    """
+    f = result.frames
+    n = f.times.shape[0]
+    nobj = f.object_position_error.shape[1]
+    recorded = bool(np.isfinite(f.object_position_error).any())
+    slip = None
+    hold = result.hold
+    if hold is not None and nobj:
+        rel = f.object_in_hand[:, 0]
+        r = int(np.searchsorted(f.times, hold.released_at - 1e-9))
+        slip = np.full(n, np.nan)
+        if r < n:
+            slip[r:] = np.linalg.norm(rel[r:] - rel[r], axis=1)
+    diverged_at = None
+    if result.diverged is not None and n:
+        diverged_at = float(f.times[-1])
+    return ReplayCurves(
+        times=f.times,
+        penetration=f.penetration,
+        links=tuple(result.scene.get("links", ())),
+        link_contacts=f.contact_count.sum(axis=2) if f.contact_count.size else np.zeros((n, 0), int),
+        tracking_error_norm=np.linalg.norm(f.tracking_error, axis=1),
+        tips=tuple(result.scene.get("tips", ())),
+        tip_error=f.tip_error,
+        objects=_object_labels(list(result.scene.get("parts", ())), f.part_object, nobj),
+        drift=f.object_position_error if recorded else None,
+        rotation_drift=f.object_rotation_error if recorded else None,
+        slip=slip,
+        release=None if hold is None else hold.released_at,
+        hold_window=None if hold is None else tuple(hold.window),
+        lost_at=None if hold is None else hold.lost_at,
+        diverged_at=diverged_at,
+    )
+
+
+def _mark(ax, curves: ReplayCurves) -> None:
+    if curves.hold_window is not None:
+        ax.axvspan(*curves.hold_window, color="#e8f4e8", lw=0, zorder=0)
+    if curves.release is not None:
+        ax.axvline(curves.release, color="#2e7d32", lw=0.9, ls="--")
+    if curves.lost_at is not None:
+        ax.axvline(curves.lost_at, color="#c0392b", lw=0.9, ls=":")
+    if curves.diverged_at is not None:
+        ax.axvline(curves.diverged_at, color="#c0392b", lw=1.4)
+
+
+def plot_replay(result: ReplayResult, path: str | Path, *, title: str | None = None) -> Path:
+    """Plot a replay: penetration, contacts per link, tracking and tip errors, drift (or slip) over time.
+
+    The hold window is shaded green, the release is a dashed green line, the moment the object was lost a
+    dotted red line and a divergence a solid red line.
+
+    Args:
+        result: A replay's result.
+        path: Image file to write (``.png``, ``.svg``, ``.pdf``).
+        title: Figure title (default: the trajectory's file name and the scenario).
+
+    Returns:
+        The path written.
+
+    Raises:
+        HandsimError: matplotlib is not installed.
+    """
+    plt = _pyplot()
+    c = replay_curves(result)
+    t = c.times
+    nlinks = len(c.links)
+    heights = [1.0, max(1.2, 0.11 * nlinks), 1.0, 1.0]
+    fig, axes = plt.subplots(4, 1, figsize=(9, 2.0 * sum(heights)), sharex=True, height_ratios=heights)
+    ax_pen, ax_con, ax_err, ax_obj = axes
+
+    ax_pen.plot(t, c.penetration * MM, lw=1.0, color="#1f4e8c")
+    ax_pen.axhline(1.0, lw=0.7, ls="--", color="#7f8c8d")
+    ax_pen.set_ylabel("penetration\n(mm)", fontsize=8)
+
+    if nlinks and t.size:
+        dt = float(t[1] - t[0]) if t.size > 1 else 1.0
+        counts = np.ma.masked_equal(c.link_contacts.T, 0)
+        ax_con.imshow(
+            counts, aspect="auto", interpolation="nearest", cmap="viridis", origin="lower",
+            extent=(t[0] - dt / 2, t[-1] + dt / 2, -0.5, nlinks - 0.5),
+        )  # fmt: skip
+        ax_con.set_yticks(range(nlinks), c.links, fontsize=max(4, 8 - nlinks // 12))
+    most = int(c.link_contacts.max()) if c.link_contacts.size else 0
+    ax_con.set_ylabel(f"contacts per link\n(dark 1 … bright {max(most, 1)})", fontsize=8)
+
+    ax_err.plot(t, c.tracking_error_norm * DEG, lw=1.0, color="#1f4e8c", label="tracking error norm (°)")
+    ax_err.set_ylabel("tracking\nerror (°)", fontsize=8)
+    tips = ax_err.twinx()
+    tips.plot(t, _nanmax(c.tip_error) * MM, lw=1.0, color="#e67e22", label="worst fingertip (mm)")
+    tips.set_ylabel("tip error\n(mm)", fontsize=8, color="#e67e22")
+
+    metrics = result.config.get("metrics", {})
+    if c.drift is not None and c.rotation_drift is not None:
+        for i, label in enumerate(c.objects):
+            ax_obj.plot(t, c.drift[:, i] * MM, lw=1.0, label=f"{label} position (mm)")
+        ax_obj.axhline(metrics.get("drift_tolerance", 0.01) * MM, lw=0.7, ls="--", color="#7f8c8d")
+        ax_obj.set_ylabel("object drift\n(mm)", fontsize=8)
+        rot = ax_obj.twinx()
+        for i, label in enumerate(c.objects):
+            rot.plot(t, c.rotation_drift[:, i] * DEG, lw=0.8, ls=":", label=f"{label} rotation (°)")
+        rot.set_ylabel("rotation\ndrift (°)", fontsize=8)
+        ax_obj.legend(fontsize=7, loc="upper left")
+    elif c.slip is not None:
+        limit = metrics.get("slip_limit", 0.02) * MM
+        ax_obj.plot(t, c.slip * MM, lw=1.0, color="#8e44ad")
+        ax_obj.axhline(limit, lw=0.7, ls="--", color="#7f8c8d")
+        label = "slip in hand\n(mm)"
+        if np.nanmax(c.slip, initial=0.0) * MM > 5 * limit:
+            ax_obj.set_ylim(0, 5 * limit)  # the limit stays readable; a lost object slips far beyond it
+            label += "\n(clipped)"
+        ax_obj.set_ylabel(label, fontsize=8)
+    else:
+        ax_obj.set_ylabel("(no object\nmeasure)", fontsize=8)
+    for ax in axes:
+        _mark(ax, c)
+        ax.tick_params(labelsize=7)
+    ax_obj.set_xlabel("time (s)", fontsize=8)
+    if title is None:
+        source = Path(result.trajectory.get("source") or "replay").name
+        title = f"{source} — {result.scene.get('scenario', '')} replay"
+        if result.hold is not None:
+            title += f"; held: {'yes' if result.hold.held else 'no'}"
+        if result.diverged is not None:
+            title += "; DIVERGED"
+    fig.suptitle(title, fontsize=9)
+    fig.tight_layout()
+    out = Path(path)
+    out.parent.mkdir(parents=True, exist_ok=True)
+    fig.savefig(out, dpi=110)
+    plt.close(fig)
+    return out

@@ -1,0 +1,267 @@
+"""Pictures of a replay: its states rendered offscreen with :class:`mujoco.Renderer`, written as a video.
+
+A replay keeps the state of every control frame when asked (``ReplayConfig(keep_states=True)``);
+:func:`render_states` puts each state into an ``MjData``, runs ``mj_forward`` and renders it from a camera
+of the scene (``hand_cam``, ``overview``) or from a camera tracking the hand (``track``).
+:func:`write_video` renders every ``stride``-th state, so that the video plays in real time at about
+:data:`DEFAULT_FPS`, and encodes it:
+
+* ``.mp4`` — H.264 (libx264; MPEG-4 part 2 where the FFmpeg build lacks it) through PyAV, the optional
+  ``video`` extra: ``pip install "handsim[video]"``;
+* ``.gif`` — an animated GIF through Pillow (a dependency of matplotlib, the ``plot`` extra).
+
+Rendering needs an OpenGL context: on a machine without a display set ``MUJOCO_GL=egl`` (GPU, or Mesa's
+software EGL) or ``MUJOCO_GL=osmesa`` before ``mujoco`` is imported (the ``handsim`` command sets
+``egl`` itself when no display is set).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterator
+from dataclasses import dataclass
+from fractions import Fraction
+from pathlib import Path
+
+import mujoco
+import numpy as np
+import numpy.typing as npt
+
+from handsim.errors import HandsimError
+from handsim.sim.compiled import SimScene
+
+DEFAULT_FPS = 30.0
+"""Target frame rate of a video, Hz; the exact rate is the control rate over a whole stride."""
+TRACK_CAMERA = "track"
+"""Camera name that follows the hand's root body (a tracking free camera) instead of a fixed camera."""
+VIDEO_FORMATS = {
+    ".mp4": 'H.264 video (PyAV: pip install "handsim[video]")',
+    ".gif": "animated GIF (Pillow)",
+}
+_TRACK_DISTANCE = 0.45  # m
+_TRACK_AZIMUTH = 135.0  # degrees
+_TRACK_ELEVATION = -25.0  # degrees
+
+
+@dataclass(frozen=True)
+class Video:
+    """A video written by :func:`write_video`.
+
+    Attributes:
+        path: The file.
+        frames: Images in it.
+        fps: Its frame rate, Hz (real time: ``1 / (stride · frame_dt)``).
+        stride: Replay frames per image.
+        width: Image width, pixels.
+        height: Image height, pixels.
+        camera: The camera it was rendered from.
+        codec: The encoder (``libx264``, ``mpeg4``, ``gif``).
+    """
+
+    path: Path
+    frames: int
+    fps: float
+    stride: int
+    width: int
+    height: int
+    camera: str
+    codec: str
+
+
+def frame_stride(frame_dt: float, fps: float = DEFAULT_FPS) -> int:
+    """Replay frames per video image so that the video plays in real time at about ``fps``.
+
+    Args:
+        frame_dt: Seconds per replay frame.
+        fps: Wanted video frame rate, Hz.
+
+    Returns:
+        The stride, at least 1.
+    """
+    if not (frame_dt > 0 and fps > 0):
+        raise ValueError(f"frame_dt and fps must be positive, got {frame_dt} and {fps}")
+    return max(1, round(1.0 / (fps * frame_dt)))
+
+
+def camera_names(scene: SimScene) -> tuple[str, ...]:
+    """Cameras :func:`render_states` accepts: the scene's cameras and :data:`TRACK_CAMERA`."""
+    model = scene.model
+    return (*(model.camera(i).name for i in range(model.ncam)), TRACK_CAMERA)
+
+
+def _camera(scene: SimScene, camera: str) -> str | mujoco.MjvCamera:
+    if camera == TRACK_CAMERA:
+        cam = mujoco.MjvCamera()
+        cam.type = mujoco.mjtCamera.mjCAMERA_TRACKING
+        cam.trackbodyid = scene.layout.root_body
+        cam.distance = _TRACK_DISTANCE
+        cam.azimuth = _TRACK_AZIMUTH
+        cam.elevation = _TRACK_ELEVATION
+        return cam
+    if mujoco.mj_name2id(scene.model, mujoco.mjtObj.mjOBJ_CAMERA, camera) < 0:
+        raise HandsimError(f"unknown camera {camera!r}; the scene has {list(camera_names(scene))}")
+    return camera
+
+
+def _renderer(scene: SimScene, width: int, height: int) -> mujoco.Renderer:
+    limit = (int(scene.model.vis.global_.offwidth), int(scene.model.vis.global_.offheight))
+    if not (0 < width <= limit[0] and 0 < height <= limit[1]):
+        raise HandsimError(f"image size {width} × {height} is outside 1 × 1 … {limit[0]} × {limit[1]} pixels")
+    try:
+        return mujoco.Renderer(scene.model, height=height, width=width)
+    except Exception as exc:  # MuJoCo raises FatalError, RuntimeError or AttributeError by GL backend
+        raise HandsimError(
+            f"offscreen rendering is not available ({type(exc).__name__}: {str(exc).strip()}); on a "
+            "machine without a display set MUJOCO_GL=egl (or MUJOCO_GL=osmesa) before starting Python"
+        ) from exc
+
+
+def render_states(
+    scene: SimScene,
+    states: npt.ArrayLike,
+    *,
+    camera: str = "hand_cam",
+    width: int = 640,
+    height: int = 480,
+    stride: int = 1,
+    shadows: bool = True,
+) -> Iterator[np.ndarray]:
+    """Render replay states, one image per ``stride``-th state.
+
+    Args:
+        scene: The replayed scene.
+        states: ``qpos`` per frame (N, nq), e.g. ``ReplayResult.states``.
+        camera: A camera of the scene (``hand_cam``, ``overview``) or :data:`TRACK_CAMERA`.
+        width: Image width, pixels (at most the scene's offscreen buffer, 1280).
+        height: Image height, pixels (at most 960).
+        stride: Render states 0, stride, 2 · stride …
+        shadows: Cast shadows (3–4× slower with software OpenGL).
+
+    Yields:
+        RGB images (height, width, 3), uint8.
+
+    Raises:
+        HandsimError: Unknown camera, bad image size, states of another model, or no OpenGL context.
+    """
+    qpos = np.asarray(states, dtype=float)
+    model = scene.model
+    if qpos.ndim != 2 or qpos.shape[1] != model.nq:
+        raise HandsimError(f"states must be (frames, {model.nq}) qpos rows of this scene, got {qpos.shape}")
+    if stride < 1:
+        raise ValueError(f"stride must be ≥ 1, got {stride}")
+    cam = _camera(scene, camera)
+    data = mujoco.MjData(model)
+    renderer = _renderer(scene, width, height)
+    renderer.scene.flags[mujoco.mjtRndFlag.mjRND_SHADOW] = shadows
+    try:
+        for q in qpos[::stride]:
+            data.qpos[:] = q
+            mujoco.mj_forward(model, data)
+            renderer.update_scene(data, camera=cam)
+            yield renderer.render()
+    finally:
+        renderer.close()
+
+
+def write_video(
+    scene: SimScene,
+    states: npt.ArrayLike,
+    frame_dt: float,
+    path: str | Path,
+    *,
+    fps: float = DEFAULT_FPS,
+    camera: str = "hand_cam",
+    width: int = 640,
+    height: int = 480,
+    shadows: bool = True,
+) -> Video:
+    """Render replay states and write them as a real-time video.
+
+    Args:
+        scene: The replayed scene.
+        states: ``qpos`` per frame (N, nq): ``ReplayResult.states`` of a replay with ``keep_states=True``.
+        frame_dt: Seconds per replay frame (``ReplayResult.frame_dt``).
+        path: ``.mp4`` or ``.gif`` file to write (its folder is created).
+        fps: Wanted frame rate, Hz (the written rate is ``1 / (stride · frame_dt)``).
+        camera: See :func:`render_states`.
+        width: Image width, pixels (even, for H.264).
+        height: Image height, pixels (even, for H.264).
+        shadows: Cast shadows.
+
+    Returns:
+        What was written.
+
+    Raises:
+        HandsimError: Unknown format, missing encoder (the message names the extra to install), or a
+            rendering problem (see :func:`render_states`).
+    """
+    out = Path(path)
+    encode = _encoder(out, width, height)
+    stride = frame_stride(frame_dt, fps)
+    rate = Fraction(1.0 / (stride * frame_dt)).limit_denominator(1000)
+    images = render_states(
+        scene, states, camera=camera, width=width, height=height, stride=stride, shadows=shadows
+    )
+    out.parent.mkdir(parents=True, exist_ok=True)
+    count, codec = encode(out, images, rate)
+    return Video(out, count, float(rate), stride, width, height, camera, codec)
+
+
+def check_video(path: str | Path, width: int = 640, height: int = 480) -> None:
+    """Check that :func:`write_video` can write ``path`` at this size, before spending time on a replay.
+
+    Raises:
+        HandsimError: Unknown format, odd size for H.264, or the encoder is not installed (the message
+            names the extra to install).
+    """
+    _encoder(Path(path), width, height)
+
+
+def _encoder(out: Path, width: int, height: int):
+    suffix = out.suffix.lower()
+    if suffix not in VIDEO_FORMATS:
+        listing = ", ".join(f"{k} ({v})" for k, v in VIDEO_FORMATS.items())
+        raise HandsimError(f"{out}: unknown video format {out.suffix!r}; handsim writes {listing}")
+    if suffix == ".mp4" and (width % 2 or height % 2):
+        raise HandsimError(f"H.264 needs an even image size, got {width} × {height}")
+    return _mp4_writer() if suffix == ".mp4" else _gif_writer()
+
+
+def _mp4_writer():
+    try:
+        import av
+    except ImportError as exc:
+        raise HandsimError('.mp4 videos need PyAV: pip install "handsim[video]" (or write a .gif)') from exc
+
+    def encode(path: Path, images: Iterator[np.ndarray], rate: Fraction) -> tuple[int, str]:
+        codec = "libx264" if "libx264" in av.codecs_available else "mpeg4"
+        count = 0
+        with av.open(str(path), mode="w") as container:
+            stream = container.add_stream(codec, rate=rate)
+            stream.pix_fmt = "yuv420p"
+            for image in images:
+                if count == 0:
+                    stream.height, stream.width = image.shape[:2]
+                frame = av.VideoFrame.from_ndarray(image, format="rgb24")
+                container.mux(stream.encode(frame))
+                count += 1
+            container.mux(stream.encode())
+        return count, codec
+
+    return encode
+
+
+def _gif_writer():
+    try:
+        from PIL import Image
+    except ImportError as exc:
+        raise HandsimError('.gif videos need Pillow: pip install "handsim[plot]" (or pillow)') from exc
+
+    def encode(path: Path, images: Iterator[np.ndarray], rate: Fraction) -> tuple[int, str]:
+        frames = [Image.fromarray(image) for image in images]
+        if not frames:
+            raise HandsimError("no states to render")
+        duration = round(1000.0 / float(rate))  # ms per image (GIF stores 10 ms steps)
+        frames[0].save(path, save_all=True, append_images=frames[1:], duration=duration, loop=0)
+        return len(frames), "gif"
+
+    return encode
