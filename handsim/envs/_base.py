@@ -71,6 +71,11 @@ class HandEnv(gym.Env[np.ndarray, np.ndarray]):
         return self._stepper.data
 
     @property
+    def dof_names(self) -> tuple[str, ...]:
+        """Hand DoFs in action order."""
+        return self._scene.layout.dof_names
+
+    @property
     def frame_skip(self) -> int:
         """MuJoCo steps per environment step (the control frame's substeps)."""
         return self._stepper.substeps

@@ -353,11 +353,6 @@ class GraspEnv(HandEnv):
         self._obs_root, self._obs_object = obs[self._root_slice], obs[self._object_slice]
 
     @property
-    def dof_names(self) -> tuple[str, ...]:
-        """Hand DoFs in action order."""
-        return self._scene.layout.dof_names
-
-    @property
     def max_steps(self) -> int:
         """Steps per episode."""
         return self._steps

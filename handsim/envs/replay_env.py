@@ -284,11 +284,6 @@ class ReplayEnv(HandEnv):
         return self._schedule
 
     @property
-    def dof_names(self) -> tuple[str, ...]:
-        """Hand DoFs in action order."""
-        return self._scene.layout.dof_names
-
-    @property
     def frame(self) -> int:
         """Index of the control frame the simulation is at."""
         return self._frame
