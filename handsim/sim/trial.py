@@ -21,6 +21,7 @@ Kinds of trial (:data:`TRIAL_KINDS`):
 
 from __future__ import annotations
 
+import dataclasses
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
 
@@ -96,8 +97,30 @@ class Trial:
     notes: tuple[str, ...] = ()
 
     def to_dict(self) -> dict:
-        """JSON-ready fields."""
+        """JSON-ready fields (:meth:`from_dict` gives the trial back)."""
         return asdict(self)
+
+    @classmethod
+    def from_dict(cls, fields: dict) -> Trial:
+        """The trial whose :meth:`to_dict` gave ``fields`` (as read back from JSON).
+
+        Raises:
+            TrialError: ``fields`` are not a trial's (a field missing or unknown).
+        """
+        names = {f.name for f in dataclasses.fields(cls)}
+        unknown, missing = (
+            set(fields) - names,
+            {"kind", "trajectory_path", "skeleton_path", "objects"} - set(fields),
+        )
+        if unknown or missing:
+            raise TrialError(
+                f"not a trial's fields: unknown {sorted(unknown)}, missing {sorted(missing)}; "
+                f"expected {sorted(names)}"
+            )
+        values = dict(fields)
+        values["objects"] = tuple(TrialObject(**o) for o in values["objects"])
+        values["notes"] = tuple(values.get("notes", ()))
+        return cls(**values)
 
 
 @dataclass(frozen=True)
