@@ -8,13 +8,15 @@ on its skeleton when ``../shared/data`` is present, else the default hand closin
 For each scene, in the same process and interleaved (median of ``--repeats``):
 
 * raw: ``mj_step`` from the replay's initial state with only the replay's inputs (controls, mocap root
-  pose, support release) set once per frame, ``nstep = substeps`` per call — the same simulation with
+  pose, the glove contact switch, support release) set once per frame, ``nstep = substeps`` per call —
+  the same simulation with
   nothing recorded or checked: the floor any replay loop can reach on this model;
 * loop: :func:`handsim.sim.replay.run_schedule` (the stepping loop: controls, mocap root, support
   release, warning checks, sensor and state copies);
 * replay: the whole :func:`handsim.sim.replay.replay` call (schedule, loop and metrics);
 * env (when the gymnasium env is available): ``env.step`` of ``handsim/Replay-v0`` with zero residuals
-  against raw ``mj_step × frame_skip`` on the env's own model.
+  against raw ``mj_step × frame_skip`` on the env's own model, from the same state with the same
+  controls and root targets.
 
 Prints steps per second, the real-time factor and the ratios; the last two lines are
 ``replay_vs_raw=<ratio>`` and ``env_vs_raw=<ratio>`` (worst scene) for tracking over time.
@@ -39,7 +41,9 @@ from handsim.io.tzionas_motion import read_tzionas_sequence
 from handsim.io.tzionas_objects import read_tzionas_object
 from handsim.sim.compiled import compile_scene
 from handsim.sim.control import control_schedule
-from handsim.sim.replay import initial_state, replay, run_schedule
+from handsim.sim.drive import ScheduleDriver, scenario_switches
+from handsim.sim.metrics import MetricSpec
+from handsim.sim.replay import replay, run_schedule
 from handsim.sim.scenarios import glove_scene, recorded_scene
 from handsim.sim.stepper import Stepper
 from handsim.trajectory import Trajectory
@@ -73,17 +77,29 @@ def glove_case():
     return "glove + ball (default hand, synthetic)", glove_scene(hand, trajectory, ball), trajectory
 
 
-def raw_seconds(scene, schedule, release: int) -> float:
-    """The same simulation with nothing but the inputs: controls, mocap root, support release."""
-    stepper = Stepper(scene, schedule.substeps)
-    initial_state(stepper, schedule)
-    model, data = scene.model, stepper.data
+def _driver(scene, schedule, own_model: bool) -> ScheduleDriver:
+    switches = scenario_switches(scene, schedule, MetricSpec().release_delay)
+    stepper = Stepper(scene, schedule.substeps, own_model=own_model or switches.contact_frame > 0)
+    driver = ScheduleDriver(stepper, schedule, switches)
+    driver.reset()
+    return driver
+
+
+def raw_seconds(scene, schedule) -> float:
+    """The same simulation with nothing but the inputs: controls, mocap root, contact switch, release."""
+    driver = _driver(scene, schedule, own_model=True)
+    model, data = driver.stepper.model, driver.stepper.data
     ctrl, root, k = schedule.ctrl, schedule.root_pose, schedule.substeps
+    contact, release = driver.switches.contact_frame, driver.switches.release_frame
     supports = [o.support_eq for o in scene.layout.objects if o.support_eq >= 0]
+    geoms = [g for o in scene.layout.objects for g in o.collision_geoms]
+    contype, conaffinity = scene.model.geom_contype[geoms].copy(), scene.model.geom_conaffinity[geoms].copy()
     start = time.perf_counter()
     for i in range(1, schedule.frames):
         if i - 1 == release:
             data.eq_active[supports] = 0
+        if i - 1 == contact and contact > 0:
+            model.geom_contype[geoms], model.geom_conaffinity[geoms] = contype, conaffinity
         if root is not None:
             data.mocap_pos[0] = root[i, :3]
             data.mocap_quat[0] = root[i, 3:]
@@ -92,11 +108,10 @@ def raw_seconds(scene, schedule, release: int) -> float:
     return time.perf_counter() - start
 
 
-def loop_seconds(scene, schedule, release: int) -> float:
-    stepper = Stepper(scene, schedule.substeps)
-    initial_state(stepper, schedule)
+def loop_seconds(scene, schedule) -> float:
+    driver = _driver(scene, schedule, own_model=False)
     start = time.perf_counter()
-    run_schedule(stepper, schedule, release)
+    run_schedule(driver)
     return time.perf_counter() - start
 
 
@@ -118,21 +133,32 @@ def env_ratio(repeats: int) -> tuple[float, float, float] | None:
         return None
     env.reset(seed=0)
     action = np.zeros(env.action_space.shape, dtype=env.action_space.dtype)
-    model, skip = env.unwrapped.model, env.unwrapped.frame_skip
-    steps = 300
+    model, skip = env.model, env.frame_skip
+    steps = min(300, env.schedule.frames - 1)
     env_times, raw_times = [], []
+    start_state = mujoco.MjData(model)
+    env.reset(seed=0)
+    mujoco.mj_copyData(start_state, model, env.data)
+    # the env's inputs per step (zero residuals: the schedule's targets and the recorded root pose)
+    ctrls, mocap_pos, mocap_quat = [], [], []
+    for _ in range(steps):
+        env.step(action)
+        ctrls.append(env.data.ctrl.copy())
+        mocap_pos.append(env.data.mocap_pos.copy())
+        mocap_quat.append(env.data.mocap_quat.copy())
+    data = mujoco.MjData(model)
     for _ in range(repeats):
         env.reset(seed=0)
         start = time.perf_counter()
         for _ in range(steps):
-            _, _, terminated, truncated, _ = env.step(action)
-            if terminated or truncated:
-                env.reset(seed=0)
+            env.step(action)
         env_times.append(time.perf_counter() - start)
-        data = mujoco.MjData(model)
-        data.qpos[:] = env.unwrapped.data.qpos
+        mujoco.mj_copyData(data, model, start_state)
         start = time.perf_counter()
-        for _ in range(steps):
+        for i in range(steps):  # the same physics from the same state, nothing observed
+            data.ctrl[:] = ctrls[i]
+            data.mocap_pos[:] = mocap_pos[i]
+            data.mocap_quat[:] = mocap_quat[i]
             mujoco.mj_step(model, data, nstep=skip)
         raw_times.append(time.perf_counter() - start)
     env_rate = steps * skip / statistics.median(env_times)
@@ -148,15 +174,12 @@ def main() -> None:
     for build in (tzionas_case, glove_case):
         name, scene, trajectory = build()
         schedule = control_schedule(scene, trajectory, 100.0)
-        release = -1
-        if scene.setup.release_time is not None:
-            release = schedule.frame_at(scene.setup.release_time + 0.1)
         steps = (schedule.frames - 1) * schedule.substeps
         raw, loop, full = [], [], []
         replay_seconds(scene, trajectory)  # warm up
         for _ in range(args.repeats):
-            raw.append(raw_seconds(scene, schedule, release))
-            loop.append(loop_seconds(scene, schedule, release))
+            raw.append(raw_seconds(scene, schedule))
+            loop.append(loop_seconds(scene, schedule))
             full.append(replay_seconds(scene, trajectory))
         raw_s, loop_s, full_s = (statistics.median(x) for x in (raw, loop, full))
         simulated = steps * scene.timestep

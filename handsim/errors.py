@@ -71,3 +71,7 @@ class ModelError(HandsimError):
 
 class SimulationError(HandsimError):
     """A simulation diverged or raised MuJoCo warnings that make its result meaningless."""
+
+
+class RenderError(HandsimError):
+    """Offscreen rendering failed: no OpenGL context (no display, no EGL/OSMesa), or an image too large."""

@@ -23,11 +23,12 @@ from handsim.builders.catalog import get
 from handsim.builders.graspdb_objects import UnknownObjectError
 from handsim.envs import ENVS, register_envs
 from handsim.envs.grasp_env import GraspEnv
-from handsim.envs.replay_env import ReplayEnv, default_replay_inputs, release_frame
+from handsim.envs.replay_env import ReplayEnv, default_replay_inputs
 from handsim.sim.compiled import compile_scene
+from handsim.sim.drive import scenario_switches
 from handsim.sim.replay import ReplayConfig, replay
 from handsim.sim.scenarios import glove_scene
-from handsim.trajectory import Trajectory
+from handsim.trajectory import Phase, Trajectory
 
 ROOT = Path(__file__).resolve().parents[1]
 REPLAY, GRASP = "handsim/Replay-v0", "handsim/Grasp-v0"
@@ -180,24 +181,31 @@ def test_replay_with_zero_residuals_is_the_replay_core_bitwise():
     assert info["frame"] == steps
 
 
-def test_replay_env_releases_a_glove_scenes_support_like_the_replay_core():
+def test_replay_env_switches_contacts_and_releases_a_glove_scenes_support_like_the_replay_core():
     hand, ball = default_hand(), build_object(get("tennis_ball"))
     layout = compile_scene(build_scene(hand, ball)).layout
     t = np.arange(100) / 64.0
     flex = np.array(["flex" in n and not n.startswith("root") for n in layout.dof_names])
-    targets = np.clip(t, 0, 1)[:, None] * np.where(flex, 0.6 * layout.ctrl_range[:, 1], 0.0)
-    trajectory = Trajectory(t, layout.dof_names, targets, np.ones_like(targets, bool))
+    # a fist first (the fingers curl through where the ball will be), then open, then close on the ball
+    closing = np.where(t < 0.2, 1.0, np.clip((t - 0.4) / 0.6, 0, 0.6 / 0.95)) * 0.95
+    targets = closing[:, None] * np.where(flex, layout.ctrl_range[:, 1], 0.0)
+    grasp = (Phase("grasp", int(np.searchsorted(t, 0.8)), 100),)
+    trajectory = Trajectory(t, layout.dof_names, targets, np.ones_like(targets, bool), phases=grasp)
     scene = glove_scene(hand, trajectory, ball)
     result = replay(scene, trajectory, ReplayConfig(keep_states=True))
     env = ReplayEnv(scene, trajectory)
     env.reset(seed=0)
     assert "ref_root_pose" not in env.observation_slices
     support = scene.layout.objects[0].support_eq
+    switches = scenario_switches(scene, env.schedule, 0.1)
+    assert 0 < switches.contact_frame < switches.release_frame
     zero = np.zeros(env.action_space.shape)
     for frame in range(1, result.states.shape[0]):
         env.step(zero)
         assert np.array_equal(env.data.qpos, result.states[frame]), f"frame {frame}"
-        assert env.data.eq_active[support] == (frame <= release_frame(scene, env.schedule, 0.1))
+        assert env.data.eq_active[support] == (frame <= switches.release_frame)
+        contacts_on = env.model.geom_contype[scene.layout.objects[0].collision_geoms[0]] != 0
+        assert contacts_on == (frame > switches.contact_frame)  # switched at the start of that frame
 
 
 @pytest.mark.parametrize("env_id", IDS)

@@ -20,10 +20,12 @@ from handsim.io.tzionas_motion import read_tzionas_sequence
 from handsim.io.tzionas_objects import read_tzionas_object
 from handsim.sim.compiled import compile_scene
 from handsim.sim.control import control_schedule
-from handsim.sim.replay import ReplayConfig, initial_state, replay
+from handsim.sim.drive import ScenarioSwitches, ScheduleDriver
+from handsim.sim.replay import ReplayConfig, replay
 from handsim.sim.scenarios import glove_scene, recorded_scene
 from handsim.sim.stepper import Stepper
-from handsim.trajectory import Trajectory
+from handsim.sim.warnings import WARNING_NAMES
+from handsim.trajectory import Phase, Trajectory
 
 SEQ20 = TZIONAS_DIR / "Models" / "20"
 
@@ -75,7 +77,7 @@ def test_recorded_scene_puts_the_support_plane_under_the_cube_at_z0_and_gravity_
     assert scene.setup.scenario == "recorded" and scene.setup.object_tracks == ("cube",)
     assert "+y axis" in scene.setup.notes[0] and "22.6°" in scene.setup.notes[0]
     stepper = Stepper(scene, 1)
-    initial_state(stepper, control_schedule(scene, trajectory, 100.0))
+    ScheduleDriver(stepper, control_schedule(scene, trajectory, 100.0), ScenarioSwitches()).reset()
     data, model = stepper.data, scene.model
     cube = [g for g in range(model.ngeom) if model.geom_bodyid[g] == scene.layout.objects[0].root_body]
     lowest = min(
@@ -110,7 +112,7 @@ def test_a_diverging_replay_is_reported_as_diverged_at_the_step_it_happened():
     # independent check: one step at a time, the first step whose warning counters move
     schedule = control_schedule(scene, bad, 100.0)
     stepper = Stepper(scene, 1)
-    initial_state(stepper, schedule)
+    ScheduleDriver(stepper, schedule, ScenarioSwitches()).reset()
     data, step, first = stepper.data, 0, None
     for k in range(schedule.frames - 1):
         data.mocap_pos[0], data.mocap_quat[0] = schedule.root_pose[k + 1, :3], schedule.root_pose[k + 1, 3:]
@@ -188,13 +190,62 @@ def test_graspdb_power_sphere_trial_places_the_ball_and_reports_the_hold_through
     ball = build_object(get_graspdb(1))
     scene = glove_scene(build_hand(skeleton), trajectory, ball)
     grasp = scene.setup.placement["grasp"]
-    assert grasp == {"frame": 81, "window": [81, 163], "source": "phase"}  # annotated 82–164, 1-based
+    assert grasp == {"frame": 81, "closed": 126, "window": [81, 163], "source": "phase"}  # 82–164, 1-based
+    # closed: the first frame of the phase with 98 % of the flexion rise within it (independent sum)
+    flex = trajectory.targets[:, ["flex" in n and not n.startswith("root") for n in trajectory.dof_names]]
+    rise = flex.sum(axis=1)[81:164]
+    level = rise[0] + 0.98 * (rise.max() - rise[0])
+    assert rise[126 - 81] >= level > rise[125 - 81]
     assert len(scene.setup.placement["links"]) >= 3
+    # contacts act from the approach: the hand at its targets lies inside the ball just before
+    contact = scene.setup.placement["contact_frame"]
+    assert 0 < contact <= 81 and scene.setup.placement["depth_before_contact_m"] > 0.002
+    assert scene.setup.contact_time == trajectory.times[contact]
     result = replay(scene, trajectory)
     assert result.diverged is None and result.warnings == ()
+    first_touch = int(np.flatnonzero(result.frames.hand_contact[:, 0])[0])
+    assert first_touch >= result.scene["contact_frame"]
     hold = result.hold
     assert hold.window[1] == pytest.approx(trajectory.times[163])
-    assert hold.released_at == pytest.approx(trajectory.times[81] + 0.1, abs=0.011)
+    assert hold.released_at == pytest.approx(trajectory.times[126] + 0.1, abs=0.011)
     assert isinstance(hold.held, bool) and 0.0 <= hold.time_held <= hold.window[1] - hold.released_at + 1e-9
     if not hold.held:
         assert hold.reason and hold.lost_at is not None
+
+
+def test_a_pickled_driver_continues_exactly_like_the_original():
+    scene, trajectory = _tzionas()
+    schedule = control_schedule(scene, trajectory, 100.0)
+    driver = ScheduleDriver(Stepper(scene, schedule.substeps), schedule, ScenarioSwitches())
+    driver.reset()
+    for k in range(50):
+        driver.advance(schedule.ctrl[k + 1])
+    clone = pickle.loads(pickle.dumps(driver))
+    assert clone.stepper.data is not driver.stepper.data and clone.frame == 50
+    for k in range(50, 120):
+        assert driver.advance(schedule.ctrl[k + 1]) == clone.advance(schedule.ctrl[k + 1]) == ()
+    assert np.array_equal(driver.stepper.data.qpos, clone.stepper.data.qpos)
+    # the clone's warning counters are live views of its own data
+    clone.stepper.data.warning.number[WARNING_NAMES.index("mjWARN_BADQACC")] += 1
+    assert clone.stepper.step(schedule.ctrl[120])[0].name == "mjWARN_BADQACC"
+
+
+def test_glove_replay_switches_contacts_on_its_own_model_copy_and_leaves_the_scene_alone():
+    hand, ball = default_hand(), build_object(get("tennis_ball"))
+    probe = compile_scene(build_scene(hand, ball))
+    t = np.arange(100) / 64.0
+    flex = np.array(["flex" in n and not n.startswith("root") for n in probe.layout.dof_names])
+    # a fist first (through where the ball will be), then open, then close on it
+    closing = np.where(t < 0.2, 0.95, np.clip((t - 0.4) / 0.6, 0, 0.6 / 0.95) * 0.95)
+    targets = closing[:, None] * np.where(flex, probe.layout.ctrl_range[:, 1], 0.0)
+    phases = (Phase("grasp", int(np.searchsorted(t, 0.8)), 100),)
+    trajectory = Trajectory(t, probe.layout.dof_names, targets, np.ones_like(targets, bool), phases=phases)
+    scene = glove_scene(hand, trajectory, ball)
+    before = scene.model.geom_contype.copy()
+    result = replay(scene, trajectory)
+    assert np.array_equal(scene.model.geom_contype, before)
+    contact = result.scene["contact_frame"]
+    assert contact > 0
+    # before contacts act, the fist passes through the ball's place without touching it
+    assert not result.frames.hand_contact[: contact + 1, 0].any()
+    assert result.frames.penetration[: contact + 1].max() == 0.0  # the sensors follow the contact switch

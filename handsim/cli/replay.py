@@ -10,10 +10,10 @@ from __future__ import annotations
 import argparse
 import json
 import math
-import os
 import sys
 
 from handsim.cli._common import write_text
+from handsim.headless import prefer_headless_gl
 
 EXIT_DIVERGED = 3
 LABEL = 12  # width of the label column
@@ -25,15 +25,6 @@ def _line(label: str, text: str) -> None:
 
 def _num(value: float | None, fmt: str = ".2f", unit: str = "") -> str:
     return "n/a" if value is None else f"{value:{fmt}}{unit}"
-
-
-def _headless_gl() -> None:
-    """Pick EGL for offscreen rendering when there is no display and nobody chose (before mujoco loads)."""
-    headless = sys.platform.startswith("linux") and not (
-        os.environ.get("DISPLAY") or os.environ.get("WAYLAND_DISPLAY")
-    )
-    if headless and "mujoco" not in sys.modules:
-        os.environ.setdefault("MUJOCO_GL", "egl")
 
 
 def _print_trial(loaded) -> None:
@@ -112,10 +103,19 @@ def _print_summary(result) -> None:
             f"{placement.get('penetration_m', 0.0) * 1000:.2f} mm at grasp frame {grasp.get('frame')} "
             f"({grasp.get('source')})",
         )
+        if scene.get("contact_frame", 0) > 0:
+            _line(
+                "contacts",
+                f"hand–object contacts act from {result.frames.times[scene['contact_frame']]:.2f} s "
+                "(before, the recorded hand reaches through where the object is placed)",
+            )
     hold = result.hold
     if hold is not None:
         _line(
-            "release", f"at {hold.released_at:.2f} s; hold window {hold.window[0]:.2f}–{hold.window[1]:.2f} s"
+            "release",
+            f"at {hold.released_at:.2f} s (grasp closed at frame {placement.get('grasp', {}).get('closed')}, "
+            f"+ {result.config['metrics']['release_delay']:g} s); hold window "
+            f"{hold.window[0]:.2f}–{hold.window[1]:.2f} s",
         )
         verdict = "yes" if hold.held else f"no: lost at {hold.lost_at:.2f} s ({hold.reason})"
         _line("held", f"{verdict}; held {hold.time_held:.2f} s")
@@ -157,7 +157,7 @@ def _json_ready(value):
 
 def _replay(args: argparse.Namespace) -> int:
     if args.video:
-        _headless_gl()
+        prefer_headless_gl()
         from handsim.sim.render import check_video
 
         check_video(args.video, *args.size)  # before the replay: a missing encoder is known at once

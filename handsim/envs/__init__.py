@@ -14,7 +14,7 @@ from __future__ import annotations
 
 from typing import Any
 
-from handsim.envs._render import prefer_headless_gl
+from handsim.headless import prefer_headless_gl
 
 prefer_headless_gl()  # before anything imports mujoco
 
@@ -39,7 +39,7 @@ register_envs()
 _LAZY = {
     "ReplayEnv": "handsim.envs.replay_env",
     "GraspEnv": "handsim.envs.grasp_env",
-    "RenderError": "handsim.envs._render",
+    "RenderError": "handsim.errors",
 }
 
 

@@ -131,22 +131,12 @@ class HandEnv(gym.Env[np.ndarray, np.ndarray]):
     # ---- pickling ---------------------------------------------------------------------------------------
     def __getstate__(self) -> dict:
         state = self.__dict__.copy()
-        stepper = state.pop("_stepper")
-        state["_pickled_data"] = stepper.data  # MjData pickles with its state (mujoco ≥ 3)
-        state["_pickled_frame"] = stepper.frame
-        # views into data and buffers would unpickle as copies: _bind() recreates them
+        # the stepper pickles with its data (state, warnings seen); views into data and buffers would
+        # unpickle as copies: _bind() recreates them
         for name in getattr(self, "_views", ()):
             state.pop(name, None)
         return state
 
     def __setstate__(self, state: dict) -> None:
-        saved = state.pop("_pickled_data")
-        frame = state.pop("_pickled_frame")
         self.__dict__.update(state)
-        self._stepper = Stepper(self._scene, self._substeps)
-        mujoco.mj_copyData(self._stepper.data, self._scene.model, saved)
-        # warnings already reported by the original were counted there; start the copy's counters afresh
-        # so that the next step reports only new ones (the counters play no part in the dynamics)
-        self._stepper.data.warning.number[:] = 0
-        self._stepper.frame = frame
         self._bind()

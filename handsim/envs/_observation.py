@@ -8,7 +8,6 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 
-import mujoco
 import numpy as np
 
 from handsim.sim.compiled import SimScene
@@ -45,12 +44,6 @@ class ObservationLayout:
         return len(self.names)
 
 
-def hand_dof_velocity_adr(model: mujoco.MjModel, scene: SimScene) -> np.ndarray:
-    """The ``qvel`` address of each hand DoF, in actuator order."""
-    joints = model.actuator_trnid[scene.layout.actuators, 0]
-    return np.asarray(model.jnt_dofadr[joints], dtype=np.int64)
-
-
 def add_state(obs: ObservationLayout, scene: SimScene) -> tuple[slice, np.ndarray, slice, np.ndarray]:
     """Add the hand and object positions, then their velocities, as two contiguous runs.
 
@@ -64,9 +57,9 @@ def add_state(obs: ObservationLayout, scene: SimScene) -> tuple[slice, np.ndarra
         The slice of the positions and their qpos addresses, the slice of the velocities and their qvel
         addresses (``obs[positions] = qpos[qpos_adr]``, ``obs[velocities] = qvel[qvel_adr]``).
     """
-    model, layout = scene.model, scene.layout
+    layout = scene.layout
     qpos = [layout.dof_qpos]
-    qvel = [hand_dof_velocity_adr(model, scene)]
+    qvel = [layout.dof_qvel]
     first = obs.add("hand_qpos", layout.dof_names)
     if layout.root_free_qpos >= 0:
         obs.add("root_pose", POSE_LABELS)
@@ -82,16 +75,14 @@ def add_state(obs: ObservationLayout, scene: SimScene) -> tuple[slice, np.ndarra
     first = obs.add("hand_qvel", layout.dof_names)
     if layout.root_free_qpos >= 0:
         obs.add("root_velocity", VELOCITY_LABELS)
-        joint = int(model.body_jntadr[layout.root_body])
-        qvel.append(int(model.jnt_dofadr[joint]) + np.arange(6))
+        qvel.append(layout.root_free_dof + np.arange(6))
     for o in layout.objects:
         if o.free_dof >= 0:
             obs.add(f"{o.prefix}velocity", VELOCITY_LABELS)
             qvel.append(o.free_dof + np.arange(6))
         if o.hinge_qpos >= 0:
             obs.add(f"{o.prefix}hinge_velocity", ("angle",))
-            hinge = [j for j in range(model.njnt) if int(model.jnt_qposadr[j]) == o.hinge_qpos]
-            qvel.append(np.array([int(model.jnt_dofadr[hinge[0]])]))
+            qvel.append(np.array([o.hinge_dof]))
     velocities = slice(first.start, obs.size)
     return positions, np.concatenate(qpos).astype(np.int64), velocities, np.concatenate(qvel).astype(np.int64)
 

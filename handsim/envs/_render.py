@@ -1,47 +1,21 @@
 """Headless rendering for the environments: MuJoCo's offscreen renderer, never a window.
 
-MuJoCo picks its OpenGL backend once, from ``MUJOCO_GL``, when ``mujoco`` is first imported. On Linux
-without a display the default (GLFW) cannot open a context, so :func:`prefer_headless_gl` (called when
-:mod:`handsim.envs` is imported, i.e. on ``import handsim``, before handsim imports ``mujoco``) selects
-EGL unless the user chose a backend. A process that imported ``mujoco`` before ``handsim`` keeps the
-backend it got; :class:`OffscreenRenderer` then fails with a :class:`RenderError` saying what to set.
+The backend choice and the renderer itself are :mod:`handsim.headless`'s; this module adds the cameras and
+a renderer that is created on first use and dropped when pickled.
 """
 
 from __future__ import annotations
 
-import os
-import sys
 from typing import TYPE_CHECKING
 
-from handsim.errors import HandsimError
+from handsim.errors import RenderError
+from handsim.headless import offscreen_renderer, prefer_headless_gl
+
+__all__ = ["OffscreenRenderer", "RenderError", "camera_id", "prefer_headless_gl"]
 
 if TYPE_CHECKING:  # mujoco is imported lazily: MUJOCO_GL must be set before its first import
     import mujoco
     import numpy as np
-
-HEADLESS_GL = "egl"
-"""Backend selected when there is no display: EGL (GPU, or Mesa's software renderer)."""
-
-
-class RenderError(HandsimError):
-    """No offscreen OpenGL context could be created (no display and no EGL/OSMesa backend)."""
-
-
-def prefer_headless_gl() -> str | None:
-    """Select MuJoCo's EGL backend on Linux without a display, unless ``MUJOCO_GL`` is already set.
-
-    Only effective before ``mujoco`` is first imported in the process (and in processes started later,
-    which inherit the environment).
-
-    Returns:
-        The backend this call selected, or None when it left ``MUJOCO_GL`` alone.
-    """
-    if not sys.platform.startswith("linux") or "MUJOCO_GL" in os.environ:
-        return None
-    if os.environ.get("DISPLAY") or os.environ.get("WAYLAND_DISPLAY"):
-        return None
-    os.environ.setdefault("MUJOCO_GL", HEADLESS_GL)
-    return HEADLESS_GL
 
 
 def camera_id(model: mujoco.MjModel, camera: str | None) -> int:
@@ -98,7 +72,7 @@ class OffscreenRenderer:
             RenderError: No OpenGL context could be created.
         """
         if self._renderer is None:
-            self._renderer = _make_renderer(model, self.width, self.height)
+            self._renderer = offscreen_renderer(model, self.width, self.height)
         self._renderer.update_scene(data, camera=self._camera_id)
         return self._renderer.render()
 
@@ -112,26 +86,3 @@ class OffscreenRenderer:
         state = self.__dict__.copy()
         state["_renderer"] = None
         return state
-
-
-def _make_renderer(model: mujoco.MjModel, width: int, height: int) -> mujoco.Renderer:
-    import mujoco
-
-    try:
-        return mujoco.Renderer(model, height=height, width=width)
-    except Exception as err:  # GLFW, EGL and OSMesa fail with different types (FatalError, ImportError…)
-        raise RenderError(
-            f"cannot create an offscreen OpenGL context with MuJoCo's {_backend()} backend: "
-            f"{type(err).__name__}: {err}. Without a display, set MUJOCO_GL=egl (or osmesa) before mujoco is "
-            "first imported: import handsim before mujoco, or set it in the environment"
-        ) from err
-
-
-def _backend() -> str:
-    """The OpenGL backend MuJoCo chose when it was imported (``glfw``, ``egl``, ``osmesa``…)."""
-    try:
-        from mujoco.rendering.classic import gl_context
-    except ImportError:
-        return "unknown"
-    module = getattr(getattr(gl_context, "GLContext", None), "__module__", "")
-    return module.removeprefix("mujoco.").split(".")[0] or "no"

@@ -16,7 +16,6 @@ import functools
 import math
 
 import gymnasium as gym
-import mujoco
 import numpy as np
 import numpy.typing as npt
 from gymnasium import spaces
@@ -25,8 +24,9 @@ from handsim.envs._base import DEFAULT_CAMERA, DEFAULT_SIZE, HandEnv
 from handsim.envs._observation import POSE_LABELS, ContactSummary, ObservationLayout, add_state
 from handsim.sim.compiled import SimScene
 from handsim.sim.control import ControlSchedule, control_schedule
+from handsim.sim.drive import ScheduleDriver, scenario_switches
 from handsim.sim.metrics import MetricSpec
-from handsim.sim.replay import DEFAULT_CONTROL_RATE, initial_state
+from handsim.sim.replay import DEFAULT_CONTROL_RATE
 from handsim.trajectory import Trajectory
 
 DEFAULT_SEQUENCE = ("Models", "20")
@@ -53,16 +53,6 @@ def default_replay_inputs() -> tuple[SimScene, Trajectory]:
     hand = build_hand(read_skeleton(folder / "Model_Hand_R.SKEL"))
     cube = build_object(read_tzionas_object(folder / "Model_Object_Cube.SKEL"))
     return recorded_scene(hand, trajectory, {"cube": cube}), trajectory
-
-
-def release_frame(scene: SimScene, schedule: ControlSchedule, release_delay: float) -> int:
-    """The frame at whose start the objects' supports are switched off; -1 when they never are.
-
-    As :func:`handsim.sim.replay.replay` computes it: the scene's ``release_time`` plus ``release_delay``.
-    """
-    if scene.setup.release_time is None:
-        return -1
-    return schedule.frame_at(scene.setup.release_time + release_delay)
 
 
 def _nonnegative(name: str, value: float) -> float:
@@ -210,12 +200,9 @@ class ReplayEnv(HandEnv):
         self._delta = np.zeros(3)
         self._last = schedule.frames - 1
         self._times = schedule.times
-        self._mocap = layout.mocap
         root = schedule.root_pose
-        self._root_pos = None if root is None else np.ascontiguousarray(root[:, :3])
-        self._root_quat = None if root is None else np.ascontiguousarray(root[:, 3:])
-        self._release = release_frame(self._scene, schedule, _nonnegative("release_delay", release_delay))
-        self._supports = np.array([o.support_eq for o in layout.objects if o.support_eq >= 0], dtype=np.int64)
+        switches = scenario_switches(self._scene, schedule, _nonnegative("release_delay", release_delay))
+        self._driver = ScheduleDriver(self._stepper, schedule, switches)
 
         obs = ObservationLayout()
         self._pos_slice, self._qpos_adr, self._vel_slice, self._qvel_adr = add_state(obs, self._scene)
@@ -255,9 +242,6 @@ class ReplayEnv(HandEnv):
             "_qvel",
             "_sensordata",
             "_data_ctrl",
-            "_mocap_pos",
-            "_mocap_quat",
-            "_eq_active",
             "_obs_pos",
             "_obs_vel",
             "_obs_refs",
@@ -271,7 +255,6 @@ class ReplayEnv(HandEnv):
         data, obs = self._stepper.data, self._obs
         self._qpos, self._qvel, self._sensordata = data.qpos, data.qvel, data.sensordata
         self._data_ctrl = data.ctrl
-        self._mocap_pos, self._mocap_quat, self._eq_active = data.mocap_pos, data.mocap_quat, data.eq_active
         self._obs_pos, self._obs_vel = obs[self._pos_slice], obs[self._vel_slice]
         self._obs_refs, self._obs_force = obs[self._ref_slice], obs[self._force_slice]
         self._obs_hand = obs[self._hand_slice]
@@ -305,10 +288,7 @@ class ReplayEnv(HandEnv):
             start = int(self.np_random.integers(0, self._last))
         else:
             start = 0
-        initial_state(self._stepper, self._schedule, start)
-        if 0 <= self._release < start:
-            self._eq_active[self._supports] = 0
-            mujoco.mj_forward(self.model, self._stepper.data)
+        self._driver.reset(start)
         self._frame = start
         self._started = True
         self._observe()
@@ -335,12 +315,7 @@ class ReplayEnv(HandEnv):
         ctrl += self._ctrl_ref[n]
         np.maximum(ctrl, self._ctrl_lo[n], out=ctrl)
         np.minimum(ctrl, self._ctrl_hi[n], out=self._data_ctrl)
-        if k == self._release:
-            self._eq_active[self._supports] = 0
-        if self._root_pos is not None:
-            self._mocap_pos[self._mocap] = self._root_pos[n]
-            self._mocap_quat[self._mocap] = self._root_quat[n]
-        events = self._stepper.step()  # the controls are in data.ctrl already
+        events = self._driver.advance()  # the controls are in data.ctrl already
         self._frame = n
         penetration = self._observe()
 

@@ -31,6 +31,9 @@ class SceneSetup:
             scene's world frame (z up, table top z = 0); applied to root poses and object tracks.
         object_tracks: Per scene object (in layout order), the key of its track in
             ``Trajectory.objects``, or "" for an object without one.
+        contact_time: Trajectory time (s) from which hand–object contacts act; before it the objects
+            collide with nothing and hang on their supports (glove scenario: the hand reaches through
+            where the placed object will be). None: from the start.
         release_time: Trajectory time (s) at which the objects' supports are switched off; None: never.
         hold_window: Trajectory times (start, stop) in s over which holding is judged, or None.
         grasp_time: Trajectory time (s) of the grasp frame the object was placed for, or None.
@@ -41,6 +44,7 @@ class SceneSetup:
     scenario: str = "free"
     world_from_recording: tuple[float, ...] = IDENTITY_POSE
     object_tracks: tuple[str, ...] = ()
+    contact_time: float | None = None
     release_time: float | None = None
     hold_window: tuple[float, float] | None = None
     grasp_time: float | None = None

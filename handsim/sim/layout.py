@@ -36,9 +36,11 @@ class ObjectLayout:
         free_qpos: qpos address of the free joint (position 3 + quaternion 4).
         free_dof: qvel address of the free joint.
         hinge_qpos: qpos address of the hinge of a two-part object, or -1.
+        hinge_dof: qvel address of that hinge, or -1.
         part_bodies: Body ids of its parts (root first).
         part_names: The parts' names without the prefix.
         support_eq: Equality id of its support weld, or -1 without one.
+        collision_geoms: Geom ids of its parts' collision geoms.
     """
 
     prefix: str
@@ -46,9 +48,11 @@ class ObjectLayout:
     free_qpos: int
     free_dof: int
     hinge_qpos: int
+    hinge_dof: int
     part_bodies: tuple[int, ...]
     part_names: tuple[str, ...]
     support_eq: int
+    collision_geoms: tuple[int, ...] = ()
 
 
 @dataclass(frozen=True)
@@ -59,11 +63,13 @@ class SceneLayout:
         dof_names: The hand's DoF names (joint names without ``hand/``), in actuator order.
         actuators: Actuator ids, one per DoF.
         dof_qpos: qpos address of each DoF's joint.
+        dof_qvel: qvel address of each DoF's joint.
         ctrl_range: (nu, 2) control range of each actuator (radians).
         link_names: Hand bodies (without ``hand/``) that have collision geoms, in body order.
         link_bodies: Their body ids.
         root_body: Body id of the hand's root.
         root_free_qpos: qpos address of the root's free joint (``hand_root="weld"``), or -1.
+        root_free_dof: qvel address of that free joint, or -1.
         mocap: Mocap index of :data:`~handsim.builders.scene.HAND_TARGET`, or -1.
         tip_names: Fingertip sites (sites on a link named for a leaf joint), without ``hand/``.
         tip_sites: Their site ids.
@@ -79,11 +85,13 @@ class SceneLayout:
     dof_names: tuple[str, ...]
     actuators: np.ndarray
     dof_qpos: np.ndarray
+    dof_qvel: np.ndarray
     ctrl_range: np.ndarray
     link_names: tuple[str, ...]
     link_bodies: np.ndarray
     root_body: int
     root_free_qpos: int
+    root_free_dof: int
     mocap: int
     tip_names: tuple[str, ...]
     tip_sites: np.ndarray
@@ -189,7 +197,7 @@ def scene_layout(model: mujoco.MjModel) -> SceneLayout:
         ModelError: An actuator does not drive a hand joint, or the scene has no hand.
     """
     names = [model.actuator(i).name for i in range(model.nu)]
-    dof_names, actuators, dof_qpos = [], [], []
+    dof_names, actuators, dof_qpos, dof_qvel = [], [], [], []
     for i, name in enumerate(names):
         if not name.startswith(HAND_PREFIX) or int(model.actuator_trntype[i]) != int(
             mujoco.mjtTrn.mjTRN_JOINT
@@ -201,6 +209,7 @@ def scene_layout(model: mujoco.MjModel) -> SceneLayout:
         dof_names.append(model.joint(joint).name.removeprefix(HAND_PREFIX))
         actuators.append(i)
         dof_qpos.append(int(model.jnt_qposadr[joint]))
+        dof_qvel.append(int(model.jnt_dofadr[joint]))
     hand_bodies = [i for i in range(model.nbody) if model.body(i).name.startswith(HAND_PREFIX)]
     if not hand_bodies:
         raise ModelError(f"the scene has no hand (no body named {HAND_PREFIX}…)")
@@ -213,11 +222,9 @@ def scene_layout(model: mujoco.MjModel) -> SceneLayout:
     links = [b for b in hand_bodies if b in colliding]
     root_joint = int(model.body_jntadr[root_body])
     free = int(mujoco.mjtJoint.mjJNT_FREE)
-    root_free = (
-        int(model.jnt_qposadr[root_joint])
-        if root_joint >= 0 and int(model.jnt_type[root_joint]) == free
-        else -1
-    )
+    is_free = root_joint >= 0 and int(model.jnt_type[root_joint]) == free
+    root_free = int(model.jnt_qposadr[root_joint]) if is_free else -1
+    root_free_dof = int(model.jnt_dofadr[root_joint]) if is_free else -1
     target = _id(model, mujoco.mjtObj.mjOBJ_BODY, HAND_TARGET)
     mocap = int(model.body_mocapid[target]) if target >= 0 else -1
     if (mocap >= 0) != (_id(model, mujoco.mjtObj.mjOBJ_EQUALITY, HAND_WELD) >= 0):
@@ -247,9 +254,16 @@ def scene_layout(model: mujoco.MjModel) -> SceneLayout:
                 free_qpos=int(model.jnt_qposadr[jnt]) if jnt >= 0 else -1,
                 free_dof=int(model.jnt_dofadr[jnt]) if jnt >= 0 else -1,
                 hinge_qpos=int(model.jnt_qposadr[hinge[0]]) if hinge else -1,
+                hinge_dof=int(model.jnt_dofadr[hinge[0]]) if hinge else -1,
                 part_bodies=tuple(parts),
                 part_names=tuple(model.body(c).name.removeprefix(prefix) for c in parts),
                 support_eq=support,
+                collision_geoms=tuple(
+                    int(g)
+                    for g in range(model.ngeom)
+                    if int(model.geom_bodyid[g]) in parts
+                    and (model.geom_contype[g] or model.geom_conaffinity[g])
+                ),
             )
         )
         parts_all.extend(model.body(c).name for c in parts)
@@ -270,11 +284,13 @@ def scene_layout(model: mujoco.MjModel) -> SceneLayout:
         dof_names=tuple(dof_names),
         actuators=np.asarray(actuators, dtype=np.int64),
         dof_qpos=np.asarray(dof_qpos, dtype=np.int64),
+        dof_qvel=np.asarray(dof_qvel, dtype=np.int64),
         ctrl_range=np.array(model.actuator_ctrlrange, dtype=float),
         link_names=tuple(model.body(b).name.removeprefix(HAND_PREFIX) for b in links),
         link_bodies=np.asarray(links, dtype=np.int64),
         root_body=root_body,
         root_free_qpos=root_free,
+        root_free_dof=root_free_dof,
         mocap=mocap,
         tip_names=tuple(model.site(s).name.removeprefix(HAND_PREFIX) for s in tips),
         tip_sites=np.asarray(tips, dtype=np.int64),

@@ -128,10 +128,11 @@ def _target_tips(scene: SimScene, qpos: np.ndarray) -> np.ndarray:
     model, sites = scene.model, scene.layout.tip_sites
     data = mujoco.MjData(model)
     tips = np.empty((qpos.shape[0], sites.size, 3))
-    for k, q in enumerate(qpos):
-        data.qpos[:] = q
-        mujoco.mj_kinematics(model, data)
-        tips[k] = data.site_xpos[sites]
+    state, site_xpos, kinematics = data.qpos, data.site_xpos, mujoco.mj_kinematics
+    for k in range(qpos.shape[0]):
+        state[:] = qpos[k]
+        kinematics(model, data)
+        np.take(site_xpos, sites, axis=0, out=tips[k])
     return tips
 
 

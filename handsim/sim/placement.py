@@ -31,6 +31,9 @@ GRASP_PHASE = "grasp"
 PEAK_WINDOW = 0.8
 """Without a ``grasp`` phase, the hold window is the frames around peak flexion above this fraction of
 the flexion range."""
+CLOSED_FRACTION = 0.98
+"""The grasp has closed at the first frame of the window whose flexion has risen this fraction of the way
+from the window's first frame to its peak."""
 GRID_STEPS = (0.01, 0.0025, 0.001)
 """Search grid spacings, m; each refinement spans ±2 steps of the previous grid around each seed."""
 SEEDS = 6
@@ -42,20 +45,28 @@ class GraspFrame:
     """The frame a glove trial's grasp closes at, and the frames holding is judged over.
 
     Attributes:
-        frame: Trajectory frame index.
+        frame: Trajectory frame index of first contact, where the object is placed.
+        closed: Frame at which the grasp has closed (flexion reaches its peak within the window): the
+            object's support is released from there.
         window: First and last frame of the hold window (inclusive).
         source: ``"phase"`` (the annotated ``grasp`` phase) or ``"peak flexion"``.
         note: For people.
     """
 
     frame: int
+    closed: int
     window: tuple[int, int]
     source: str
     note: str
 
     def to_dict(self) -> dict:
         """JSON-ready fields."""
-        return {"frame": self.frame, "window": list(self.window), "source": self.source}
+        return {
+            "frame": self.frame,
+            "closed": self.closed,
+            "window": list(self.window),
+            "source": self.source,
+        }
 
 
 def _flexion(trajectory: Trajectory) -> np.ndarray:
@@ -69,21 +80,29 @@ def _flexion(trajectory: Trajectory) -> np.ndarray:
 
 
 def grasp_frame(trajectory: Trajectory) -> GraspFrame:
-    """The grasp frame: the start of the ``grasp`` phase (window = the phase), else peak flexion.
+    """The grasp frame and the frame the grasp has closed at.
+
+    With an annotated ``grasp`` phase: its first frame (the hand reaches the object), closed at
+    :data:`CLOSED_FRACTION` of the flexion rise within the phase; the window is the phase. Without one:
+    the frames above :data:`PEAK_WINDOW` of the flexion range around the peak; the grasp frame is their
+    first, closed at the same fraction of the rise to the peak.
 
     Raises:
-        TrajectoryError: No ``grasp`` phase and no flexion DoFs.
+        TrajectoryError: No flexion DoFs (names containing ``flex``).
     """
+    flex = _flexion(trajectory)
     for phase in trajectory.phases:
         if phase.name.strip(".") == GRASP_PHASE and phase.stop > phase.start:
+            lo, hi = phase.start, phase.stop - 1
+            closed = _closed(flex, lo, hi)
             return GraspFrame(
-                frame=phase.start,
-                window=(phase.start, phase.stop - 1),
+                frame=lo,
+                closed=closed,
+                window=(lo, hi),
                 source="phase",
-                note=f"grasp frame {phase.start} = start of the annotated 'grasp' phase "
-                f"(frames {phase.start}–{phase.stop - 1}, 0-based)",
+                note=f"grasp frame {lo} = start of the annotated 'grasp' phase (frames {lo}–{hi}, 0-based); "
+                f"closed at frame {closed}",
             )
-    flex = _flexion(trajectory)
     peak = int(np.argmax(flex))
     level = flex.min() + PEAK_WINDOW * (flex[peak] - flex.min())
     lo = peak
@@ -92,13 +111,21 @@ def grasp_frame(trajectory: Trajectory) -> GraspFrame:
     hi = peak
     while hi + 1 < flex.shape[0] and flex[hi + 1] >= level:
         hi += 1
+    closed = _closed(flex, lo, hi)
     return GraspFrame(
         frame=lo,
+        closed=closed,
         window=(lo, hi),
         source="peak flexion",
         note=f"no 'grasp' phase: grasp frame {lo} = first of frames {lo}–{hi} above {PEAK_WINDOW:.0%} of the "
-        f"flexion range (peak at {peak})",
+        f"flexion range (peak at {peak}); closed at frame {closed}",
     )
+
+
+def _closed(flex: np.ndarray, lo: int, hi: int) -> int:
+    window = flex[lo : hi + 1]
+    level = window[0] + CLOSED_FRACTION * (window.max() - window[0])
+    return lo + int(np.argmax(window >= level))
 
 
 def _targets_qpos(scene: SimScene, trajectory: Trajectory, frame: int) -> np.ndarray:
@@ -308,6 +335,59 @@ def place_object(scene: SimScene, trajectory: Trajectory, frame: int, spec: Metr
     return Placement(
         pose=pose, links=names, penetration=depth, candidates=score.count, lowest_z=lowest, note=note
     )
+
+
+@dataclass(frozen=True)
+class ContactStart:
+    """From which frame on the hand may touch the placed object.
+
+    Attributes:
+        frame: Trajectory frame.
+        depth_before: Deepest penetration of the hand at its targets in the frame before, m (0 when the
+            hand is clear of the object from the first frame on).
+        note: For people.
+    """
+
+    frame: int
+    depth_before: float
+    note: str
+
+
+def contact_start(
+    scene: SimScene, trajectory: Trajectory, frame: int, pose: np.ndarray, spec: MetricSpec
+) -> ContactStart:
+    """The first frame of the run of frames up to ``frame`` in which the hand stays out of the object.
+
+    The glove records the hand alone: where the object was while the hand reached is unknown, and the
+    placed object (where the grasp closes) often lies where the fingers were earlier (a relaxed ring finger
+    at the start of a recording, say). Walking back from the grasp frame with the hand at its targets, the
+    frames whose deepest penetration of the object at ``pose`` is at most
+    :attr:`MetricSpec.placement_penetration` are the approach; contacts act from its first frame.
+
+    Args:
+        scene: The placement search's scene (:func:`place_object`'s).
+        trajectory: The glove trajectory.
+        frame: The grasp frame.
+        pose: The placed object's pose in that scene.
+        spec: The penetration tolerance.
+
+    Returns:
+        The frame, the penetration just before it, and a note.
+    """
+    score = _Scorer(scene, _targets_qpos(scene, trajectory, frame), spec)
+    pos, quat = pose[:3], pose[3:]
+    for f in range(frame, -1, -1):
+        score.data.qpos[:] = _targets_qpos(scene, trajectory, f)
+        _, depth, _ = score(pos, quat)
+        if depth > spec.placement_penetration:
+            times = trajectory.times
+            return ContactStart(
+                frame=f + 1,
+                depth_before=depth,
+                note=f"hand–object contacts act from frame {f + 1} ({times[f + 1]:.3f} s); at frame {f} the "
+                f"hand at its targets is {depth * 1000:.1f} mm inside the placed object",
+            )
+    return ContactStart(frame=0, depth_before=0.0, note="the hand is clear of the placed object from frame 0")
 
 
 def _lowest_point(model: mujoco.MjModel, data: mujoco.MjData, mask: np.ndarray) -> float:

@@ -27,6 +27,7 @@ import numpy as np
 import numpy.typing as npt
 
 from handsim.errors import HandsimError
+from handsim.headless import offscreen_renderer
 from handsim.sim.compiled import SimScene
 
 DEFAULT_FPS = 30.0
@@ -103,16 +104,7 @@ def _camera(scene: SimScene, camera: str) -> str | mujoco.MjvCamera:
 
 
 def _renderer(scene: SimScene, width: int, height: int) -> mujoco.Renderer:
-    limit = (int(scene.model.vis.global_.offwidth), int(scene.model.vis.global_.offheight))
-    if not (0 < width <= limit[0] and 0 < height <= limit[1]):
-        raise HandsimError(f"image size {width} × {height} is outside 1 × 1 … {limit[0]} × {limit[1]} pixels")
-    try:
-        return mujoco.Renderer(scene.model, height=height, width=width)
-    except Exception as exc:  # MuJoCo raises FatalError, RuntimeError or AttributeError by GL backend
-        raise HandsimError(
-            f"offscreen rendering is not available ({type(exc).__name__}: {str(exc).strip()}); on a "
-            "machine without a display set MUJOCO_GL=egl (or MUJOCO_GL=osmesa) before starting Python"
-        ) from exc
+    return offscreen_renderer(scene.model, width, height)
 
 
 def render_states(

@@ -2,18 +2,18 @@
 
 ``replay(scene, trajectory, config)`` is pure (same inputs, bitwise-same result on one machine), takes
 picklable inputs and returns a small result, so it runs in-process, in a process pool or as a Ray task.
-The gymnasium environments drive the same :class:`~handsim.sim.stepper.Stepper` and schedule.
+The gymnasium environments drive the same :class:`~handsim.sim.drive.ScheduleDriver` and schedule.
 """
 
 from __future__ import annotations
 
 from dataclasses import asdict, dataclass, field
 
-import mujoco
 import numpy as np
 
 from handsim.sim.compiled import SimScene
 from handsim.sim.control import ControlSchedule, control_schedule
+from handsim.sim.drive import ScheduleDriver, scenario_switches
 from handsim.sim.metrics import FrameMetrics, MetricSpec, frame_metrics
 from handsim.sim.stability import StabilityResult, stability_test
 from handsim.sim.stepper import Stepper, WarningEvent
@@ -113,38 +113,10 @@ class ReplayResult:
         }
 
 
-def initial_state(stepper: Stepper, schedule: ControlSchedule, frame: int = 0) -> None:
-    """Put the scene in the state the recording starts from.
-
-    The hand at its targets, its root at its recorded pose, recorded objects at their recorded poses,
-    supports on; velocities zero.
-    """
-    scene, data = stepper.scene, stepper.data
-    layout = scene.layout
-    stepper.reset()
-    data.qpos[layout.dof_qpos] = np.clip(
-        schedule.ctrl[frame], layout.ctrl_range[:, 0], layout.ctrl_range[:, 1]
-    )
-    data.ctrl[:] = schedule.ctrl[frame]
-    if schedule.root_pose is not None:
-        data.mocap_pos[layout.mocap] = schedule.root_pose[frame, :3]
-        data.mocap_quat[layout.mocap] = schedule.root_pose[frame, 3:]
-        data.qpos[layout.root_free_qpos : layout.root_free_qpos + 7] = schedule.root_pose[frame]
-    for index, track in schedule.objects.items():
-        obj = layout.objects[index]
-        data.qpos[obj.free_qpos : obj.free_qpos + 7] = track.pose[frame]
-        if track.articulation is not None and obj.hinge_qpos >= 0:
-            data.qpos[obj.hinge_qpos] = track.articulation[frame]
-    for obj in layout.objects:
-        if obj.support_eq >= 0:
-            data.eq_active[obj.support_eq] = 1
-    mujoco.mj_forward(scene.model, data)
-
-
 def run_schedule(
-    stepper: Stepper, schedule: ControlSchedule, release_frame: int = -1
+    driver: ScheduleDriver,
 ) -> tuple[np.ndarray, np.ndarray, list[WarningEvent], WarningEvent | None]:
-    """Step through every frame of a schedule from the current state.
+    """Step through every frame of the driver's schedule from its current state (frame 0).
 
     During frame ``k`` (from ``t_k`` to ``t_k+1``) the actuators and the root's mocap target hold the
     references of ``t_k+1``, so the state at ``t_k+1`` is compared with what it was driven towards.
@@ -153,23 +125,17 @@ def run_schedule(
         qpos and sensordata at each frame time (rows up to the divergence when there is one), the
         warnings, and the divergence.
     """
-    model, data = stepper.model, stepper.data
+    model, data = driver.stepper.model, driver.stepper.data
+    schedule = driver.schedule
     n = schedule.frames
     qpos = np.empty((n, model.nq))
     sensors = np.empty((n, model.nsensordata))
     qpos[0], sensors[0] = data.qpos, data.sensordata
-    ctrl, root = schedule.ctrl, schedule.root_pose
-    mocap = stepper.scene.layout.mocap
-    supports = [o.support_eq for o in stepper.scene.layout.objects if o.support_eq >= 0]
+    ctrl = schedule.ctrl
     warnings: list[WarningEvent] = []
-    step = stepper.step
+    advance = driver.advance
     for k in range(n - 1):
-        if k == release_frame:
-            data.eq_active[supports] = 0
-        if root is not None:
-            data.mocap_pos[mocap] = root[k + 1, :3]
-            data.mocap_quat[mocap] = root[k + 1, 3:]
-        events = step(ctrl[k + 1])
+        events = advance(ctrl[k + 1])
         if events:
             warnings.extend(events)
             stop = next((e for e in events if e.diverged), None)
@@ -199,13 +165,13 @@ def replay(scene: SimScene, trajectory: Trajectory, config: ReplayConfig | None 
     config = config or ReplayConfig()
     spec = config.metrics
     schedule = control_schedule(scene, trajectory, config.control_rate)
-    stepper = Stepper(scene, schedule.substeps)
-    initial_state(stepper, schedule)
+    switches = scenario_switches(scene, schedule, spec.release_delay)
+    stepper = Stepper(scene, schedule.substeps, own_model=switches.contact_frame > 0)
+    driver = ScheduleDriver(stepper, schedule, switches)
+    driver.reset()
     setup = scene.setup
-    release = -1
-    if setup.release_time is not None:
-        release = schedule.frame_at(setup.release_time + spec.release_delay)
-    qpos, sensors, warnings, diverged = run_schedule(stepper, schedule, release)
+    release = switches.release_frame
+    qpos, sensors, warnings, diverged = run_schedule(driver)
     frames = frame_metrics(scene, schedule, qpos, sensors)
     summary = summarize(frames, spec)
     summary["diverged"] = diverged is not None
@@ -249,6 +215,8 @@ def replay(scene: SimScene, trajectory: Trajectory, config: ReplayConfig | None 
             "parts": list(scene.layout.part_labels),
             "tips": list(scene.layout.tip_names),
             "placement": setup.placement,
+            "contact_frame": switches.contact_frame,
+            "release_frame": release,
             "notes": list(setup.notes),
         },
         trajectory={

@@ -25,7 +25,7 @@ from handsim.errors import TrajectoryError
 from handsim.poses import compose, quat_rotate, transform_points
 from handsim.sim.compiled import SceneSetup, SimScene, compile_scene
 from handsim.sim.metrics import MetricSpec
-from handsim.sim.placement import GraspFrame, grasp_frame, hand_frame, place_object
+from handsim.sim.placement import GraspFrame, contact_start, grasp_frame, hand_frame, place_object
 from handsim.trajectory import Trajectory
 
 CAMERA_DOWN = (0.0, 1.0, 0.0)
@@ -171,6 +171,7 @@ def glove_scene(
     quat = hand_frame(probe)
     search = compile_scene(build_scene(hand, obj, hand_quat=quat, hand_pos=(0.0, 0.0, 0.0), table=False))
     placement = place_object(search, trajectory, grasp.frame, spec)
+    contact = contact_start(search, trajectory, grasp.frame, placement.pose, spec)
     lift = HOLD_HEIGHT - placement.lowest_z
     hand_pos = (0.0, 0.0, lift)
     pose = placement.pose.copy()
@@ -181,10 +182,21 @@ def glove_scene(
     times = trajectory.times
     setup = SceneSetup(
         scenario="glove",
-        release_time=float(times[grasp.frame]),
+        contact_time=float(times[contact.frame]),
+        release_time=float(times[grasp.closed]),
         grasp_time=float(times[grasp.frame]),
         hold_window=(float(times[grasp.window[0]]), float(times[grasp.window[1]])),
-        placement={**placement.to_dict(), "grasp": grasp.to_dict()},
-        notes=(grasp.note, placement.note, f"hand palm down, the object's lowest point {HOLD_HEIGHT} m up"),
+        placement={
+            **placement.to_dict(),
+            "grasp": grasp.to_dict(),
+            "contact_frame": contact.frame,
+            "depth_before_contact_m": contact.depth_before,
+        },
+        notes=(
+            grasp.note,
+            placement.note,
+            contact.note,
+            f"hand palm down, the object's lowest point {HOLD_HEIGHT} m up",
+        ),
     )
     return compile_scene(scene, setup)

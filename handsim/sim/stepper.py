@@ -8,6 +8,7 @@ frame; a divergence warning stops the run and names the step it happened at.
 from __future__ import annotations
 
 import collections
+import copy
 from dataclasses import dataclass
 
 import mujoco
@@ -68,28 +69,43 @@ class WarningEvent:
 class Stepper:
     """Steps a scene in control frames and records the sensors and the state after each frame.
 
+    Pickles with its state (model, data, frame, warnings seen).
+
     Args:
         scene: The scene.
         substeps: MuJoCo steps per control frame (≥ 1).
+        own_model: Step a private copy of the scene's model (for runs that switch collisions on the
+            model, :class:`~handsim.sim.drive.ScheduleDriver`), leaving ``scene.model`` untouched.
     """
 
-    def __init__(self, scene: SimScene, substeps: int) -> None:
+    def __init__(self, scene: SimScene, substeps: int, *, own_model: bool = False) -> None:
         if substeps < 1:
             raise ValueError(f"substeps must be ≥ 1, got {substeps}")
         self.scene = scene
-        self.model = scene.model
-        self.data = mujoco.MjData(scene.model)
+        self.model = copy.deepcopy(scene.model) if own_model else scene.model
+        self.data = mujoco.MjData(self.model)
         self.substeps = int(substeps)
         self.frame = 0
         self._counts = self.data.warning.number  # a view: updated in place by MuJoCo
         self._seen = np.zeros_like(self._counts)
+        self._seen_bytes = self._seen.tobytes()  # comparing bytes is the cheapest check per frame
         capture_mujoco_warnings()
+
+    def __getstate__(self) -> dict:
+        state = self.__dict__.copy()
+        del state["_counts"]  # a view into data: recreated from the unpickled data
+        return state
+
+    def __setstate__(self, state: dict) -> None:
+        self.__dict__.update(state)
+        self._counts = self.data.warning.number
 
     def reset(self) -> None:
         """Back to the model's reference state (``qpos0``), frame 0, warnings cleared."""
         mujoco.mj_resetData(self.model, self.data)
         self._counts = self.data.warning.number
         self._seen[:] = 0
+        self._seen_bytes = self._seen.tobytes()
         self.frame = 0
 
     def step(self, ctrl: npt.ArrayLike | None = None) -> tuple[WarningEvent, ...]:
@@ -105,7 +121,7 @@ class Stepper:
             self.data.ctrl[:] = ctrl
         mujoco.mj_step(self.model, self.data, nstep=self.substeps)
         self.frame += 1
-        if not self._counts.any():
+        if self._counts.tobytes() == self._seen_bytes:
             return ()
         return self._new_warnings()
 
@@ -133,6 +149,7 @@ class Stepper:
                 )
             )
         self._seen[:] = self._counts
+        self._seen_bytes = self._seen.tobytes()
         return tuple(events)
 
 

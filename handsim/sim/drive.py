@@ -1,0 +1,131 @@
+"""Drive a stepper through a control schedule: the one per-frame loop body of replays and environments.
+
+Each control frame ``k → k+1`` applies, before stepping: the scenario's switches that fall on frame ``k``
+(hand–object contacts on at the scene's contact time; the objects' supports off at the release time plus
+the release delay), and the root's mocap target of ``t_k+1``. The joint targets are the caller's:
+:func:`handsim.sim.replay.replay` gives the schedule's, an environment its own.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import mujoco
+import numpy as np
+import numpy.typing as npt
+
+from handsim.sim.compiled import SimScene
+from handsim.sim.control import ControlSchedule
+from handsim.sim.stepper import Stepper, WarningEvent
+
+
+@dataclass(frozen=True)
+class ScenarioSwitches:
+    """The frames at whose start a scenario switches something.
+
+    Attributes:
+        contact_frame: Hand–object contacts act from this frame on; before it the objects collide with
+            nothing (they hang on their supports). 0: from the start.
+        release_frame: The objects' supports are switched off at this frame; -1: never.
+    """
+
+    contact_frame: int = 0
+    release_frame: int = -1
+
+
+def scenario_switches(scene: SimScene, schedule: ControlSchedule, release_delay: float) -> ScenarioSwitches:
+    """The switch frames of ``scene``'s setup on ``schedule``'s frames.
+
+    Args:
+        scene: The scene (its :class:`~handsim.sim.compiled.SceneSetup` holds the times).
+        schedule: The control frames.
+        release_delay: Seconds after the setup's release time at which the supports go off.
+    """
+    setup = scene.setup
+    contact = 0 if setup.contact_time is None else schedule.frame_at(setup.contact_time)
+    release = -1 if setup.release_time is None else schedule.frame_at(setup.release_time + release_delay)
+    return ScenarioSwitches(contact_frame=contact, release_frame=release)
+
+
+class ScheduleDriver:
+    """Steps a :class:`~handsim.sim.stepper.Stepper` frame by frame through a schedule.
+
+    Switching contacts changes the stepper's model: give it a private one (``Stepper(own_model=True)``,
+    or an environment's own copy) when ``switches.contact_frame > 0``.
+
+    Args:
+        stepper: The stepper (its scene is the schedule's).
+        schedule: The control frames.
+        switches: When the scenario switches (:func:`scenario_switches`).
+    """
+
+    def __init__(self, stepper: Stepper, schedule: ControlSchedule, switches: ScenarioSwitches) -> None:
+        layout = stepper.scene.layout
+        self.stepper, self.schedule, self.switches = stepper, schedule, switches
+        self.frame = 0
+        self._data = stepper.data
+        self._supports = np.array([o.support_eq for o in layout.objects if o.support_eq >= 0], dtype=np.int64)
+        self._geoms = np.array([g for o in layout.objects for g in o.collision_geoms], dtype=np.int64)
+        model = stepper.model
+        self._contype = model.geom_contype[self._geoms].copy()
+        self._conaffinity = model.geom_conaffinity[self._geoms].copy()
+        root = schedule.root_pose
+        self._mocap = layout.mocap
+        self._root_pos = None if root is None else np.ascontiguousarray(root[:, :3])
+        self._root_quat = None if root is None else np.ascontiguousarray(root[:, 3:])
+
+    def reset(self, frame: int = 0) -> None:
+        """Put the scene in the recorded state of ``frame``, with the switches as they are then.
+
+        The hand at its targets, its root at its recorded pose, recorded objects at their recorded poses;
+        velocities zero; warnings cleared.
+        """
+        stepper, schedule, data = self.stepper, self.schedule, self._data
+        layout = stepper.scene.layout
+        stepper.reset()
+        data.qpos[layout.dof_qpos] = np.clip(
+            schedule.ctrl[frame], layout.ctrl_range[:, 0], layout.ctrl_range[:, 1]
+        )
+        data.ctrl[:] = schedule.ctrl[frame]
+        if self._root_pos is not None:
+            data.mocap_pos[self._mocap] = self._root_pos[frame]
+            data.mocap_quat[self._mocap] = self._root_quat[frame]
+            data.qpos[layout.root_free_qpos : layout.root_free_qpos + 7] = schedule.root_pose[frame]
+        for index, track in schedule.objects.items():
+            obj = layout.objects[index]
+            data.qpos[obj.free_qpos : obj.free_qpos + 7] = track.pose[frame]
+            if track.articulation is not None and obj.hinge_qpos >= 0:
+                data.qpos[obj.hinge_qpos] = track.articulation[frame]
+        release = self.switches.release_frame
+        data.eq_active[self._supports] = 0 if 0 <= release < frame else 1
+        self._set_contacts(frame >= self.switches.contact_frame)
+        mujoco.mj_forward(stepper.model, data)
+        self.frame = frame
+
+    def advance(self, ctrl: npt.ArrayLike | None = None) -> tuple[WarningEvent, ...]:
+        """Step from frame ``k`` to ``k+1``: the switches of ``k``, the root target of ``k+1``, then the step.
+
+        Args:
+            ctrl: Joint targets held during the frame, or None for those already in ``data.ctrl``.
+
+        Returns:
+            The frame's warnings (see :meth:`Stepper.step`).
+        """
+        k = self.frame
+        if k == self.switches.release_frame:
+            self._data.eq_active[self._supports] = 0
+        if k == self.switches.contact_frame and k > 0:
+            self._set_contacts(True)
+        if self._root_pos is not None:
+            self._data.mocap_pos[self._mocap] = self._root_pos[k + 1]
+            self._data.mocap_quat[self._mocap] = self._root_quat[k + 1]
+        events = self.stepper.step(ctrl)
+        self.frame = k + 1
+        return events
+
+    def _set_contacts(self, on: bool) -> None:
+        if self.switches.contact_frame <= 0:
+            return  # contacts always on: the model is never touched
+        model = self.stepper.model
+        model.geom_contype[self._geoms] = self._contype if on else 0
+        model.geom_conaffinity[self._geoms] = self._conaffinity if on else 0
