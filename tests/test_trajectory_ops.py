@@ -304,7 +304,14 @@ def test_resample_reports_the_largest_gap_between_input_samples() -> None:
         == "largest gap between input samples: 500.0 ms, from frame 2 at 0.5000 s (2.00 output periods)"
     )
     assert result.trajectory.notes == ("read", *result.notes)
-    assert result.notes[0].startswith("resampled 6 samples (2.86 Hz mean, irregular) to 8 samples at 4 Hz")
+    assert result.notes[0].startswith(
+        "resampled 6 samples (2.86 Hz mean, intervals 250.0–500.0 ms) to 8 samples at 4 Hz"
+    )
+
+
+def test_resample_calls_evenly_spaced_input_regular() -> None:
+    traj = _trajectory(np.arange(10) / 30.0, {"x": [0.0] * 10})
+    assert resample(traj, 100.0).notes[0].startswith("resampled 10 samples (30.00 Hz mean, regular) to")
 
 
 def test_resample_of_one_sample_gives_one_sample_and_no_gap() -> None:
