@@ -514,7 +514,10 @@ def resample(trajectory: Trajectory, rate_hz: float, *, method: ResampleMethod =
     gap_at = float(times[k])
 
     regular = n > 2 and float(gaps.max() - gaps.min()) <= 1e-9 * max(1.0, float(gaps.max()))
-    spacing = "regular" if regular else f"intervals {gaps.min() * 1e3:.1f}–{gaps.max() * 1e3:.1f} ms"
+    if regular or n < 2:
+        spacing = "regular"
+    else:
+        spacing = f"intervals {gaps.min() * 1e3:.1f}–{gaps.max() * 1e3:.1f} ms"
     notes = [
         f"resampled {n} samples ({trajectory.mean_rate:.2f} Hz mean, {spacing}) to {m} samples at "
         f"{rate:g} Hz by {method} interpolation (targets between valid samples; an output sample is valid "
