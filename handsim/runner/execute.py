@@ -1,0 +1,429 @@
+"""Run every trial of a dataset: in-process, in a local process pool, or as Ray tasks; resumable.
+
+:func:`run_dataset` skips the trials that already have a record in ``OUT/records.jsonl`` (a killed run
+restarted with the same command loses nothing and runs no trial twice), runs the others with the chosen
+backend, and appends each record as its trial finishes — written by this (the parent) process only, with
+the trial's rendered frames written first. A trial that fails is recorded with its error; the run goes
+on. Ctrl-C stops the workers and leaves complete lines only.
+
+Backends (:data:`BACKENDS`):
+
+* ``local`` — ``workers=1``: in this process, in id order (debuggable); more: a
+  :class:`~concurrent.futures.ProcessPoolExecutor` with the ``spawn`` start method (MuJoCo and EGL are not
+  fork-safe), at most ``workers`` trials in flight, each worker with one OpenMP thread. A worker that dies
+  (a crash, out of memory) breaks the pool: the pool is restarted and the trials that were in flight run
+  again one at a time, so that the one that kills its worker is recorded as an error (``WorkerCrashed``).
+* ``ray`` — each trial a ``@ray.remote(num_cpus=1)`` task running the same function
+  (:func:`handsim.runner.worker.trial_outcome`); ``address`` connects to a cluster, else a local Ray with
+  ``num_cpus=workers`` is started (and shut down after). Needs ``pip install 'handsim[ray]'``.
+"""
+
+from __future__ import annotations
+
+import concurrent.futures as cf
+import contextlib
+import logging
+import multiprocessing
+import os
+import sys
+import time
+from collections import deque
+from collections.abc import Callable, Iterator, Sequence
+from concurrent.futures.process import BrokenProcessPool
+from dataclasses import dataclass
+from pathlib import Path
+from types import ModuleType
+
+from handsim.errors import HandsimError
+from handsim.runner.discover import Discovery, TrialEntry
+from handsim.runner.records import RecordWriter, load_records, repair_records, write_run_info
+from handsim.runner.worker import (
+    TrialOutcome,
+    base_record,
+    prepare_worker_process,
+    run_parameters,
+    run_trial,
+    trial_outcome,
+    write_outcome_files,
+)
+from handsim.sim.replay import ReplayConfig
+
+__all__ = [
+    "BACKENDS",
+    "RunSummary",
+    "RunnerError",
+    "default_workers",
+    "records_line",
+    "run_dataset",
+    "run_trial",
+]
+
+BACKENDS = ("local", "ray")
+RAY_INSTALL = "pip install 'handsim[ray]'"
+
+
+class RunnerError(HandsimError):
+    """A dataset run that cannot start (bad option, records of other parameters, Ray missing …)."""
+
+
+@dataclass(frozen=True)
+class RunSummary:
+    """What a dataset run did.
+
+    Attributes:
+        out: The output folder.
+        trials: Trials selected for this run.
+        skipped: Of those, already recorded before this call (resumed).
+        ran: Ids of the trials run by this call, in the order they finished.
+        ok: Selected trials whose record says ``ok``.
+        diverged: … ``diverged``.
+        failed: … ``error``.
+        held: Glove trials whose object was held through the hold window.
+        hold_trials: Glove trials with a hold outcome.
+        notes: What was repaired or skipped (a truncated records line …).
+        wall_s: Wall-clock time of this call, s.
+    """
+
+    out: str
+    trials: int
+    skipped: int
+    ran: tuple[str, ...]
+    ok: int
+    diverged: int
+    failed: int
+    held: int
+    hold_trials: int
+    notes: tuple[str, ...]
+    wall_s: float
+
+    def line(self) -> str:
+        """One line for people: trial counts by status and the hold rate."""
+        counts = {k: getattr(self, k) for k in ("ok", "diverged", "failed", "held", "hold_trials")}
+        return _line(self.trials, counts)
+
+
+def _line(trials: int, counts: dict) -> str:
+    text = f"{trials} trials: {counts['ok']} ok, {counts['diverged']} diverged, {counts['failed']} failed"
+    if counts["hold_trials"]:
+        rate = 100.0 * counts["held"] / counts["hold_trials"]
+        text += f"; held {counts['held']} of {counts['hold_trials']} glove trials ({rate:.0f} %)"
+    return text
+
+
+def records_line(records: Sequence[dict]) -> str:
+    """One line for people about a run's records: trial counts by status and the hold rate."""
+    return _line(len(records), _counts(records, {r["id"] for r in records}))
+
+
+def default_workers() -> int:
+    """The cores this process may use (its CPU affinity where the OS reports one)."""
+    if hasattr(os, "sched_getaffinity"):
+        return max(1, len(os.sched_getaffinity(0)))
+    return max(1, os.cpu_count() or 1)
+
+
+def _entries(source: Discovery | Sequence[TrialEntry]) -> tuple[tuple[TrialEntry, ...], dict]:
+    if isinstance(source, Discovery):
+        return source.entries, source.to_dict()
+    entries = tuple(source)
+    return entries, {"root": None, "trials": len(entries)}
+
+
+def _flat(value: object, prefix: str = "") -> dict[str, object]:
+    if isinstance(value, dict):
+        out: dict[str, object] = {}
+        for key, item in value.items():
+            out.update(_flat(item, f"{prefix}{key}."))
+        return out
+    return {prefix.rstrip("."): value}
+
+
+def _check_parameters(records: Sequence[dict], parameters: dict, out: Path) -> None:
+    want = _flat(parameters)
+    for record in records:
+        have = _flat(record.get("parameters"))
+        if have != want:
+            keys = sorted(k for k in set(have) | set(want) if have.get(k) != want.get(k))
+            diff = [f"{k}: {have.get(k)!r} there, {want.get(k)!r} now" for k in keys]
+            raise RunnerError(
+                f"{out}: holds records made with other parameters (first: trial {record['id']!r}; "
+                f"{'; '.join(diff)}). Resume with the same options, or write to another output folder"
+            )
+
+
+def _crash_outcome(entry: TrialEntry, config: ReplayConfig, frames: int, why: str) -> TrialOutcome:
+    """The record of a trial whose worker process died (no Python exception to report)."""
+    record = base_record(entry, config, frames)
+    record["error"] = {"type": "WorkerCrashed", "message": f"{entry.id}: {why}", "traceback": ""}
+    record["timing"] = {"load_s": 0.0, "replay_s": 0.0, "render_s": 0.0, "total_s": 0.0}
+    return TrialOutcome(record)
+
+
+def _in_process(todo: Sequence[TrialEntry], config: ReplayConfig, frames: int) -> Iterator[TrialOutcome]:
+    for entry in todo:
+        yield trial_outcome(entry, config, frames)
+
+
+@contextlib.contextmanager
+def _environment(**values: str) -> Iterator[None]:
+    """Set environment variables for processes started inside the block (restored after)."""
+    saved = {k: os.environ.get(k) for k in values}
+    os.environ.update(values)
+    try:
+        yield
+    finally:
+        for key, value in saved.items():
+            if value is None:
+                os.environ.pop(key, None)
+            else:
+                os.environ[key] = value
+
+
+def _stop_pool(pool: cf.ProcessPoolExecutor) -> None:
+    """End a pool now: cancel queued trials and terminate the workers (running trials are lost)."""
+    processes = list(getattr(pool, "_processes", {}).values())  # no public API before Python 3.14
+    pool.shutdown(wait=False, cancel_futures=True)
+    for process in processes:
+        if process.is_alive():
+            process.terminate()
+    for process in processes:
+        process.join(timeout=5)
+
+
+POOL_START_TIMEOUT_S = 300.0
+"""Longest wait for a new worker process to start and import handsim, s."""
+
+
+def _new_pool(workers: int) -> cf.ProcessPoolExecutor:
+    """A started pool of spawned workers; RunnerError when a worker cannot even start.
+
+    A pool whose workers die at start would otherwise look like every trial crashing its worker.
+    """
+    context = multiprocessing.get_context("spawn")
+    pool = cf.ProcessPoolExecutor(workers, mp_context=context, initializer=prepare_worker_process)
+    try:
+        pool.submit(os.getpid).result(timeout=POOL_START_TIMEOUT_S)
+    except Exception as exc:
+        _stop_pool(pool)
+        raise RunnerError(
+            f"the local pool's worker processes do not start ({type(exc).__name__}: {exc}); the spawn start "
+            "method re-imports the main script, so run_dataset must be called from an importable script "
+            "(under `if __name__ == '__main__':`) or the handsim command; workers=1 runs in this process"
+        ) from exc
+    return pool
+
+
+def _pool(
+    todo: Sequence[TrialEntry], config: ReplayConfig, frames: int, workers: int
+) -> Iterator[TrialOutcome]:
+    queue = deque(todo)
+    suspects: deque[TrialEntry] = deque()  # in flight when a worker died: run again one at a time
+    solo: str | None = None  # the suspect running alone
+    with _environment(OMP_NUM_THREADS="1"):
+        pool = _new_pool(workers)
+        inflight: dict[cf.Future, TrialEntry] = {}
+        try:
+            while queue or suspects or inflight:
+                broken = False
+                try:  # submit raises once the pool knows a worker died
+                    if suspects and not inflight:
+                        inflight[pool.submit(trial_outcome, suspects[0], config, frames)] = suspects[0]
+                        solo = suspects.popleft().id
+                    while queue and not suspects and solo is None and len(inflight) < workers:
+                        inflight[pool.submit(trial_outcome, queue[0], config, frames)] = queue[0]
+                        queue.popleft()
+                except BrokenProcessPool:
+                    broken = True
+                done = set() if broken else cf.wait(inflight, return_when=cf.FIRST_COMPLETED).done
+                for future in done:
+                    try:
+                        outcome = future.result()
+                    except BrokenProcessPool:
+                        broken = True
+                        continue
+                    entry = inflight.pop(future)
+                    solo = None if entry.id == solo else solo
+                    yield outcome
+                if broken:
+                    for entry in inflight.values():
+                        if entry.id == solo:
+                            why = "its worker process died while running it alone (a crash or out of memory)"
+                            yield _crash_outcome(entry, config, frames, why)
+                            solo = None
+                        else:
+                            suspects.append(entry)
+                    inflight.clear()
+                    _stop_pool(pool)
+                    pool = _new_pool(workers)
+        finally:
+            _stop_pool(pool)
+
+
+def _ray(
+    todo: Sequence[TrialEntry], config: ReplayConfig, frames: int, workers: int, address: str | None
+) -> Iterator[TrialOutcome]:
+    ray = _import_ray()
+    started = not ray.is_initialized()
+    if started:
+        env = {"env_vars": {"OMP_NUM_THREADS": "1", **_gl_env()}}
+        options = {"address": address} if address else {"num_cpus": workers, "include_dashboard": False}
+        ray.init(runtime_env=env, log_to_driver=False, logging_level=logging.WARNING, **options)
+    task = ray.remote(num_cpus=1, max_retries=0)(_ray_trial)
+    pending = {task.remote(entry, config, frames): entry for entry in todo}
+    try:
+        while pending:
+            done, _ = ray.wait(list(pending), num_returns=1)
+            for ref in done:
+                entry = pending.pop(ref)
+                try:
+                    yield ray.get(ref)
+                except ray.exceptions.RayError as exc:  # the task's worker died; Python errors are records
+                    yield _crash_outcome(entry, config, frames, f"its Ray worker failed: {exc}")
+    finally:
+        for ref in pending:
+            ray.cancel(ref, force=True)
+        if started:
+            ray.shutdown()
+
+
+def _import_ray() -> ModuleType:
+    """The ``ray`` module, or a RunnerError saying how to install it."""
+    try:
+        import ray
+    except ImportError:
+        raise RunnerError(f"the Ray backend needs Ray: {RAY_INSTALL}") from None
+    return ray
+
+
+def _ray_trial(entry: TrialEntry, config: ReplayConfig, frames: int) -> TrialOutcome:
+    prepare_worker_process()
+    return trial_outcome(entry, config, frames)
+
+
+def _gl_env() -> dict[str, str]:
+    from handsim.envs._render import prefer_headless_gl
+
+    prefer_headless_gl()
+    return {"MUJOCO_GL": os.environ["MUJOCO_GL"]} if "MUJOCO_GL" in os.environ else {}
+
+
+def _counts(records: Sequence[dict], ids: set[str]) -> dict:
+    mine = [r for r in records if r["id"] in ids]
+    held = [r["summary"]["held"] for r in mine if r.get("summary") and "held" in r["summary"]]
+    return {
+        "ok": sum(r["status"] == "ok" for r in mine),
+        "diverged": sum(r["status"] == "diverged" for r in mine),
+        "failed": sum(r["status"] == "error" for r in mine),
+        "held": sum(bool(h) for h in held),
+        "hold_trials": len(held),
+    }
+
+
+def run_dataset(
+    source: Discovery | Sequence[TrialEntry],
+    out: str | Path,
+    *,
+    workers: int | None = None,
+    backend: str = "local",
+    address: str | None = None,
+    config: ReplayConfig | None = None,
+    frames: int = 4,
+    progress: bool = True,
+    command: Sequence[str] | None = None,
+    on_record: Callable[[dict], None] | None = None,
+) -> RunSummary:
+    """Run the trials of a discovery (or a list of trials), appending a record per trial to ``OUT``.
+
+    Args:
+        source: A :class:`~handsim.runner.discover.Discovery` (its overview goes into ``run.json``) or
+            trial entries.
+        out: Output folder (``records.jsonl``, ``run.json``, ``frames/``); created if missing.
+        workers: Trials at once; default every core this process may use. 1 runs in this process.
+        backend: ``"local"`` or ``"ray"``.
+        address: Ray cluster address (``ray`` backend); None starts a local Ray.
+        config: Replay parameters; default :class:`~handsim.sim.replay.ReplayConfig` with the stability
+            tests at the end of the hold window (``stability_at="grasp"``, glove trials only).
+        frames: Frames rendered per trial (0: none).
+        progress: Show a progress bar with ETA (tqdm, on stderr).
+        command: The command line, for ``run.json`` (default ``sys.argv``).
+        on_record: Called with each record after it is written.
+
+    Returns:
+        What the run did, with counts over every selected trial's record (resumed ones included).
+
+    Raises:
+        RunnerError: An unknown backend, ``workers`` or ``frames`` out of range, Ray missing, or ``OUT``
+            holding records made with other parameters.
+        RecordsError: ``OUT/records.jsonl`` has a malformed line other than a truncated last one.
+        KeyboardInterrupt: Ctrl-C; the records written so far are complete lines (run again to resume).
+    """
+    from tqdm import tqdm
+
+    from handsim.runner.trial_record import versions
+
+    start = time.perf_counter()
+    if backend not in BACKENDS:
+        raise RunnerError(f"unknown backend {backend!r}; expected one of {list(BACKENDS)}")
+    workers = default_workers() if workers is None else workers
+    if workers < 1:
+        raise RunnerError(f"workers must be ≥ 1, got {workers}")
+    if frames < 0:
+        raise RunnerError(f"frames must be ≥ 0, got {frames}")
+    if backend == "ray":
+        _import_ray()  # fail before anything is written
+    config = config or ReplayConfig(stability_at="grasp")
+    entries, overview = _entries(source)
+    out = Path(out)
+    out.mkdir(parents=True, exist_ok=True)
+    notes = list(repair_records(out))
+    parameters = run_parameters(config, frames)
+    existing = load_records(out).records
+    _check_parameters(existing, parameters, out)
+    recorded = {r["id"] for r in existing}
+    todo = [e for e in entries if e.id not in recorded]
+    write_run_info(
+        out,
+        {
+            "command": list(sys.argv if command is None else command),
+            "dataset": overview.get("root"),
+            "versions": versions(),
+            "discovery": overview,
+            "parameters": parameters,
+            "backend": backend,
+            "workers": workers,
+            "selected": [e.id for e in entries],
+        },
+    )
+    if backend == "ray":
+        outcomes = _ray(todo, config, frames, workers, address)
+    elif workers == 1 or not todo:
+        outcomes = _in_process(todo, config, frames)
+    else:  # a pool even for one trial: records must not depend on how many trials were left
+        outcomes = _pool(todo, config, frames, min(workers, len(todo)))
+    ran: list[str] = []
+    bar = tqdm(total=len(todo), unit="trial", desc="trials", disable=not progress, dynamic_ncols=True)
+    status = {"ok": 0, "diverged": 0, "error": 0}
+    with contextlib.closing(outcomes), RecordWriter(out) as writer, bar:
+        if len(entries) > len(todo):
+            bar.write(
+                f"{len(entries) - len(todo)} of {len(entries)} trials already recorded in {out}: skipped"
+            )
+        for outcome in outcomes:
+            write_outcome_files(out, outcome)
+            writer.append(outcome.record)
+            ran.append(outcome.record["id"])
+            status[outcome.record["status"]] += 1
+            bar.set_postfix(status, refresh=False)
+            bar.update(1)
+            if on_record is not None:
+                on_record(outcome.record)
+    counts = _counts(load_records(out).records, {e.id for e in entries})
+    return RunSummary(
+        out=str(out),
+        trials=len(entries),
+        skipped=len(entries) - len(todo),
+        ran=tuple(ran),
+        notes=tuple(notes),
+        wall_s=time.perf_counter() - start,
+        **counts,
+    )

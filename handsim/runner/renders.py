@@ -1,0 +1,104 @@
+"""A few rendered frames per trial (headless), as PNG bytes for ``OUT/frames/<safe-id>/<frame>.png``.
+
+Which frames (:func:`key_frames`), in this order of choice: the frame with the most hand links touching
+the object, the grasp (glove trials: the start of the hold window; recorded trials: the first frame with
+hand–object contact), the first and the last; more frames, when asked, evenly between. Rendering needs an
+OpenGL context (``MUJOCO_GL=egl`` without a display, which ``import handsim`` selects); when there is none
+the trial gets a note and no frames, not an error.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import os
+import re
+import sys
+
+import numpy as np
+
+from handsim.errors import HandsimError
+from handsim.runner.png import encode_png
+from handsim.runner.trial_record import touching_links
+from handsim.sim.compiled import SimScene
+from handsim.sim.replay import ReplayResult
+
+FRAMES_DIR = "frames"
+RENDER_CAMERA = "track"
+RENDER_SIZE = (320, 240)
+"""Width and height of a rendered frame, pixels (small: the report embeds them)."""
+RENDER_SHADOWS = False
+"""Shadows make software OpenGL (Mesa's EGL without a GPU) 3–4× slower; frames are for a quick look."""
+
+
+def safe_id(trial_id: str) -> str:
+    """A folder name for a trial id: unsafe characters replaced, plus a hash that keeps it unique.
+
+    ``Models/20`` → ``Models_20-<8 hex digits of the id's SHA-256>``.
+    """
+    readable = re.sub(r"[^A-Za-z0-9._-]+", "_", trial_id).strip("._") or "trial"
+    return f"{readable[:80]}-{hashlib.sha256(trial_id.encode('utf-8')).hexdigest()[:8]}"
+
+
+def key_frames(result: ReplayResult, count: int) -> list[int]:
+    """The frames to render, sorted; chosen in this order: most contact, grasp, first, last, then evenly.
+
+    Args:
+        result: A replay result.
+        count: How many frames (at most the frames simulated).
+
+    Returns:
+        Distinct frame indices into the simulated frames, ascending.
+    """
+    n = int(result.frames.times.shape[0])
+    if count <= 0 or n == 0:
+        return []
+    touching = touching_links(result).sum(axis=1)
+    if result.hold is not None:
+        grasp = int(np.searchsorted(result.frames.times, result.hold.window[0] - 1e-9))
+    else:
+        grasp = int(np.argmax(touching > 0)) if touching.any() else 0
+    wanted = [int(np.argmax(touching)), min(grasp, n - 1), 0, n - 1]  # most telling first
+    wanted += np.round(np.linspace(0, n - 1, max(count, 2))).astype(int).tolist()
+    chosen: list[int] = []
+    for frame in wanted:
+        if frame not in chosen:
+            chosen.append(frame)
+        if len(chosen) == count:
+            break
+    return sorted(chosen)
+
+
+def headless_glfw() -> bool:
+    """True when MuJoCo took its GLFW backend on Linux without a display: no offscreen context can be made.
+
+    MuJoCo picks the backend from ``MUJOCO_GL`` when first imported (``import handsim`` first selects EGL
+    without a display). Trying GLFW without a display can abort the process, so it is not tried.
+    """
+    import mujoco
+
+    backend = getattr(getattr(mujoco, "GLContext", None), "__module__", "")
+    display = os.environ.get("DISPLAY") or os.environ.get("WAYLAND_DISPLAY")
+    return sys.platform.startswith("linux") and backend.endswith("glfw") and not display
+
+
+def render_pngs(scene: SimScene, result: ReplayResult, frames: list[int]) -> list[bytes]:
+    """Render frames of a replay (``result.states`` needed) as PNG files' bytes.
+
+    Raises:
+        HandsimError: No OpenGL context (or any error of :func:`handsim.sim.render.render_states`).
+        ValueError: The result kept no states.
+    """
+    from handsim.sim.render import render_states
+
+    if headless_glfw():
+        raise HandsimError(
+            "MuJoCo was imported with its GLFW OpenGL backend and there is no display; set MUJOCO_GL=egl "
+            "(or osmesa) before mujoco is first imported (import handsim first, or set it in the environment)"
+        )
+    if result.states is None:
+        raise ValueError("the replay kept no states; replay with ReplayConfig(keep_states=True)")
+    width, height = RENDER_SIZE
+    images = render_states(
+        scene, result.states[frames], camera=RENDER_CAMERA, width=width, height=height, shadows=RENDER_SHADOWS
+    )
+    return [encode_png(image) for image in images]

@@ -1,0 +1,154 @@
+"""The parts of a trial's record computed from a replay: curves, trajectory quality, inputs, versions.
+
+Everything here is deterministic: the same inputs give bitwise the same JSON. Curves are sampled at a
+uniform stride to at most :data:`MAX_CURVE_POINTS` points and rounded to :data:`CURVE_DIGITS` significant
+digits (enough for plots; the summary keeps full precision).
+"""
+
+from __future__ import annotations
+
+import hashlib
+import math
+import platform
+from pathlib import Path
+
+import numpy as np
+
+from handsim.runner.discover import TrialEntry
+from handsim.runner.fingers import finger_groups
+from handsim.sim.compiled import SimScene
+from handsim.sim.replay import ReplayResult
+from handsim.trajectory import Trajectory
+
+MAX_CURVE_POINTS = 600
+"""Most points per curve in a record."""
+CURVE_DIGITS = 6
+"""Significant digits of curve values."""
+MM, DEG = 1000.0, 180.0 / math.pi
+_CHUNK = 1 << 20
+
+
+def versions() -> dict:
+    """Versions that decide a record's numbers: handsim, MuJoCo, NumPy, Python and the platform."""
+    import mujoco
+
+    import handsim
+
+    return {
+        "handsim": handsim.__version__,
+        "mujoco": mujoco.__version__,
+        "numpy": np.__version__,
+        "python": platform.python_version(),
+        "platform": platform.platform(),
+    }
+
+
+def sha256_file(path: str | Path) -> str | None:
+    """SHA-256 of a file's bytes (hex), or None when it cannot be read."""
+    digest = hashlib.sha256()
+    try:
+        with open(path, "rb") as f:
+            for block in iter(lambda: f.read(_CHUNK), b""):
+                digest.update(block)
+    except OSError:
+        return None
+    return digest.hexdigest()
+
+
+def input_hashes(entry: TrialEntry) -> list[dict]:
+    """The trial's input files with their role, dataset-relative path and SHA-256 (None if unreadable)."""
+    return [{"role": i.role, "path": i.path, "sha256": sha256_file(i.file)} for i in entry.inputs]
+
+
+def rounded(values: np.ndarray, scale: float = 1.0) -> list:
+    """Values times ``scale`` rounded to :data:`CURVE_DIGITS` significant digits; NaN and ±inf as None."""
+    out = []
+    for v in (np.asarray(values, dtype=float) * scale).tolist():
+        out.append(float(f"{v:.{CURVE_DIGITS}g}") if math.isfinite(v) else None)
+    return out
+
+
+def curve_indices(n: int, limit: int = MAX_CURVE_POINTS) -> np.ndarray:
+    """Frame indices of a curve of ``n`` frames: every ``ceil(n / limit)``-th frame from frame 0."""
+    stride = max(1, math.ceil(n / limit))
+    return np.arange(0, n, stride)
+
+
+def touching_links(result: ReplayResult) -> np.ndarray:
+    """Per frame and hand link: the link touches some object part (N, links), bool."""
+    count = result.frames.contact_count
+    return count.sum(axis=2) > 0 if count.ndim == 3 and count.shape[2] else np.zeros(count.shape[:2], bool)
+
+
+def curves(result: ReplayResult) -> dict:
+    """The record's per-frame curves, strided to at most :data:`MAX_CURVE_POINTS` points.
+
+    Returns:
+        ``time_s``; ``penetration_mm``; ``contacts_per_finger`` (thumb, index, middle, ring, little, palm:
+        how many of the group's links touch an object); ``drift_mm`` (recorded scenario: the largest object
+        position error over the objects, else None); ``tracking_error_deg`` (RMS over the hand's DoFs of
+        achieved minus target angle); ``stride`` (frames per point).
+    """
+    f = result.frames
+    n = f.times.shape[0]
+    idx = curve_indices(n)
+    touching = touching_links(result)[idx]
+    groups = finger_groups(result.scene["links"])
+    contacts = {g: touching[:, links].sum(axis=1).astype(int).tolist() for g, links in groups.items()}
+    drift = None
+    if result.scene["scenario"] == "recorded" and f.object_position_error.shape[1]:
+        err = f.object_position_error[idx]
+        finite = np.isfinite(err)
+        drift = rounded(np.where(finite.any(axis=1), np.where(finite, err, -np.inf).max(axis=1), np.nan), MM)
+    tracking = f.tracking_error[idx]
+    rms = np.sqrt(np.mean(tracking**2, axis=1)) if tracking.shape[1] else np.full(idx.shape, np.nan)
+    return {
+        "time_s": rounded(f.times[idx]),
+        "penetration_mm": rounded(f.penetration[idx], MM),
+        "contacts_per_finger": contacts,
+        "drift_mm": drift,
+        "tracking_error_deg": rounded(rms, DEG),
+        "stride": int(idx[1] - idx[0]) if idx.size > 1 else 1,
+    }
+
+
+def trajectory_quality(trajectory: Trajectory, scene: SimScene) -> dict:
+    """How good the recording is as joint targets for the scene's hand.
+
+    Args:
+        trajectory: The recording as loaded.
+        scene: The scene its hand is in; its actuators' control ranges are the hand's joint ranges.
+
+    Returns:
+        ``frames``, ``duration_s``, ``limit_violations`` (valid target samples outside their joint's
+        range), ``limit_violation_max_deg`` (the largest excess, 0 without violations), ``gaps_filled``
+        (samples filled in by gap filling), ``filled_fraction`` (of all samples), ``invalid_samples``
+        (samples still invalid, not filled).
+    """
+    layout = scene.layout
+    column = {name: c for c, name in enumerate(trajectory.dof_names)}
+    targets = np.asarray(trajectory.targets, dtype=float)
+    valid = np.asarray(trajectory.valid, dtype=bool)
+    count, worst = 0, 0.0
+    for name, (low, high) in zip(layout.dof_names, layout.ctrl_range, strict=True):
+        c = column.get(name)
+        if c is None:
+            continue
+        x = targets[:, c]
+        checked = valid[:, c] & np.isfinite(x)
+        excess = np.where(checked, np.maximum(low - x, x - high), 0.0)
+        outside = excess > 0.0
+        count += int(outside.sum())
+        if outside.any():
+            worst = max(worst, float(excess.max()))
+    filled = 0 if trajectory.filled is None else int(np.asarray(trajectory.filled).sum())
+    times = np.asarray(trajectory.times, dtype=float)
+    return {
+        "frames": int(times.shape[0]),
+        "duration_s": float(times[-1] - times[0]) if times.size else 0.0,
+        "limit_violations": count,
+        "limit_violation_max_deg": worst * DEG,
+        "gaps_filled": filled,
+        "filled_fraction": filled / valid.size if valid.size else 0.0,
+        "invalid_samples": int((~valid).sum()),
+    }

@@ -1,0 +1,212 @@
+"""One trial, start to record: load, replay, measure, render a few frames.
+
+:func:`trial_outcome` is what every backend runs (in-process, a process-pool worker, a Ray task): it
+writes nothing and returns the record and the rendered frames' bytes, so the parent process alone writes
+``OUT/`` (on a cluster the workers need no shared file system). :func:`run_trial` does the same and writes
+the frames itself, for use anywhere.
+
+A trial that fails (a malformed file, a trajectory that does not fit, any exception) becomes a record
+with ``status`` ``"error"`` and the exception's type, message and traceback; it never stops a run.
+Records are deterministic except for ``timing``.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import hashlib
+import os
+import signal
+import sys
+import time
+import traceback
+from dataclasses import dataclass, field
+from pathlib import Path
+
+from handsim.runner.discover import TrialEntry
+from handsim.runner.records import SCHEMA, json_ready, write_atomic
+from handsim.sim.replay import ReplayConfig
+
+STATUSES = ("ok", "diverged", "error")
+
+
+@dataclass(frozen=True)
+class TrialOutcome:
+    """What a worker returns for one trial.
+
+    Attributes:
+        record: The record (``docs/records.md``).
+        files: Rendered frames: ``OUT``-relative path → PNG bytes.
+    """
+
+    record: dict
+    files: dict[str, bytes] = field(default_factory=dict)
+
+
+def run_parameters(config: ReplayConfig, frames: int) -> dict:
+    """The ``parameters`` of a run's records: the replay configuration as used and the frames rendered."""
+    used = dataclasses.replace(config, keep_states=frames > 0)
+    return json_ready({"replay": used.to_dict(), "render_frames": int(frames)})
+
+
+def prepare_worker_process() -> None:
+    """Settings of a worker process (pool initializer, start of a Ray task).
+
+    One OpenMP thread (CoACD decompositions: the pool already uses every core), MuJoCo's EGL backend
+    when there is no display (before ``mujoco`` is imported), and Ctrl-C left to the parent process, which
+    ends the workers itself.
+    """
+    os.environ["OMP_NUM_THREADS"] = "1"
+    from handsim.envs._render import prefer_headless_gl
+
+    prefer_headless_gl()
+    if sys.platform != "win32":
+        signal.signal(signal.SIGINT, signal.SIG_IGN)
+
+
+def base_record(entry: TrialEntry, config: ReplayConfig, frames: int) -> dict:
+    """A trial's record before it runs: identity, inputs, parameters, versions; status ``"error"``."""
+    from handsim.runner.trial_record import input_hashes, versions
+
+    return {
+        "schema": SCHEMA,
+        "id": entry.id,
+        "kind": entry.kind,
+        "status": "error",
+        "meta": dict(entry.meta),
+        "trial": entry.trial.to_dict(),
+        "inputs": input_hashes(entry),
+        "parameters": run_parameters(config, frames),
+        "metric_spec_version": config.metrics.version,
+        "versions": versions(),
+        "model_sha256": None,
+        "scenario": None,
+        "summary": None,
+        "hold": None,
+        "stability": None,
+        "warnings": [],
+        "diverged": None,
+        "notes": [],
+        "trajectory_quality": None,
+        "curves": None,
+        "renders": [],
+        "error": None,
+        "timing": None,
+    }
+
+
+def _replay_config(config: ReplayConfig, scene, frames: int, notes: list[str]) -> ReplayConfig:
+    used = dataclasses.replace(config, keep_states=frames > 0)
+    if used.stability_at == "grasp" and scene.setup.hold_window is None:
+        notes.append(
+            f"stability tests not run: 'grasp' is the end of the glove scenario's hold window, and this "
+            f"trial's scenario is {scene.setup.scenario!r}"
+        )
+        used = dataclasses.replace(used, stability_at=None)
+    return used
+
+
+def _renders(entry: TrialEntry, loaded, result, frames: int, record: dict) -> dict[str, bytes]:
+    from handsim.runner.renders import FRAMES_DIR, key_frames, render_pngs, safe_id
+
+    chosen = key_frames(result, frames)
+    try:
+        pngs = render_pngs(loaded.scene, result, chosen)
+    except Exception as exc:  # rendering is optional: no OpenGL is a note, not a failed trial
+        record["notes"].append(f"frames not rendered: {type(exc).__name__}: {exc}")
+        return {}
+    files = {}
+    folder = f"{FRAMES_DIR}/{safe_id(entry.id)}"
+    for frame, png in zip(chosen, pngs, strict=True):
+        path = f"{folder}/{frame:05d}.png"
+        files[path] = png
+        record["renders"].append(
+            {
+                "frame": frame,
+                "time_s": float(result.frames.times[frame]),
+                "path": path,
+                "sha256": hashlib.sha256(png).hexdigest(),
+            }
+        )
+    return files
+
+
+def trial_outcome(entry: TrialEntry, config: ReplayConfig, frames: int = 4) -> TrialOutcome:
+    """Run one trial and build its record, writing nothing.
+
+    Args:
+        entry: The trial.
+        config: Replay parameters (``keep_states`` is set when frames are rendered; ``stability_at="grasp"``
+            is skipped, with a note, for trials without a hold window).
+        frames: How many frames to render (0: none).
+
+    Returns:
+        The record and the rendered frames' bytes.
+    """
+    from handsim.runner.layouts import ARCTIC_UNSUPPORTED
+    from handsim.runner.trial_record import curves, trajectory_quality
+    from handsim.sim.replay import replay
+    from handsim.sim.trial import TrialError, load_trial
+
+    start = time.perf_counter()
+    timing = {"load_s": 0.0, "replay_s": 0.0, "render_s": 0.0, "total_s": 0.0}
+    record = base_record(entry, config, frames)
+    files: dict[str, bytes] = {}
+    try:
+        if entry.kind == "arctic":
+            raise TrialError(f"{entry.id}: {ARCTIC_UNSUPPORTED}")
+        loaded = load_trial(entry.trial, metrics=config.metrics)
+        timing["load_s"] = time.perf_counter() - start
+        record["model_sha256"] = loaded.scene.model_sha256
+        record["scenario"] = loaded.scene.setup.scenario
+        record["trajectory_quality"] = trajectory_quality(loaded.trajectory, loaded.scene)
+        notes = [*loaded.notes, *loaded.scene.setup.notes]
+        used = _replay_config(config, loaded.scene, frames, notes)
+        result = replay(loaded.scene, loaded.trajectory, used)
+        timing["replay_s"] = time.perf_counter() - start - timing["load_s"]
+        record.update(
+            status="diverged" if result.diverged is not None else "ok",
+            summary=result.summary,
+            hold=None if result.hold is None else result.hold.to_dict(),
+            stability=None if result.stability is None else result.stability.to_dict(),
+            warnings=[dataclasses.asdict(w) for w in result.warnings],
+            diverged=None if result.diverged is None else dataclasses.asdict(result.diverged),
+            notes=[*notes, *result.notes],
+            curves=curves(result),
+        )
+        if frames > 0:
+            rendered = time.perf_counter()
+            files = _renders(entry, loaded, result, frames, record)
+            timing["render_s"] = time.perf_counter() - rendered
+    except Exception as exc:  # a failing trial is recorded, never stops the run
+        record["status"] = "error"
+        record["error"] = {
+            "type": type(exc).__name__,
+            "message": str(exc),
+            "traceback": "".join(traceback.format_exception(type(exc), exc, exc.__traceback__)),
+        }
+    timing["total_s"] = time.perf_counter() - start
+    record["timing"] = {k: round(v, 3) for k, v in timing.items()}
+    return TrialOutcome(record, files)
+
+
+def write_outcome_files(out: str | Path, outcome: TrialOutcome) -> None:
+    """Write a trial's rendered frames under ``out`` (atomically, before its record is appended)."""
+    for path, data in outcome.files.items():
+        write_atomic(Path(out) / path, data)
+
+
+def run_trial(entry: TrialEntry, config: ReplayConfig, out: str | Path, frames: int = 4) -> dict:
+    """Run one trial, write its rendered frames under ``out`` and return its record.
+
+    Args:
+        entry: The trial.
+        config: Replay parameters.
+        out: The run's output folder (frames go to ``out/frames/<safe-id>/``).
+        frames: How many frames to render (0: none).
+
+    Returns:
+        The record (not appended to ``records.jsonl``: :func:`handsim.runner.execute.run_dataset` does that).
+    """
+    outcome = trial_outcome(entry, config, frames)
+    write_outcome_files(out, outcome)
+    return outcome.record
