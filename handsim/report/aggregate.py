@@ -1,0 +1,275 @@
+"""Numbers of a report, computed from records alone: pure functions over record dicts.
+
+Per-trial values come from a record's ``summary`` (mm, degrees, seconds as its key names say),
+``trajectory_quality`` and ``meta``; missing, null or non-finite values are ``None`` and are left out of
+every statistic (a statistic over no values is ``None``).
+"""
+
+from __future__ import annotations
+
+import math
+from collections import Counter
+from collections.abc import Callable, Iterable, Sequence
+
+import numpy as np
+
+from handsim.report.records import STATUSES, natural_key
+
+GROUP_KEYS: tuple[str, ...] = ("object", "grasp", "actor")
+KINDS: tuple[str, ...] = ("graspdb", "tzionas", "arctic")
+DISTRIBUTIONS: dict[str, str] = {
+    "max_penetration_mm": "Max penetration per trial (mm)",
+    "max_slip_mm": "Max slip per glove trial (mm)",
+    "max_drift_mm": "Max object drift per recorded trial (mm)",
+    "mean_tracking_error_deg": "Mean tracking error per trial (deg)",
+}
+RANKING = (
+    "Errors first, then diverged runs, then glove trials whose object was not held, then every other "
+    "trial; within each of these tiers by max penetration (deepest first), then by max drift (largest "
+    "first), then by trial id."
+)
+_TIERS = ("error", "diverged", "not held", "ok")
+OUTCOMES: tuple[str, ...] = ("held", "not held", "ran", "diverged", "error")
+"""How a trial ended: its object held or not (glove trials), ran without a hold test, diverged, failed."""
+
+
+def number(value: object) -> float | None:
+    """``value`` as a finite float, or None (missing, null, boolean, non-numeric, NaN or infinite)."""
+    if isinstance(value, bool) or not isinstance(value, (int, float)):
+        return None
+    value = float(value)
+    return value if math.isfinite(value) else None
+
+
+def summary_value(record: dict, key: str) -> float | None:
+    """A finite number from the record's summary, or None."""
+    return number((record.get("summary") or {}).get(key))
+
+
+def held(record: dict) -> bool | None:
+    """Whether the glove trial held its object: the summary's ``held`` (else the hold outcome's), or None."""
+    value = (record.get("summary") or {}).get("held")
+    if value is None:
+        value = (record.get("hold") or {}).get("held")
+    return value if isinstance(value, bool) else None
+
+
+def quality_value(record: dict, key: str) -> float | None:
+    """A finite number from the record's ``trajectory_quality``, or None."""
+    return number((record.get("trajectory_quality") or {}).get(key))
+
+
+def meta_value(record: dict, key: str) -> str | None:
+    """A ``meta`` field as text, or None when absent or null."""
+    value = (record.get("meta") or {}).get(key)
+    return None if value is None else str(value)
+
+
+def count(value: float | None) -> int | None:
+    """A count as a whole number, or None."""
+    return None if value is None else round(value)
+
+
+def percentile(values: Sequence[float], q: float) -> float | None:
+    """The ``q``-th percentile (0–100, linear interpolation between order statistics), None for none."""
+    return float(np.percentile(np.asarray(values, dtype=float), q)) if len(values) else None
+
+
+def _stat(values: Sequence[float], fn: Callable[[np.ndarray], float]) -> float | None:
+    return float(fn(np.asarray(values, dtype=float))) if len(values) else None
+
+
+def _present(values: Iterable[float | None]) -> list[float]:
+    return [v for v in values if v is not None]
+
+
+def _total(values: Iterable[float | None]) -> int | None:
+    present = _present(values)
+    return int(sum(present)) if present else None
+
+
+def outcome(record: dict) -> str:
+    """The trial's entry of :data:`OUTCOMES`."""
+    if record["status"] != "ok":
+        return record["status"]
+    return {True: "held", False: "not held", None: "ran"}[held(record)]
+
+
+def outcome_counts(records: Sequence[dict], key: Callable[[dict], str | None]) -> dict[str, dict[str, int]]:
+    """Trials per :data:`OUTCOMES` entry for each value of ``key(record)`` (values in natural order)."""
+    counts: dict[str, dict[str, int]] = {}
+    for record in records:
+        value = key(record)
+        label = "—" if value is None else value
+        counts.setdefault(label, dict.fromkeys(OUTCOMES, 0))[outcome(record)] += 1
+    return {k: counts[k] for k in sorted(counts, key=natural_key)}
+
+
+def trial_row(record: dict) -> dict:
+    """The key facts and metrics of one trial (JSON-ready; ``None`` where a value does not exist)."""
+    error = record.get("error") or {}
+    diverged = record.get("diverged") or {}
+    warnings = record.get("warnings") or []
+    return {
+        "id": record["id"],
+        "kind": record.get("kind"),
+        "status": record["status"],
+        "outcome": outcome(record),
+        **{key: meta_value(record, key) for key in ("object", "grasp", "actor", "scenario")},
+        "frames": count(summary_value(record, "frames")),
+        "duration_s": summary_value(record, "duration_s"),
+        "held": held(record),
+        "time_held_s": summary_value(record, "time_held_s"),
+        "max_slip_mm": summary_value(record, "max_slip_mm"),
+        "max_penetration_mm": summary_value(record, "max_penetration_mm"),
+        "p95_penetration_mm": summary_value(record, "p95_penetration_mm"),
+        "mean_drift_mm": summary_value(record, "mean_drift_mm"),
+        "max_drift_mm": summary_value(record, "max_drift_mm"),
+        "mean_tracking_error_deg": summary_value(record, "mean_tracking_error_deg"),
+        "max_tracking_error_deg": summary_value(record, "max_tracking_error_deg"),
+        "limit_violations": count(quality_value(record, "limit_violations")),
+        "gaps_filled": count(quality_value(record, "gaps_filled")),
+        "warnings": len(warnings),
+        "diverged_at_step": count(number(diverged.get("step"))),
+        "error_type": error.get("type"),
+    }
+
+
+def group_stats(records: Sequence[dict]) -> dict:
+    """Statistics over a group of trials.
+
+    Returns:
+        ``trials`` and counts per status; ``held`` of ``hold_judged`` (glove trials with a hold outcome)
+        and ``hold_rate``; ``slip_median_mm``/``slip_max_mm`` over each trial's max slip;
+        ``penetration_p50_mm``/``_p95_mm``/``_max_mm`` over each trial's max penetration;
+        ``drift_mean_mm`` (mean of each trial's mean drift) and ``drift_max_mm``; totals of
+        ``limit_violations`` and ``gaps_filled`` (None if no trial reports them).
+    """
+    status = Counter(r["status"] for r in records)
+    holds = [h for h in map(held, records) if h is not None]
+    slip = _present(summary_value(r, "max_slip_mm") for r in records)
+    penetration = _present(summary_value(r, "max_penetration_mm") for r in records)
+    drift_mean = _present(summary_value(r, "mean_drift_mm") for r in records)
+    drift_max = _present(summary_value(r, "max_drift_mm") for r in records)
+    return {
+        "trials": len(records),
+        "ok": status["ok"],
+        "diverged": status["diverged"],
+        "errors": status["error"],
+        "held": sum(holds),
+        "hold_judged": len(holds),
+        "hold_rate": sum(holds) / len(holds) if holds else None,
+        "slip_median_mm": _stat(slip, np.median),
+        "slip_max_mm": _stat(slip, np.max),
+        "penetration_p50_mm": percentile(penetration, 50),
+        "penetration_p95_mm": percentile(penetration, 95),
+        "penetration_max_mm": _stat(penetration, np.max),
+        "drift_mean_mm": _stat(drift_mean, np.mean),
+        "drift_max_mm": _stat(drift_max, np.max),
+        "limit_violations": _total(quality_value(r, "limit_violations") for r in records),
+        "gaps_filled": _total(quality_value(r, "gaps_filled") for r in records),
+    }
+
+
+def group_table(records: Sequence[dict], key: str) -> list[dict]:
+    """One row of :func:`group_stats` per value of ``meta[key]`` (trials without a value: group None).
+
+    Rows are in natural order of the group value, the None group last; an empty list when no trial has a
+    value for ``key``.
+    """
+    groups: dict[str | None, list[dict]] = {}
+    for record in records:
+        groups.setdefault(meta_value(record, key), []).append(record)
+    if set(groups) <= {None}:
+        return []
+    order = sorted((g for g in groups if g is not None), key=natural_key) + ([None] if None in groups else [])
+    return [{"group": g, **group_stats(groups[g])} for g in order]
+
+
+def overview(records: Sequence[dict], run: dict | None) -> dict:
+    """Trial counts by status and kind, and what discovery found besides trials."""
+    discovery = (run or {}).get("discovery") or {}
+    by_kind: dict[str, dict[str, int]] = {}
+    for record in records:
+        counts = by_kind.setdefault(str(record.get("kind")), dict.fromkeys(STATUSES, 0))
+        counts[record["status"]] += 1
+    kinds = [k for k in KINDS if k in by_kind] + sorted(set(by_kind) - set(KINDS))
+    discovered = number(discovery.get("trials"))
+    return {
+        "dataset": (run or {}).get("dataset"),
+        "trials": len(records),
+        "discovered_trials": None if discovered is None else int(discovered),
+        "by_status": {s: sum(1 for r in records if r["status"] == s) for s in STATUSES},
+        "by_kind": {k: by_kind[k] for k in kinds},
+        "companion": list(discovery.get("companion") or []),
+        "unknown": list(discovery.get("unknown") or []),
+    }
+
+
+def _tier(record: dict) -> int:
+    if record["status"] == "error":
+        return 0
+    if record["status"] == "diverged":
+        return 1
+    return 2 if held(record) is False else 3
+
+
+def _reason(record: dict) -> str:
+    tier = _tier(record)
+    if tier == 0:
+        error = record.get("error") or {}
+        message = str(error.get("message") or "").strip().splitlines()
+        return f"{error.get('type') or 'unknown error'}" + (f": {message[0]}" if message else "")
+    if tier == 1:
+        diverged = record.get("diverged") or {}
+        where = f" at step {diverged['step']}" if diverged.get("step") is not None else ""
+        return f"MuJoCo {diverged.get('name') or 'divergence'}{where}"
+    parts = []
+    if tier == 2:
+        reason = (record.get("hold") or {}).get("reason")
+        parts.append(f"object lost: {reason}" if reason else "object not held")
+    penetration = summary_value(record, "max_penetration_mm")
+    if penetration is not None:
+        parts.append(f"max penetration {penetration:.2f} mm")
+    drift = summary_value(record, "max_drift_mm")
+    if drift is not None:
+        parts.append(f"max drift {drift:.1f} mm")
+    return "; ".join(parts) or "no metrics"
+
+
+def rank(records: Sequence[dict]) -> list[dict]:
+    """Trials worst first (see :data:`RANKING`), each with its rank (1 = worst), tier and a reason."""
+
+    def key(record: dict) -> tuple:
+        penetration = summary_value(record, "max_penetration_mm")
+        drift = summary_value(record, "max_drift_mm")
+        return (
+            _tier(record),
+            -(penetration if penetration is not None else -math.inf),
+            -(drift if drift is not None else -math.inf),
+            natural_key(record["id"]),
+        )
+
+    ordered = sorted(records, key=key)
+    return [
+        {"rank": i, "id": r["id"], "tier": _TIERS[_tier(r)], "reason": _reason(r)}
+        for i, r in enumerate(ordered, start=1)
+    ]
+
+
+def distributions(records: Sequence[dict]) -> dict[str, list[float]]:
+    """Per-trial values of each :data:`DISTRIBUTIONS` metric (trials without the value left out)."""
+    return {key: _present(summary_value(r, key) for r in records) for key in DISTRIBUTIONS}
+
+
+def distinct(values: Iterable[object]) -> list[dict]:
+    """Distinct JSON values with how many times each occurs, in order of first occurrence."""
+    seen: list[dict] = []
+    for value in values:
+        for entry in seen:
+            if entry["value"] == value:
+                entry["trials"] += 1
+                break
+        else:
+            seen.append({"value": value, "trials": 1})
+    return seen

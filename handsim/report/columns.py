@@ -1,0 +1,96 @@
+"""The columns of the report's tables, shared by the HTML and Markdown writers.
+
+A column turns one row (a dict from :mod:`handsim.report.aggregate`) into text; ``numeric`` columns are
+right-aligned.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass
+
+from handsim.report import fmt
+
+
+@dataclass(frozen=True)
+class Column:
+    """One table column.
+
+    Attributes:
+        label: Header text.
+        cell: Text of the cell for a row.
+        numeric: Right-align the column.
+        help: What the column means (a tooltip in HTML, a legend line in Markdown).
+    """
+
+    label: str
+    cell: Callable[[dict], str]
+    numeric: bool = True
+    help: str = ""
+
+
+GROUP_COLUMNS: tuple[Column, ...] = (
+    Column("trials", lambda r: str(r["trials"])),
+    Column("ok", lambda r: str(r["ok"])),
+    Column("diverged", lambda r: str(r["diverged"]), help="runs stopped by a MuJoCo divergence"),
+    Column("errors", lambda r: str(r["errors"]), help="trials that failed to load or run"),
+    Column(
+        "hold rate",
+        lambda r: fmt.rate(r["held"], r["hold_judged"]),
+        help="glove trials whose object stayed in hand through the hold window, of those judged",
+    ),
+    Column("slip p50 mm", lambda r: fmt.num(r["slip_median_mm"], 1), help="median of each trial's max slip"),
+    Column("slip max mm", lambda r: fmt.num(r["slip_max_mm"], 1), help="largest max slip"),
+    Column(
+        "pen. p50 mm",
+        lambda r: fmt.num(r["penetration_p50_mm"]),
+        help="median of each trial's max hand–object penetration",
+    ),
+    Column(
+        "pen. p95 mm",
+        lambda r: fmt.num(r["penetration_p95_mm"]),
+        help="95th percentile of each trial's max penetration",
+    ),
+    Column(
+        "pen. max mm", lambda r: fmt.num(r["penetration_max_mm"]), help="deepest penetration of any trial"
+    ),
+    Column(
+        "drift mean mm",
+        lambda r: fmt.num(r["drift_mean_mm"], 1),
+        help="mean of each recorded trial's mean object drift",
+    ),
+    Column("drift max mm", lambda r: fmt.num(r["drift_max_mm"], 1), help="largest object drift of any trial"),
+    Column(
+        "limit viol.",
+        lambda r: fmt.integer(r["limit_violations"]),
+        help="recorded joint angles outside the hand's joint limits (total)",
+    ),
+    Column(
+        "gaps filled",
+        lambda r: fmt.integer(r["gaps_filled"]),
+        help="invalid samples of the recording filled by interpolation (total)",
+    ),
+)
+
+TRIAL_COLUMNS: tuple[Column, ...] = (
+    Column("kind", lambda r: fmt.text(r["kind"]), numeric=False),
+    Column(
+        "outcome",
+        lambda r: r["outcome"],
+        numeric=False,
+        help="held, not held, ran (no hold test), diverged, error",
+    ),
+    Column("object", lambda r: fmt.text(r["object"]), numeric=False),
+    Column("grasp", lambda r: fmt.text(r["grasp"]), numeric=False),
+    Column("actor", lambda r: fmt.text(r["actor"]), numeric=False),
+    Column("slip mm", lambda r: fmt.num(r["max_slip_mm"], 1), help="max slip relative to the hand"),
+    Column("pen. max mm", lambda r: fmt.num(r["max_penetration_mm"]), help="deepest penetration"),
+    Column("pen. p95 mm", lambda r: fmt.num(r["p95_penetration_mm"]), help="95th percentile over frames"),
+    Column("drift max mm", lambda r: fmt.num(r["max_drift_mm"], 1), help="largest object drift"),
+    Column(
+        "track. mean °", lambda r: fmt.num(r["mean_tracking_error_deg"]), help="mean joint tracking error"
+    ),
+    Column("limit viol.", lambda r: fmt.integer(r["limit_violations"])),
+    Column("gaps filled", lambda r: fmt.integer(r["gaps_filled"])),
+    Column("warnings", lambda r: str(r["warnings"]), help="MuJoCo warnings during the run"),
+)

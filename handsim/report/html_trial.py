@@ -1,0 +1,342 @@
+"""One trial's section of the HTML report: its numbers, curves, frames, warnings, notes and error."""
+
+from __future__ import annotations
+
+import json
+from collections.abc import Sequence
+
+from handsim.report import fmt
+from handsim.report.aggregate import number
+from handsim.report.charts import Markers, Series, area_chart, line_chart
+from handsim.report.frames import FrameImage
+from handsim.report.markup import badge, esc, numbers, simple_table
+
+FINGERS: tuple[str, ...] = ("thumb", "index", "middle", "ring", "little", "palm")
+SUMMARY_FIELDS: tuple[tuple[str, str, int | None], ...] = (
+    # key, label, decimals (None: whole number / boolean / text)
+    ("frames", "frames", None),
+    ("duration_s", "duration s", 2),
+    ("max_penetration_mm", "max penetration mm", 2),
+    ("p95_penetration_mm", "p95 penetration mm", 2),
+    ("frames_penetrating_over_1mm", "frames > 1 mm deep", None),
+    ("contact_frames", "frames in contact", None),
+    ("max_contact_links", "max links in contact", None),
+    ("max_total_normal_force_n", "max normal force N", 2),
+    ("truncated_contact_pairs", "truncated contact pairs", None),
+    ("mean_tracking_error_deg", "mean tracking error °", 2),
+    ("max_tracking_error_deg", "max tracking error °", 2),
+    ("mean_tip_error_mm", "mean fingertip error mm", 1),
+    ("max_tip_error_mm", "max fingertip error mm", 1),
+    ("held", "held", None),
+    ("time_held_s", "time held s", 2),
+    ("max_slip_mm", "max slip mm", 1),
+    ("drop_mm", "drop mm", 1),
+    ("mean_drift_mm", "mean drift mm", 1),
+    ("max_drift_mm", "max drift mm", 1),
+    ("final_drift_mm", "final drift mm", 1),
+    ("within_tolerance", "frames on track %", None),
+    ("mean_rotation_drift_deg", "mean rotation drift °", 1),
+    ("max_rotation_drift_deg", "max rotation drift °", 1),
+    ("max_articulation_drift_deg", "max hinge drift °", 1),
+    ("stable", "stable (6 directions)", None),
+    ("simulation_displacement_mm", "simulation displacement mm", 1),
+    ("diverged", "diverged", None),
+    ("warnings", "MuJoCo warnings", None),
+)
+_QUALITY_FIELDS = (
+    ("frames", "frames", None),
+    ("duration_s", "duration s", 2),
+    ("limit_violations", "limit violations", None),
+    ("limit_violation_max_deg", "worst limit violation °", 2),
+    ("gaps_filled", "gaps filled", None),
+    ("filled_fraction", "samples filled %", None),
+    ("invalid_samples", "invalid samples left", None),
+)
+
+
+def _value(key: str, value: object, decimals: int | None) -> str:
+    if isinstance(value, bool) or value is None:
+        return fmt.yes_no(value)
+    if key in ("within_tolerance", "filled_fraction"):
+        x = number(value)
+        return fmt.MISSING if x is None else f"{100 * x:.1f}"
+    if isinstance(value, (int, float)):
+        return fmt.integer(number(value)) if decimals is None else fmt.num(number(value), decimals)
+    return fmt.text(value)
+
+
+def _fields(values: dict, fields: Sequence[tuple[str, str, int | None]]) -> list[tuple[str, str]]:
+    known = {k for k, _, _ in fields}
+    items = [(label, _value(key, values[key], d)) for key, label, d in fields if key in values]
+    items += [
+        (k.replace("_", " "), _value(k, values[k], None if isinstance(values[k], int) else 3))
+        for k in sorted(values)
+        if k not in known
+    ]
+    return items
+
+
+def _checked_curves(curves: dict) -> tuple[dict, list[str]]:
+    """The curves whose length matches ``time_s`` (others left out, with a note)."""
+    n = len(curves.get("time_s") or [])
+    kept, problems = {"time_s": curves.get("time_s") or []}, []
+    for key in ("penetration_mm", "drift_mm", "tracking_error_deg"):
+        values = curves.get(key)
+        if values is not None and len(values) != n:
+            problems.append(f"{key} has {len(values)} values for {n} times: not drawn")
+            values = None
+        kept[key] = values
+    fingers = {}
+    for name, values in (curves.get("contacts_per_finger") or {}).items():
+        if len(values) == n:
+            fingers[name] = values
+        else:
+            problems.append(f"contacts of {name} have {len(values)} values for {n} times: not drawn")
+    kept["contacts_per_finger"] = fingers
+    kept["stride"] = curves.get("stride")
+    return kept, problems
+
+
+def _curves(record: dict) -> str:
+    curves, problems = _checked_curves(record.get("curves") or {})
+    t = curves["time_s"]
+    if not t:
+        return '<p class="note">No curves: the trial did not run.</p>'
+    hold = record.get("hold") or {}
+    spans, events = [], []
+    window = hold.get("window")
+    if isinstance(window, (list, tuple)) and len(window) == 2 and None not in window:
+        spans.append((float(window[0]), float(window[1]), "hold window"))
+    if number(hold.get("released_at")) is not None:
+        events.append((float(hold["released_at"]), "release"))
+    if number(hold.get("lost_at")) is not None:
+        events.append((float(hold["lost_at"]), "lost"))
+    diverged_at = number((record.get("diverged") or {}).get("frame"))
+    if diverged_at is not None and t:
+        stride = max(1, int(number(curves.get("stride")) or 1))  # curves keep every stride-th frame
+        events.append((float(t[min(int(diverged_at) // stride, len(t) - 1)]), "diverged"))
+    marks = Markers(vlines=events, vspans=spans)
+    time = "time (s)"
+    charts = [
+        line_chart(
+            [Series("penetration", t, curves.get("penetration_mm") or [None] * len(t))],
+            title="Deepest hand–object penetration",
+            x_label=time,
+            y_label="mm",
+            y_min=0.0,
+            markers=Markers(hlines=[(1.0, "1 mm")], vlines=marks.vlines, vspans=marks.vspans),
+        )
+    ]
+    per_finger = curves.get("contacts_per_finger") or {}
+    names = [f for f in FINGERS if f in per_finger] + sorted(set(per_finger) - set(FINGERS))
+    charts.append(
+        area_chart(
+            t,
+            [(name, per_finger[name]) for name in names],
+            title="Contacts per finger (stacked)",
+            x_label=time,
+            y_label="contacts",
+            markers=marks,
+        )
+    )
+    drift = curves.get("drift_mm")
+    metrics = ((record.get("parameters") or {}).get("replay") or {}).get("metrics") or {}
+    tolerance = number(metrics.get("drift_tolerance"))
+    if drift:
+        hlines = [(tolerance * 1000.0, "tolerance")] if tolerance is not None else []
+        charts.append(
+            line_chart(
+                [Series("drift", t, drift)],
+                title="Object drift from the recording",
+                x_label=time,
+                y_label="mm",
+                y_min=0.0,
+                markers=Markers(hlines=hlines, vlines=marks.vlines, vspans=marks.vspans),
+            )
+        )
+    charts.append(
+        line_chart(
+            [Series("tracking error", t, curves.get("tracking_error_deg") or [None] * len(t))],
+            title="Joint tracking error (RMS over the joints)",
+            x_label=time,
+            y_label="degrees",
+            y_min=0.0,
+            markers=marks,
+        )
+    )
+    note = "" if drift else '<p class="note">No object track to drift from (glove scenario).</p>'
+    note += "".join(f'<p class="problem">{esc(p)}</p>' for p in problems)
+    return '<div class="grid2">' + "".join(f"<div>{c}</div>" for c in charts) + "</div>" + note
+
+
+def _frames(images: Sequence[FrameImage]) -> str:
+    if not images:
+        return ""
+    figures = []
+    for image in images:
+        caption = f"frame {fmt.text(image.frame)} · {fmt.num(number(image.time_s), 2)} s"
+        if image.data_uri:
+            body = f'<img src="{image.data_uri}" alt="{esc(caption)}">'
+        else:
+            body = f'<a href="{esc(image.path)}">{esc(image.path)}</a>'
+        problem = f'<div class="problem">{esc(image.problem)}</div>' if image.problem else ""
+        figures.append(f"<figure>{body}<figcaption>{esc(caption)}</figcaption>{problem}</figure>")
+    return "<h4>Rendered frames</h4>" + '<div class="frames">' + "".join(figures) + "</div>"
+
+
+def _warnings(record: dict) -> str:
+    warnings = record.get("warnings") or []
+    if not warnings:
+        return ""
+    rows = [
+        [
+            fmt.text(w.get("name")),
+            fmt.text(w.get("step")),
+            fmt.text(w.get("frame")),
+            fmt.text(w.get("count")),
+            fmt.yes_no(w.get("diverged")),
+            fmt.text(w.get("message") or w.get("info")),
+        ]
+        for w in warnings
+    ]
+    return "<h4>MuJoCo warnings</h4>" + simple_table(
+        ["warning", "step", "frame", "count", "diverged", "message"], rows, [False, True, True, True]
+    )
+
+
+def _hold(record: dict) -> str:
+    hold = record.get("hold")
+    if not hold:
+        return ""
+    window = hold.get("window") or [None, None]
+    items = [
+        ("released at s", fmt.num(number(hold.get("released_at")), 3)),
+        ("hold window s", f"{fmt.num(number(window[0]), 2)} – {fmt.num(number(window[1]), 2)}"),
+        ("held", fmt.yes_no(hold.get("held"))),
+        ("lost at s", fmt.num(number(hold.get("lost_at")), 3)),
+        ("why lost", fmt.text(hold.get("reason"))),
+    ]
+    return "<h4>Hold outcome</h4>" + numbers(items)
+
+
+def _stability(record: dict) -> str:
+    stability = record.get("stability")
+    if not stability:
+        return ""
+    rows = [
+        [
+            fmt.text(d.get("direction")),
+            fmt.yes_no(d.get("success")),
+            fmt.num(
+                None if number(d.get("displacement")) is None else 1000 * number(d.get("displacement")), 1
+            ),
+            fmt.num(number(d.get("rotation_deg")), 1),
+            fmt.text(d.get("failure")),
+        ]
+        for d in stability.get("directions") or []
+    ]
+    displacement = number(stability.get("simulation_displacement"))
+    head = numbers(
+        [
+            ("all directions held", fmt.yes_no(stability.get("success"))),
+            ("simulation displacement mm", fmt.num(None if displacement is None else 1000 * displacement, 1)),
+        ]
+    )
+    return (
+        "<h4>Grasp stability</h4>"
+        + head
+        + (
+            simple_table(
+                ["gravity", "held", "displacement mm", "rotation °", "failure"],
+                rows,
+                [False, False, True, True],
+            )
+            if rows
+            else ""
+        )
+    )
+
+
+def _error(record: dict) -> str:
+    error = record.get("error")
+    if not error:
+        return ""
+    trace = error.get("traceback")
+    details = f"<details><summary>traceback</summary><pre>{esc(trace)}</pre></details>" if trace else ""
+    return (
+        f'<div class="reason error"><strong>{esc(fmt.text(error.get("type")))}</strong>: '
+        f"{esc(fmt.text(error.get('message')))}</div>{details}"
+    )
+
+
+def _provenance(record: dict) -> str:
+    inputs = [
+        [fmt.text(i.get("role")), fmt.text(i.get("path")), fmt.text(i.get("sha256"))]
+        for i in record.get("inputs") or []
+    ]
+    timing = record.get("timing") or {}
+    items = [("model sha256", fmt.text(record.get("model_sha256")))]
+    items += [(f"{k} s", fmt.num(number(v), 2)) for k, v in sorted(timing.items())]
+    trial = json.dumps(record.get("trial"), indent=1, sort_keys=True)
+    return (
+        "<details><summary>inputs, model hash, timing and trial definition</summary>"
+        + simple_table(["role", "path", "sha256"], inputs)
+        + numbers(items)
+        + f"<pre>{esc(trial)}</pre></details>"
+    )
+
+
+def trial_section(record: dict, row: dict, images: Sequence[FrameImage], trials: int) -> str:
+    """The section of one trial.
+
+    Args:
+        record: The trial's record.
+        row: Its entry in the summary's ``trials`` (anchor, rank, reason, outcome).
+        images: Its rendered frames (:func:`~handsim.report.frames.load_frames`).
+        trials: How many trials the report has (for "rank k of n").
+
+    Returns:
+        A ``<section id="trial-…">`` element.
+    """
+    meta = record.get("meta") or {}
+    first = ("object", "grasp", "grasp_id", "action", "scenario", "actor", "sequence")
+    order = [k for k in first if k in meta] + sorted(set(meta) - set(first))
+    facts = [f"kind {record.get('kind')}"] + [
+        f"{k.replace('_', ' ')} {', '.join(map(str, v)) if isinstance(v, list) else v}"
+        for k in order
+        if (v := meta[k]) is not None
+    ]
+    tier_class = {"error": "error", "diverged": "diverged"}.get(record["status"], "")
+    reason = (
+        f'<div class="reason {tier_class}">{esc(row["reason"])}</div>'
+        if row["outcome"] in ("not held", "diverged")
+        else ""
+    )
+    diverged = record.get("diverged") or {}
+    if diverged.get("message"):
+        reason += f'<p class="note">{esc(diverged["message"])}</p>'
+    summary = record.get("summary")
+    quality = record.get("trajectory_quality")
+    notes = record.get("notes") or []
+    parts = [
+        f'<section class="trial" id="{esc(row["anchor"])}">',
+        '<a class="top" href="#trials">↑ all trials</a>',
+        f"<h3>{esc(record['id'])} {badge(row['outcome'])}"
+        f'<span class="rank">rank {row["rank"]} of {trials} (1 = worst)</span></h3>',
+        f'<div class="meta">{esc(" · ".join(facts))}</div>',
+        reason,
+        _error(record),
+        numbers(_fields(summary, SUMMARY_FIELDS)) if summary else "",
+        ("<h4>Recording</h4>" + numbers(_fields(quality, _QUALITY_FIELDS))) if quality else "",
+        _curves(record),
+        _frames(images),
+        _hold(record),
+        _stability(record),
+        _warnings(record),
+        ('<h4>Notes</h4><ul class="plain">' + "".join(f"<li>{esc(n)}</li>" for n in notes) + "</ul>")
+        if notes
+        else "",
+        _provenance(record),
+        "</section>",
+    ]
+    return "".join(parts)

@@ -1,0 +1,119 @@
+"""The Markdown report (GitHub tables): overview, group tables, worst trials, all trials, reproducibility."""
+
+from __future__ import annotations
+
+import json
+import shlex
+from collections.abc import Callable, Sequence
+from urllib.parse import quote
+
+from handsim.report import fmt
+from handsim.report.aggregate import GROUP_KEYS
+from handsim.report.columns import GROUP_COLUMNS, TRIAL_COLUMNS, Column
+from handsim.report.records import STATUSES
+
+HTML_NAME = "report.html"
+GROUP_TITLES = {"object": "By object", "grasp": "By grasp type", "actor": "By actor"}
+
+
+def cell(text: object) -> str:
+    """Text safe inside a GitHub table cell (pipes escaped, line breaks removed)."""
+    return str(text).replace("\\", "\\\\").replace("|", "\\|").replace("\r", " ").replace("\n", " ")
+
+
+def link_text(text: object) -> str:
+    """Text safe inside a Markdown link label."""
+    return cell(text).replace("[", "\\[").replace("]", "\\]")
+
+
+def _table(headers: Sequence[str], rows: Sequence[Sequence[str]], numeric: Sequence[bool]) -> list[str]:
+    lines = ["| " + " | ".join(cell(h) for h in headers) + " |"]
+    lines.append("|" + "|".join("---:" if n else "---" for n in numeric) + "|")
+    lines += ["| " + " | ".join(r) + " |" for r in rows]
+    return lines
+
+
+def _column_table(
+    columns: Sequence[Column],
+    rows: Sequence[dict],
+    first: tuple[str, Callable[[dict], str]],
+    total: dict | None,
+) -> list[str]:
+    body = [[first[1](r), *(cell(c.cell(r)) for c in columns)] for r in rows]
+    if total is not None:
+        body.append(["**all**", *(f"**{cell(c.cell(total))}**" for c in columns)])
+    return _table([first[0], *(c.label for c in columns)], body, [False, *(c.numeric for c in columns)])
+
+
+def _frames(trial: dict) -> str:
+    renders = [p for p in trial["renders"] if p]
+    return ", ".join(f"[{link_text(p.rsplit('/', 1)[-1])}]({quote(p)})" for p in renders) or fmt.MISSING
+
+
+def render_markdown(summary: dict) -> str:
+    """The Markdown report of ``summary`` (:func:`~handsim.report.summary.build_summary`)."""
+    o = summary["overview"]
+    trials = {t["id"]: t for t in summary["trials"]}
+    out = [
+        f"# handsim physics-plausibility report — {cell(fmt.text(summary['dataset']))}",
+        "",
+        f"{o['trials']} trials: {o['by_status']['ok']} ok, {o['by_status']['diverged']} diverged, "
+        f"{o['by_status']['error']} errors. Metric spec "
+        f"{', '.join(summary['metric_spec_versions']) or fmt.MISSING}. Plots, per-trial curves and frames: "
+        f"[{HTML_NAME}]({HTML_NAME}).",
+        "",
+        "## Dataset overview",
+        "",
+    ]
+    if o["discovered_trials"] is not None and o["discovered_trials"] != o["trials"]:
+        out += [f"Discovery found {o['discovered_trials']} trials; {o['trials']} have records.", ""]
+    kind_rows = [
+        [cell(k), *(str(v[s]) for s in STATUSES), str(sum(v.values()))] for k, v in o["by_kind"].items()
+    ]
+    out += [*_table(["kind", *STATUSES, "trials"], kind_rows, [False, True, True, True, True]), ""]
+    for key, title in (("companion", "Companion files"), ("unknown", "Unknown files (not used)")):
+        entries = o[key]
+        out += [f"{title}: {len(entries) or 'none'}.", ""]
+        out += [f"- `{cell(fmt.text(e.get('path')))}` — {cell(fmt.text(e.get('reason')))}" for e in entries]
+        out += [""] if entries else []
+    out += ["## Groups", ""]
+    out += [f"- **{c.label}**: {c.help}" for c in GROUP_COLUMNS if c.help] + [""]
+    for key in GROUP_KEYS:
+        rows = summary["groups"][key]
+        out += [f"### {GROUP_TITLES[key]}", ""]
+        if not rows:
+            out += [f"No trial has a{'n' if key[0] in 'aeiou' else ''} {key}.", ""]
+            continue
+        out += _column_table(GROUP_COLUMNS, rows, (key, lambda r: cell(fmt.text(r["group"]))), summary["all"])
+        out += [""]
+    out += ["## Worst trials first", "", f"Ranking: {summary['ranking']}", ""]
+    for w in summary["worst"]:
+        t = trials[w["id"]]
+        out.append(
+            f"{w['rank']}. [{link_text(w['id'])}]({HTML_NAME}#{t['anchor']}) — **{t['outcome']}** — "
+            f"{cell(w['reason'])} — frames: {_frames(t)}"
+        )
+    out += ["", "## All trials", ""]
+    out += _column_table(
+        TRIAL_COLUMNS,
+        summary["trials"],
+        ("trial", lambda r: f"[{link_text(r['id'])}]({HTML_NAME}#{r['anchor']})"),
+        None,
+    )
+    out += ["", "## Reproducibility", ""]
+    command = summary["command"]
+    if isinstance(command, list):
+        out += ["Command line:", "", "```", shlex.join(str(c) for c in command), "```", ""]
+    out += [f"Metric spec version: {', '.join(summary['metric_spec_versions']) or fmt.MISSING}.", ""]
+    for v in summary["versions"]:
+        out += [
+            f"Versions of {v['trials']} trial(s):",
+            "",
+            "```json",
+            json.dumps(v["value"], indent=2, sort_keys=True),
+        ]
+        out += ["```", ""]
+    if summary["notes"]:
+        out += ["Notes on the records:", ""] + [f"- {n}" for n in summary["notes"]] + [""]
+    out += ["Re-render from the records alone: `handsim report --render-only OUT/`.", ""]
+    return "\n".join(out)
