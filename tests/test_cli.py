@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import json
+
 import mujoco
 import pytest
 
@@ -16,12 +18,16 @@ def test_help_explains_the_commands(capsys):
     assert "handsim demo" in out and "build" in out
 
 
-def test_demo_builds_and_simulates_the_default_hand(capsys, tmp_path):
-    assert main(["demo", "-o", str(tmp_path / "hand.xml")]) == 0
+def test_demo_checks_the_default_hand_and_reports_on_the_bundled_tzionas_sample(capsys, tmp_path):
+    out_dir = tmp_path / "demo"
+    assert main(["demo", "-o", str(out_dir), "--workers", "1", "--frames", "0"]) == 0
     out = capsys.readouterr().out
-    assert "actuators  27" in out
-    assert "0 MuJoCo warnings" in out
-    assert mujoco.MjModel.from_xml_path(str(tmp_path / "hand.xml")).nu == 27
+    assert "27 actuated DoFs" in out and "0 MuJoCo warnings" in out
+    records = [json.loads(line) for line in (out_dir / "records.jsonl").read_text().splitlines()]
+    assert [(r["id"], r["status"]) for r in records] == [("Models/20", "ok")]
+    assert records[0]["summary"]["warnings"] == 0
+    for name in ("report.html", "report.md", "summary.json"):
+        assert (out_dir / name).is_file() and str(out_dir / name) in out
 
 
 def test_build_hand_from_graspdb_skeleton_writes_mjcf(capsys, tmp_path, graspdb_dir):

@@ -11,7 +11,7 @@ import sys
 from collections.abc import Sequence
 
 from handsim import __version__
-from handsim.cli import build, catalog, demo, replay, trajectory
+from handsim.cli import build, catalog, demo, export, replay, report, trajectory
 from handsim.errors import HandsimError
 
 DESCRIPTION = """\
@@ -19,7 +19,8 @@ handsim turns captured human hand motion into MuJoCo physics.
 
 Start with `handsim demo` (no arguments; uses data bundled with the package). Build models with
 `handsim build hand|object|scene ... -o model.xml`; list the object catalogue with `handsim catalog`;
-look at a recording with `handsim inspect RECORDING --plot out.png`.
+look at a recording with `handsim inspect RECORDING --plot out.png`; replay a whole dataset and report
+on it with `handsim report DATASET -o OUT`; export replayed episodes with `handsim export minari OUT`.
 """
 
 
@@ -30,7 +31,7 @@ def build_parser() -> argparse.ArgumentParser:
     )
     parser.add_argument("--version", action="version", version=f"handsim {__version__}")
     commands = parser.add_subparsers(dest="command", metavar="COMMAND")
-    for module in (demo, build, catalog, trajectory, replay):
+    for module in (demo, build, catalog, trajectory, replay, report, export):
         module.register(commands)
     return parser
 

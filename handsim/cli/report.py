@@ -1,0 +1,202 @@
+"""``handsim report``: replay every trial of a dataset, record each, and render the report.
+
+Exit codes: 0 done (failed trials are recorded in the report, not an exit code); 1 a handsim error (a
+malformed records file, records of other parameters in OUT, Ray missing …); 2 a usage error (no dataset,
+no trial in it); 130 interrupted (the records written so far are kept: run the same command to resume).
+"""
+
+from __future__ import annotations
+
+import argparse
+import signal
+import sys
+from pathlib import Path
+from typing import TYPE_CHECKING
+
+if TYPE_CHECKING:
+    from handsim.sim.replay import ReplayConfig
+
+EXIT_INTERRUPTED = 130
+
+
+def _non_negative(text: str) -> int:
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a whole number, got {text!r}") from None
+    if value < 0:
+        raise argparse.ArgumentTypeError(f"expected a number ≥ 0, got {value}")
+    return value
+
+
+def _positive(text: str) -> int:
+    value = _non_negative(text)
+    if value == 0:
+        raise argparse.ArgumentTypeError("expected a number ≥ 1, got 0")
+    return value
+
+
+def _interrupt(signum: int, frame: object) -> None:
+    raise KeyboardInterrupt(f"signal {signum}")
+
+
+def _render(out: Path) -> int:
+    """Render the report of ``out`` from its records; print where it is."""
+    try:
+        from handsim.report import render_report
+    except ModuleNotFoundError as exc:
+        if exc.name not in ("handsim.report",):
+            raise
+        print(
+            "handsim report: error: this handsim has no report renderer (handsim.report); the records "
+            f"are in {out / 'records.jsonl'}",
+            file=sys.stderr,
+        )
+        return 1
+    files = render_report(out)
+    print(f"report      {files.html}")
+    print(f"markdown    {files.markdown}")
+    print(f"json        {files.json}")
+    return 0
+
+
+def _summary_line(out: Path) -> str:
+    from handsim.runner.execute import records_line
+    from handsim.runner.records import read_records
+
+    return records_line(read_records(out))
+
+
+def run_and_render(
+    dataset: str | Path,
+    out: str | Path,
+    *,
+    workers: int | None = None,
+    backend: str = "local",
+    address: str | None = None,
+    config: ReplayConfig | None = None,
+    frames: int = 4,
+    only: str | None = None,
+    limit: int | None = None,
+    command: list[str] | None = None,
+) -> int:
+    """Discover, run and report on a dataset, printing what happens; the command's exit code.
+
+    Shared by ``handsim report`` and ``handsim demo``.
+
+    Args:
+        dataset: A dataset folder or one recording.
+        out: The output folder (resumed when it holds records of the same parameters).
+        workers: Trials at once; default every core.
+        backend: ``"local"`` or ``"ray"``.
+        address: Ray cluster address.
+        config: Replay parameters (default: :func:`handsim.runner.execute.run_dataset`'s).
+        frames: Frames rendered per trial.
+        only: Run only trials whose id matches this glob.
+        limit: Run only the first ``limit`` trials.
+        command: The command line for ``run.json``.
+
+    Returns:
+        0 done, 1 no report renderer, 2 no trial to run, 130 interrupted.
+
+    Raises:
+        HandsimError: The dataset is missing, OUT holds records of other parameters, Ray is missing …
+    """
+    from handsim.runner.discover import discover, select
+    from handsim.runner.execute import run_dataset
+
+    out = Path(out)
+    discovery = discover(dataset)
+    entries = select(discovery.entries, only, limit)
+    for item in discovery.unknown:
+        print(f"unknown     {item.path}: {item.reason}")
+    if not entries:
+        what = f" matching {only!r}" if only else ""
+        print(f"handsim report: error: no trial{what} in {dataset}", file=sys.stderr)
+        return 2
+    print(
+        f"dataset     {discovery.root}: {len(discovery.entries)} trials, {len(discovery.companions)} "
+        f"companion and {len(discovery.unknown)} unknown files; running {len(entries)}"
+    )
+    source = discovery if len(entries) == len(discovery.entries) else entries
+    previous = signal.signal(signal.SIGTERM, _interrupt)  # a killed job stops its workers too
+    try:
+        summary = run_dataset(
+            source, out, workers=workers, backend=backend, address=address, config=config, frames=frames,
+            command=command,
+        )  # fmt: skip
+    except KeyboardInterrupt:
+        print(
+            f"handsim report: interrupted; the finished trials are recorded in {out / 'records.jsonl'}: "
+            "run the same command to resume",
+            file=sys.stderr,
+        )
+        return EXIT_INTERRUPTED
+    finally:
+        signal.signal(signal.SIGTERM, previous)
+    for note in summary.notes:
+        print(f"note        {note}")
+    print(f"records     {out / 'records.jsonl'} ({len(summary.ran)} run now, {summary.skipped} resumed)")
+    code = _render(out)
+    print(summary.line())
+    return code
+
+
+def _report(args: argparse.Namespace) -> int:
+    from handsim.sim.replay import ReplayConfig
+
+    if args.render_only is not None:
+        out = Path(args.render_only or args.output or "")
+        if not str(out) or not (out / "records.jsonl").is_file():
+            print(f"handsim report: error: --render-only needs a run's folder with records.jsonl, got {out}",
+                  file=sys.stderr)  # fmt: skip
+            return 2
+        code = _render(out)
+        print(_summary_line(out))
+        return code
+    if args.dataset is None or args.output is None:
+        print("handsim report: error: give DATASET and -o OUT (or --render-only OUT)", file=sys.stderr)
+        return 2
+    config = ReplayConfig(control_rate=args.rate, stability_at=None if args.stability == "none" else "grasp")
+    return run_and_render(
+        args.dataset, args.output, workers=args.workers, backend=args.backend, address=args.address,
+        config=config, frames=args.frames, only=args.only, limit=args.limit,
+        command=["handsim", *sys.argv[1:]],
+    )  # fmt: skip
+
+
+def register(commands: argparse._SubParsersAction) -> None:
+    """Add the ``report`` command."""
+    report = commands.add_parser(
+        "report",
+        help="replay every trial of a dataset and write a physics-plausibility report (HTML, Markdown, JSON)",
+        description="Find the trials of a dataset folder (GraspDB14 recordings, Tzionas Models/NN sequences, "
+        "ARCTIC raw_seqs), replay each in MuJoCo on all cores (or Ray), append one record per trial to "
+        "OUT/records.jsonl, and render the report from the records. A killed run restarted with the same "
+        "command resumes; a failing trial is recorded and the run goes on. Exit codes: 0 done, 1 handsim "
+        f"error, 2 usage error, {EXIT_INTERRUPTED} interrupted.",
+    )
+    report.add_argument("dataset", nargs="?", metavar="DATASET", help="dataset folder or one recording")
+    report.add_argument("-o", "--output", metavar="OUT", help="output folder (records, frames, report)")
+    report.add_argument(
+        "--workers", type=_positive, metavar="N", help="trials at once (default: all cores; 1 = in-process)"
+    )
+    report.add_argument("--backend", choices=("local", "ray"), default="local", help="process pool or Ray")
+    report.add_argument("--address", metavar="ADDR", help="Ray cluster address (default: start a local Ray)")
+    report.add_argument(
+        "--frames", type=_non_negative, default=4, metavar="N", help="frames rendered per trial (default 4)"
+    )
+    report.add_argument(
+        "--limit", type=_non_negative, metavar="N", help="run only the first N trials (by id)"
+    )
+    report.add_argument("--only", metavar="GLOB", help="run only trials whose id matches (e.g. '*su04*')")
+    report.add_argument(
+        "--stability", choices=("grasp", "none"), default="grasp",
+        help="grasp stability tests at the end of the hold window of glove trials (default), or none",
+    )  # fmt: skip
+    report.add_argument("--rate", type=float, default=100.0, metavar="HZ", help="control rate (default 100)")
+    report.add_argument(
+        "--render-only", nargs="?", const="", metavar="OUT",
+        help="render the report of OUT (or -o OUT) from its records, without simulating",
+    )  # fmt: skip
+    report.set_defaults(func=_report)
