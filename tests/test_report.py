@@ -27,7 +27,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from handsim.errors import FormatError, InputFileError
+from handsim.errors import InputFileError
 from handsim.report import build_summary, read_run, render_report
 from handsim.report.aggregate import group_stats, group_table, overview, rank
 from handsim.report.charts import (
@@ -41,6 +41,7 @@ from handsim.report.charts import (
     ticks,
 )
 from handsim.report.frames import FrameBudget, load_frames
+from handsim.runner.records import RecordsError
 from tests.conftest import SHARED_DATA, _require
 
 # --------------------------------------------------------------------------------------------- fixtures
@@ -389,26 +390,30 @@ def test_cut_off_last_line_is_skipped_and_noted(run_dir):
         f.write('{"schema": 1, "id": "Models/9", "sta')
     run = read_run(run_dir)
     assert len(run.records) == 6
-    assert run.notes == ("records.jsonl line 7 is incomplete (a run stopped while writing it); skipped",)
+    assert (
+        len(run.notes) == 1 and "records.jsonl: the last line" in run.notes[0] and "truncated" in run.notes[0]
+    )
 
 
-def test_bad_line_in_the_middle_raises_format_error_with_its_line(run_dir):
+def test_bad_line_in_the_middle_raises_records_error_with_its_line(run_dir):
     lines = (run_dir / "records.jsonl").read_text().splitlines()
     lines.insert(2, "{not json")
     (run_dir / "records.jsonl").write_text("\n".join(lines) + "\n")
-    with pytest.raises(FormatError, match=r"records\.jsonl:3: not valid JSON"):
+    with pytest.raises(RecordsError, match=r"records\.jsonl:3: not a JSON record"):
         read_run(run_dir)
 
 
-def test_unsupported_schema_raises_format_error(run_dir):
+def test_unsupported_schema_raises_records_error(run_dir):
     (run_dir / "records.jsonl").write_text(json.dumps({"schema": 2, "id": "x", "status": "ok"}) + "\n")
-    with pytest.raises(FormatError, match=r":1 \[schema\]: record schema 2 is not supported; expected 1"):
+    with pytest.raises(RecordsError, match=r":1: field 'schema' is 2; this handsim reads schema 1"):
         read_run(run_dir)
 
 
-def test_unknown_status_raises_format_error(run_dir):
+def test_unknown_status_raises_records_error(run_dir):
     (run_dir / "records.jsonl").write_text(json.dumps({"schema": 1, "id": "x", "status": "done"}) + "\n")
-    with pytest.raises(FormatError, match=r"status 'done' is not one of \['ok', 'diverged', 'error'\]"):
+    with pytest.raises(
+        RecordsError, match=r"field 'status' is 'done'; expected one of \['ok', 'diverged', 'error'\]"
+    ):
         read_run(run_dir)
 
 
@@ -417,7 +422,7 @@ def test_missing_records_file_raises_input_file_error(tmp_path):
         render_report(tmp_path)
 
 
-def test_repeated_id_keeps_the_last_record_and_says_so(run_dir):
+def test_repeated_id_keeps_the_first_record_and_says_so(run_dir):
     records = [json.loads(line) for line in (run_dir / "records.jsonl").read_text().splitlines()]
     again = dict(
         records[0], status="error", summary=None, error={"type": "X", "message": "m", "traceback": ""}
@@ -426,8 +431,9 @@ def test_repeated_id_keeps_the_last_record_and_says_so(run_dir):
         f.write(json.dumps(again) + "\n")
     run = read_run(run_dir)
     assert len(run.records) == 6
-    assert _by_id(list(run.records))[records[0]["id"]]["status"] == "error"
-    assert run.notes == (f"trial {records[0]['id']!r} has more than one record; the last one is used",)
+    assert _by_id(list(run.records))[records[0]["id"]]["status"] == records[0]["status"]
+    assert len(run.notes) == 1
+    assert f"repeats the record of {records[0]['id']!r}; the first is kept" in run.notes[0]
 
 
 def test_missing_run_json_is_noted_and_the_report_still_renders(run_dir):

@@ -1,23 +1,20 @@
 """Reading a run's output folder: ``records.jsonl`` (one trial per line) and ``run.json``.
 
-The report is rendered from these files alone. Records are returned sorted by trial id (natural order,
-``Models/9`` before ``Models/10``), so the order in which a process pool finished the trials does not change
-the report.
+The report is rendered from these files alone, read by the runner's own reader
+(:func:`handsim.runner.records.load_records`: a cut-off last line is skipped with a note). Records are
+returned sorted by trial id (natural order, ``Models/9`` before ``Models/10``), so the order in which a
+process pool finished the trials does not change the report.
 """
 
 from __future__ import annotations
 
-import json
 import re
 from dataclasses import dataclass
 from pathlib import Path
 
-from handsim.errors import FormatError, InputFileError
-
-RECORD_SCHEMA = 1
-RECORDS_FILE = "records.jsonl"
-RUN_FILE = "run.json"
-STATUSES: tuple[str, ...] = ("ok", "diverged", "error")
+from handsim.errors import InputFileError
+from handsim.runner.records import RECORDS_FILE, RUN_FILE, RecordsError, load_records, read_run_info
+from handsim.runner.worker import STATUSES
 
 
 @dataclass(frozen=True)
@@ -26,7 +23,7 @@ class RunRecords:
 
     Attributes:
         out_dir: The run's output folder.
-        records: One record per trial (the last one written for an id), sorted by :func:`natural_key` of
+        records: One record per trial (the first one written for an id), sorted by :func:`natural_key` of
             the id.
         run: The contents of ``run.json``, or None when the file is absent.
         notes: What reading had to decide (a cut-off last line skipped, repeated ids, no ``run.json``).
@@ -45,63 +42,6 @@ def natural_key(text: str) -> tuple:
     )
 
 
-def _check_record(record: object, path: Path, line: int) -> dict:
-    if not isinstance(record, dict):
-        raise FormatError(path, f"a record must be a JSON object, got {type(record).__name__}", line=line)
-    schema = record.get("schema")
-    if schema != RECORD_SCHEMA:
-        raise FormatError(
-            path,
-            f"record schema {schema!r} is not supported; expected {RECORD_SCHEMA}",
-            line=line,
-            field="schema",
-        )
-    if not isinstance(record.get("id"), str) or not record["id"]:
-        raise FormatError(path, "a record needs a non-empty string id", line=line, field="id")
-    if record.get("status") not in STATUSES:
-        raise FormatError(
-            path,
-            f"status {record.get('status')!r} is not one of {list(STATUSES)}",
-            line=line,
-            field="status",
-        )
-    return record
-
-
-def parse_records(text: str, path: Path) -> tuple[list[dict], list[str]]:
-    """Records from the text of a ``records.jsonl`` file.
-
-    A last line without its newline that is not valid JSON is what a killed run leaves behind: it is
-    skipped and noted (the run's resume re-runs that trial). Any other bad line is an error.
-
-    Args:
-        text: The file's text.
-        path: The file, for messages.
-
-    Returns:
-        The records in file order, and notes on what was skipped.
-
-    Raises:
-        FormatError: A line is not a JSON object of a supported record schema.
-    """
-    records, notes = [], []
-    lines = text.split("\n")
-    for number, line in enumerate(lines, start=1):
-        if not line.strip():
-            continue
-        try:
-            record = json.loads(line)
-        except json.JSONDecodeError as exc:
-            if number == len(lines):  # no newline after it: the write was cut off
-                notes.append(
-                    f"{path.name} line {number} is incomplete (a run stopped while writing it); skipped"
-                )
-                continue
-            raise FormatError(path, f"not valid JSON: {exc.msg} at column {exc.colno}", line=number) from exc
-        records.append(_check_record(record, path, number))
-    return records, notes
-
-
 def read_run(out_dir: str | Path) -> RunRecords:
     """Read a run's ``records.jsonl`` and ``run.json``.
 
@@ -113,7 +53,7 @@ def read_run(out_dir: str | Path) -> RunRecords:
 
     Raises:
         InputFileError: The folder or its ``records.jsonl`` does not exist.
-        FormatError: A record or ``run.json`` is malformed.
+        RecordsError: A record (a line other than a cut-off last one) or ``run.json`` is malformed.
     """
     out_dir = Path(out_dir)
     path = out_dir / RECORDS_FILE
@@ -122,22 +62,18 @@ def read_run(out_dir: str | Path) -> RunRecords:
             f"{path} does not exist: render a report from the folder a dataset run wrote "
             f"(handsim report DATASET -o OUT)"
         )
-    records, notes = parse_records(path.read_text(encoding="utf-8"), path)
-    by_id: dict[str, dict] = {}
-    for record in records:
-        if record["id"] in by_id:
-            notes.append(f"trial {record['id']!r} has more than one record; the last one is used")
-        by_id[record["id"]] = record
-    run = None
-    run_path = out_dir / RUN_FILE
-    if run_path.is_file():
-        try:
-            run = json.loads(run_path.read_text(encoding="utf-8"))
-        except json.JSONDecodeError as exc:
-            raise FormatError(run_path, f"not valid JSON: {exc.msg}", line=exc.lineno) from exc
-        if not isinstance(run, dict):
-            raise FormatError(run_path, f"expected a JSON object, got {type(run).__name__}")
-    else:
+    read = load_records(out_dir)
+    notes = list(read.notes)
+    for number, record in enumerate(read.records, start=1):
+        if record.get("status") not in STATUSES:
+            raise RecordsError(
+                f"{path}: record {number} ({record['id']!r}): field 'status' is {record.get('status')!r}; "
+                f"expected one of {list(STATUSES)}"
+            )
+    run = read_run_info(out_dir)
+    if run is not None and not isinstance(run, dict):
+        raise RecordsError(f"{out_dir / RUN_FILE}: expected a JSON object, got {type(run).__name__}")
+    if run is None:
         notes.append(f"{RUN_FILE} is absent: no command line, discovery or run parameters to show")
-    ordered = tuple(by_id[key] for key in sorted(by_id, key=natural_key))
+    ordered = tuple(sorted(read.records, key=lambda r: natural_key(r["id"])))
     return RunRecords(out_dir=out_dir, records=ordered, run=run, notes=tuple(notes))

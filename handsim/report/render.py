@@ -58,7 +58,7 @@ def render_report(out_dir: str | Path, *, embed_budget: int = DEFAULT_EMBED_BUDG
 
     Raises:
         InputFileError: ``out_dir`` has no ``records.jsonl``.
-        FormatError: A record or ``run.json`` is malformed.
+        RecordsError: A record or ``run.json`` is malformed.
     """
     run = read_run(out_dir)
     summary = build_summary(run)

@@ -181,7 +181,10 @@ def _environment(**values: str) -> Iterator[None]:
 
 def _stop_pool(pool: cf.ProcessPoolExecutor) -> None:
     """End a pool now: cancel queued trials and terminate the workers (running trials are lost)."""
-    processes = list(getattr(pool, "_processes", {}).values())  # no public API before Python 3.14
+    # no public API before Python 3.14; a broken pool may already have dropped its processes from
+    # ``_processes``, so the ones seen at start are ended too
+    current = list((getattr(pool, "_processes", None) or {}).values())
+    processes = list({id(p): p for p in (*_STARTED.pop(id(pool), ()), *current)}.values())
     pool.shutdown(wait=False, cancel_futures=True)
     for process in processes:
         if process.is_alive():
@@ -190,6 +193,8 @@ def _stop_pool(pool: cf.ProcessPoolExecutor) -> None:
         process.join(timeout=5)
 
 
+_STARTED: dict[int, tuple] = {}
+"""Worker processes of each live pool, by ``id(pool)``, as started."""
 POOL_START_TIMEOUT_S = 300.0
 """Longest wait for a new worker process to start and import handsim, s."""
 
@@ -202,7 +207,12 @@ def _new_pool(workers: int) -> cf.ProcessPoolExecutor:
     context = multiprocessing.get_context("spawn")
     pool = cf.ProcessPoolExecutor(workers, mp_context=context, initializer=prepare_worker_process)
     try:
-        pool.submit(os.getpid).result(timeout=POOL_START_TIMEOUT_S)
+        # one task per worker submitted at once: the pool spawns every worker now (it spawns one per
+        # submit while none is idle), so all of them import handsim in parallel before the first trial
+        started = [pool.submit(os.getpid) for _ in range(workers)]
+        for future in started:
+            future.result(timeout=POOL_START_TIMEOUT_S)
+        _STARTED[id(pool)] = tuple(pool._processes.values())
     except Exception as exc:
         _stop_pool(pool)
         raise RunnerError(
@@ -301,7 +311,7 @@ def _ray_trial(entry: TrialEntry, config: ReplayConfig, frames: int) -> TrialOut
 
 
 def _gl_env() -> dict[str, str]:
-    from handsim.envs._render import prefer_headless_gl
+    from handsim.headless import prefer_headless_gl
 
     prefer_headless_gl()
     return {"MUJOCO_GL": os.environ["MUJOCO_GL"]} if "MUJOCO_GL" in os.environ else {}

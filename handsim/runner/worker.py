@@ -56,7 +56,7 @@ def prepare_worker_process() -> None:
     ends the workers itself.
     """
     os.environ["OMP_NUM_THREADS"] = "1"
-    from handsim.envs._render import prefer_headless_gl
+    from handsim.headless import prefer_headless_gl
 
     prefer_headless_gl()
     if sys.platform != "win32":
