@@ -89,6 +89,19 @@ class HandEnv(gym.Env[np.ndarray, np.ndarray]):
     def _bind(self) -> None:
         """(Re)create views into ``self.data`` and the observation buffer."""
 
+    def _observe_state(self) -> float:
+        """Fill the observation's state, contact forces and penetration; returns the penetration, m.
+
+        Uses the views :meth:`_bind` made (``_obs_pos``/``_obs_vel``/``_obs_force``) and the index arrays
+        of :func:`~handsim.envs._observation.add_state`.
+        """
+        self._obs_pos[:] = self._qpos[self._qpos_adr]
+        self._obs_vel[:] = self._qvel[self._qvel_adr]
+        self._contacts.link_forces(self._sensordata, self._obs_force)
+        penetration = self._contacts.penetration(self._sensordata)
+        self._obs[self._pen_index] = penetration
+        return penetration
+
     def _action(self, action: npt.ArrayLike) -> tuple[np.ndarray, float]:
         """The action as float64 and its sum of squares.
 

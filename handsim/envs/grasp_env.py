@@ -454,14 +454,10 @@ class GraspEnv(HandEnv):
             The penetration (m) and the number of hand links touching the object.
         """
         obs = self._obs
-        self._obs_pos[:] = self._qpos[self._qpos_adr]
-        self._obs_vel[:] = self._qvel[self._qvel_adr]
+        penetration = self._observe_state()
         self._obs_target[:] = self._target
         np.subtract(self._obs_object, self._obs_root, out=self._obs_rel)
         self._obs_rel -= self._grasp_offset
-        self._contacts.link_forces(self._sensordata, self._obs_force)
-        penetration = self._contacts.penetration(self._sensordata)
-        obs[self._pen_index] = penetration
         obs[self._lift_index] = self._object_lift() if lift is None else lift
         obs[self._progress_index] = self._step_count / self._steps
         if lift is None:

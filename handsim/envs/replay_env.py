@@ -362,11 +362,7 @@ class ReplayEnv(HandEnv):
     def _observe(self) -> float:
         """Fill the observation buffer from the state; returns the penetration, m."""
         obs = self._obs
-        self._obs_pos[:] = self._qpos[self._qpos_adr]
-        self._obs_vel[:] = self._qvel[self._qvel_adr]
+        penetration = self._observe_state()
         self._obs_refs[:] = self._refs[min(self._frame + 1, self._last)]
-        self._contacts.link_forces(self._sensordata, self._obs_force)
-        penetration = self._contacts.penetration(self._sensordata)
-        obs[self._pen_index] = penetration
         obs[self._progress_index] = self._frame / self._last
         return penetration
