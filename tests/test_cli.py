@@ -23,9 +23,16 @@ def test_demo_checks_the_default_hand_and_reports_on_the_bundled_tzionas_sample(
     assert main(["demo", "-o", str(out_dir), "--workers", "1", "--frames", "0"]) == 0
     out = capsys.readouterr().out
     assert "27 actuated DoFs" in out and "0 MuJoCo warnings" in out
+    assert "synthetic scripted grasps" in out and "not recordings" in out
     records = [json.loads(line) for line in (out_dir / "records.jsonl").read_text().splitlines()]
-    assert [(r["id"], r["status"]) for r in records] == [("Models/20", "ok")]
-    assert records[0]["summary"]["warnings"] == 0
+    assert sorted((r["id"], r["kind"], r["status"]) for r in records) == [
+        ("demo/cube.grasp.json", "scripted", "ok"),
+        ("demo/cylinder_25mm.grasp.json", "scripted", "ok"),
+        ("demo/tennis_ball.grasp.json", "scripted", "ok"),
+        ("tzionas_ijcv16/Models/20", "tzionas", "ok"),
+    ]
+    assert all(r["summary"]["warnings"] == 0 for r in records)
+    assert all(isinstance(r["summary"]["held"], bool) for r in records if r["kind"] == "scripted")
     for name in ("report.html", "report.md", "summary.json"):
         assert (out_dir / name).is_file() and str(out_dir / name) in out
 

@@ -190,7 +190,7 @@ def test_load_trial_raises_error_if_options_come_with_a_trial():
 def test_load_trial_raises_error_for_an_unknown_kind():
     trial = Trial(kind="arctic", trajectory_path="x", skeleton_path=None, objects=())
     with pytest.raises(
-        TrialError, match=r"unknown trial kind 'arctic'; expected one of \['tzionas', 'graspdb'\]"
+        TrialError, match=r"unknown trial kind 'arctic'; expected one of \['tzionas', 'graspdb', 'scripted'\]"
     ):
         load_trial(trial)
 

@@ -3,17 +3,24 @@
 No arguments and no downloads: the parametric default hand and the object catalogue are checked (built,
 compiled, one simulated second with a MuJoCo warning check), then the MIT-licensed Tzionas sample bundled
 in ``handsim/assets/tzionas_ijcv16`` (sequence 20: a hand pinching a cube, with its notice) goes through
-the same dataset run as ``handsim report``: discovery, replay with collisions on and a free cube, one
-record per trial, rendered frames, and the HTML/Markdown/JSON report.
+the same dataset run as ``handsim report`` together with the synthetic scripted grasps bundled in
+``handsim/assets/demo`` (the default hand closing around catalogue objects, glove scenario; written for
+handsim, not recordings): discovery, replay with collisions on and free objects, one record per trial,
+rendered frames, and one HTML/Markdown/JSON report.
 """
 
 from __future__ import annotations
 
 import argparse
 import time
+from dataclasses import replace
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 from handsim.cli._common import add_hand_size
+
+if TYPE_CHECKING:
+    from handsim.runner.discover import Discovery
 
 DEFAULT_OUT = "handsim-demo"
 DEMO_OBJECTS = ("tennis_ball", "mug")
@@ -49,17 +56,49 @@ def _check_default_hand(hand_length: float) -> None:
     )
 
 
+def demo_discovery() -> Discovery:
+    """The demo's dataset: the bundled Tzionas sample and the bundled scripted grasps, as one discovery.
+
+    Each folder is discovered on its own and its ids and paths are made relative to
+    :data:`handsim.assets.ASSETS_DIR` (``tzionas_ijcv16/Models/20``, ``demo/tennis_ball.grasp.json``), so
+    they stay unique and name where the files are.
+
+    Returns:
+        The combined discovery, rooted at the assets folder, entries sorted by id.
+    """
+    from handsim.assets import ASSETS_DIR, TZIONAS_DIR
+    from handsim.runner.discover import CompanionFile, Discovery, UnknownFile, discover
+
+    entries, companions, unknown = [], [], []
+    for folder in (TZIONAS_DIR, ASSETS_DIR / "demo"):
+        found = discover(folder)
+        prefix = Path(found.root).relative_to(ASSETS_DIR).as_posix() + "/"
+        for e in found.entries:
+            inputs = tuple(replace(i, path=prefix + i.path) for i in e.inputs)
+            entries.append(replace(e, id=prefix + e.id, inputs=inputs))
+        companions += [CompanionFile(prefix + c.path, c.reason) for c in found.companions]
+        unknown += [UnknownFile(prefix + u.path, u.reason) for u in found.unknown]
+    return Discovery(
+        root=str(ASSETS_DIR),
+        entries=tuple(sorted(entries, key=lambda e: e.id)),
+        companions=tuple(sorted(companions, key=lambda c: c.path)),
+        unknown=tuple(sorted(unknown, key=lambda u: u.path)),
+    )
+
+
 def _run(args: argparse.Namespace) -> int:
-    from handsim.assets import TZIONAS_DIR
+    from handsim.assets import ASSETS_DIR, TZIONAS_DIR
     from handsim.cli.report import run_and_render
 
     print("handsim demo: on data bundled with handsim (no downloads)")
     _check_default_hand(args.hand_length)
     print(f"  dataset: the Tzionas/Ballan sample in {TZIONAS_DIR}")
     print("  (MIT licence, Copyright (c) 2014 cvlabbonn: see LICENSE there)")
+    print(f"  and the synthetic scripted grasps in {ASSETS_DIR / 'demo'}")
+    print("  (written for handsim, not recordings: the default hand closing around catalogue objects)")
     out = Path(args.output)
     return run_and_render(
-        TZIONAS_DIR,
+        demo_discovery(),
         out,
         workers=args.workers,
         frames=args.frames,
@@ -74,7 +113,8 @@ def register(commands: argparse._SubParsersAction) -> None:
         help="build, replay and report on data bundled with handsim (start here)",
         description="Check the parametric default hand and catalogue objects (build, compile, simulate with "
         "a MuJoCo warning check), then replay the bundled MIT-licensed Tzionas sample (a hand pinching a "
-        "cube) with collisions on and a free object, and write the dataset report (HTML, Markdown, JSON) "
+        "cube) and the bundled synthetic scripted grasps (the default hand closing around catalogue "
+        "objects) with collisions on and free objects, and write one dataset report (HTML, Markdown, JSON) "
         f"into OUT (default ./{DEFAULT_OUT}). Running it again reuses the records already there.",
     )
     add_hand_size(demo)

@@ -14,6 +14,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING
 
 if TYPE_CHECKING:
+    from handsim.runner.discover import Discovery
     from handsim.sim.replay import ReplayConfig
 
 EXIT_INTERRUPTED = 130
@@ -68,7 +69,7 @@ def _summary_line(out: Path) -> str:
 
 
 def run_and_render(
-    dataset: str | Path,
+    dataset: str | Path | Discovery,
     out: str | Path,
     *,
     workers: int | None = None,
@@ -85,7 +86,7 @@ def run_and_render(
     Shared by ``handsim report`` and ``handsim demo``.
 
     Args:
-        dataset: A dataset folder or one recording.
+        dataset: A dataset folder or one recording, or a discovery made already.
         out: The output folder (resumed when it holds records of the same parameters).
         workers: Trials at once; default every core.
         backend: ``"local"`` or ``"ray"``.
@@ -102,11 +103,11 @@ def run_and_render(
     Raises:
         HandsimError: The dataset is missing, OUT holds records of other parameters, Ray is missing …
     """
-    from handsim.runner.discover import discover, select
+    from handsim.runner.discover import Discovery, discover, select
     from handsim.runner.execute import run_dataset
 
     out = Path(out)
-    discovery = discover(dataset)
+    discovery = dataset if isinstance(dataset, Discovery) else discover(dataset)
     entries = select(discovery.entries, only, limit)
     for item in discovery.unknown:
         print(f"unknown     {item.path}: {item.reason}")

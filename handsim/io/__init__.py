@@ -4,7 +4,8 @@ Entry points:
 
 * :func:`read_skeleton` — ``.xmlskel`` (GraspDB14) or ``.SKEL`` (+ ``.LIMITS`` …, Tzionas/Ballan).
 * :func:`read_trajectory` — GraspDB14 CyberGlove recordings (``.txt``, radians or raw counts with a
-  calibration) and Tzionas/Ballan hand ``.MOTION`` files (with the sequence's object tracks).
+  calibration), Tzionas/Ballan hand ``.MOTION`` files (with the sequence's object tracks) and handsim's
+  synthetic scripted grasps (``.grasp.json``, :mod:`handsim.io.scripted`).
 
 Other sources, with their own readers: ARCTIC (:mod:`handsim.io.arctic_motion`: ``read_arctic_mano``,
 ``read_arctic_object``; templates in :mod:`handsim.io.arctic`), MANO models and poses
@@ -27,6 +28,7 @@ SKELETON_SUFFIXES = {".xmlskel": "GraspDB14 skeleton", ".skel": "Tzionas/Ballan 
 TRAJECTORY_SUFFIXES = {
     ".txt": "GraspDB14 CyberGlove recording (radians, or raw counts with a calibration)",
     ".motion": "Tzionas/Ballan hand motion (with its .SKEL/.LIMITS, and the sequence's objects)",
+    ".grasp.json": "handsim scripted grasp (synthetic closing motion of the parametric default hand)",
 }
 
 
@@ -34,6 +36,8 @@ def _suffix_or_error(path: Path, known: dict[str, str], what: str) -> str:
     if not path.exists():
         raise InputFileError(f"{path}: file not found")
     suffix = path.suffix.lower()
+    if path.name.lower().endswith(".grasp.json"):
+        suffix = ".grasp.json"
     if suffix not in known and not (what == "trajectory" and suffix == ""):
         listing = ", ".join(f"{k} ({v})" for k, v in known.items())
         raise InputFileError(f"{path}: unknown {what} file type {path.suffix!r}; handsim reads {listing}")
@@ -75,7 +79,8 @@ def read_trajectory(
             GraspDB14's FK-oracle files have no extension and are accepted too), or a Tzionas/Ballan
             ``Model_Hand_*.MOTION`` (its ``.SKEL``/``.LIMITS`` beside it; ``skeleton`` is not used — the
             columns are that skeleton's DoFs — and the objects of ``Configs/NN/MODELS_INFO.txt`` become
-            object tracks).
+            object tracks), or a synthetic scripted grasp ``NAME.grasp.json`` (:mod:`handsim.io.scripted`;
+            its columns are ``skeleton``'s DoFs, default the parametric hand of the file's ``hand_length``).
         skeleton: The hand the targets are for. Its DoF names become the trajectory's columns; DoFs the
             recording does not drive are held at 0 and listed in ``notes``. Without a skeleton, the
             columns are the DoFs the glove drives.
@@ -93,6 +98,12 @@ def read_trajectory(
     suffix = _suffix_or_error(p, TRAJECTORY_SUFFIXES, "trajectory")
     if suffix == ".motion":
         return _read_tzionas(p)
+    if suffix == ".grasp.json":
+        if calibration is not None:
+            raise InputFileError(f"{p}: a scripted grasp is synthetic joint angles; it takes no calibration")
+        from handsim.io.scripted import read_scripted_grasp
+
+        return read_scripted_grasp(p, skeleton=skeleton)
     from handsim.io.graspdb import read_graspdb_glove
 
     return read_graspdb_glove(p, skeleton=skeleton, calibration=calibration)

@@ -11,7 +11,8 @@ into exactly one of three lists:
   - Tzionas/Ballan sequences: a folder with a ``Model_Hand_*.MOTION`` (``Models/20``) and its
     ``Configs/NN/MODELS_INFO.txt``;
   - ARCTIC sequences: ``raw_seqs/sXX/<seq>.mano.npy`` + ``<seq>.object.npy`` with the template
-    ``meta/object_vtemplates/<object>/`` (listed; see :data:`handsim.runner.layouts.ARCTIC_UNSUPPORTED`).
+    ``meta/object_vtemplates/<object>/`` (listed; see :data:`handsim.runner.layouts.ARCTIC_UNSUPPORTED`);
+  - handsim's synthetic scripted grasps ``NAME.grasp.json`` (:mod:`handsim.io.scripted`; not recordings).
 
 * **companions** (:class:`CompanionFile`): files that belong to a dataset's layout but are not replayed,
   each with what it is (``.xmlskel``, Tzionas ``Calibration/``, ``VOIs/``, ``.ZONES``, GraspDB14's

@@ -1,8 +1,9 @@
 """The dataset layouts discovery knows: which files make a trial, which are companions, which are unknown.
 
 Each ``_…`` pass below takes the files not yet sorted and claims those of its layout (see
-:mod:`handsim.runner.discover` for the three lists). Order: Tzionas sequences, ARCTIC sequences, GraspDB14
-recordings, documentation, then everything left is unknown.
+:mod:`handsim.runner.discover` for the three lists). Order: Tzionas sequences, ARCTIC sequences, handsim's
+synthetic scripted grasps (``*.grasp.json``), GraspDB14 recordings, documentation, then everything left is
+unknown.
 """
 
 from __future__ import annotations
@@ -67,6 +68,7 @@ def sort_files(sorting: _Sorting) -> None:
     _tzionas(sorting)
     _tzionas_companions(sorting)
     _arctic(sorting)
+    _scripted(sorting)
     _graspdb(sorting)
     _rest(sorting)
 
@@ -260,6 +262,30 @@ def _arctic_companion(sorting: _Sorting, p: PurePosixPath) -> None:
 
 
 # --------------------------------------------------------------------------------------------------
+# Scripted grasps (synthetic, written for handsim)
+
+
+def _scripted(sorting: _Sorting) -> None:
+    from handsim.io.scripted import is_scripted_grasp, scripted_grasp_fields
+    from handsim.runner.discover import TrialEntry
+
+    for f in sorting.open_files():
+        if not is_scripted_grasp(f):
+            continue
+        path = sorting.base / f
+        try:
+            trial = find_trial(path)
+            fields = scripted_grasp_fields(path)
+        except HandsimError as exc:
+            sorting.unknown[f] = f"a scripted grasp (.grasp.json), but not a trial: {exc}"
+            continue
+        meta = _meta(
+            object=trial.objects[0].what, grasp="scripted", synthetic=True, closure=fields["closure"]
+        )
+        sorting.add(TrialEntry(f, trial, meta, (_input("trajectory", path, sorting.base),)))
+
+
+# --------------------------------------------------------------------------------------------------
 # GraspDB14
 
 
@@ -351,5 +377,6 @@ def _rest(sorting: _Sorting) -> None:
             kind = f"file type {p.suffix!r}" if p.suffix else "a file without extension"
             sorting.unknown[f] = (
                 f"{kind}: no recording handsim replays (GraspDB14 .txt, Tzionas Models/NN with "
-                "Model_Hand_*.MOTION, ARCTIC raw_seqs/sXX/*.mano.npy) nor a known companion file"
+                "Model_Hand_*.MOTION, ARCTIC raw_seqs/sXX/*.mano.npy, scripted grasp *.grasp.json) nor a "
+                "known companion file"
             )

@@ -17,6 +17,10 @@ Kinds of trial (:data:`TRIAL_KINDS`):
   extension). The hand is the parametric default hand unless a skeleton is given; the object is the one
   given, else the one whose id the file name carries (``r_01_11_ex03-…`` → id 1, the tennis ball); phases
   come from the ``_annot-`` file beside it (scenario ``glove``).
+* ``scripted`` — a synthetic scripted grasp ``NAME.grasp.json`` (:mod:`handsim.io.scripted`): not a
+  recording but a closing motion written for handsim. The hand is the parametric default hand of the
+  file's ``hand_length``, the object the file's catalogue object unless one is given; its ``grasp`` phase
+  is the hold (scenario ``glove``, as for GraspDB14).
 """
 
 from __future__ import annotations
@@ -24,6 +28,7 @@ from __future__ import annotations
 import dataclasses
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 from handsim.builders.default_hand import DEFAULT_HAND_LENGTH_M
 from handsim.errors import HandsimError, InputFileError
@@ -31,10 +36,16 @@ from handsim.sim.compiled import SimScene
 from handsim.sim.metrics import MetricSpec
 from handsim.trajectory import Trajectory
 
+if TYPE_CHECKING:
+    import mujoco
+
+    from handsim.skeleton import Skeleton
+
 TRIAL_KINDS = {
     "tzionas": "Tzionas/Ballan hand motion Model_Hand_*.MOTION (or its Models/NN folder), with the "
     "sequence's Configs/NN/MODELS_INFO.txt",
     "graspdb": "GraspDB14 CyberGlove recording .txt (radians; raw counts with a calibration)",
+    "scripted": "handsim scripted grasp NAME.grasp.json (synthetic closing motion of the parametric hand)",
 }
 """Kinds of trial and the files that make them."""
 HAND_COLLISIONS = ("capsules", "mesh")
@@ -179,6 +190,8 @@ def trial_kind(path: str | Path) -> str:
             return "tzionas"
     elif p.suffix.lower() == ".motion":
         return "tzionas"
+    elif p.name.lower().endswith(".grasp.json"):
+        return "scripted"
     elif "_annot-" in p.name:
         raise UnsupportedTrialError(
             f"{p}: a GraspDB14 phase annotation file, not a recording; give the recording it annotates "
@@ -206,16 +219,19 @@ def find_trial(
     """Find the files of a trial from its recording.
 
     Args:
-        path: A GraspDB14 recording, a Tzionas ``Model_Hand_*.MOTION`` or its ``Models/NN`` folder.
+        path: A GraspDB14 recording, a Tzionas ``Model_Hand_*.MOTION`` or its ``Models/NN`` folder, or a
+            synthetic scripted grasp ``NAME.grasp.json``.
         skeleton: GraspDB14: the hand's skeleton (``.xmlskel`` or ``.SKEL``); default the parametric
             hand. Tzionas: must be the motion's own ``.SKEL`` if given.
         obj: GraspDB14: the object (catalogue name or mesh file); default the object whose id the file
-            name carries. Not for Tzionas sequences (their objects are in ``MODELS_INFO.txt``).
+            name carries. Scripted grasp: default the file's object. Not for Tzionas sequences (their
+            objects are in ``MODELS_INFO.txt``).
         calibration: GraspDB14 raw-count recording: its glove calibration JSON.
         units: A mesh-file object's units, ``"m"`` or ``"mm"``.
         density: Object density in kg/m³ instead of the objects' own.
         mass: Object mass in kg instead of the objects' own.
-        hand_length: Parametric default hand's length, m (default 0.19); only without a skeleton.
+        hand_length: Parametric default hand's length, m (default 0.19; a scripted grasp's own); only
+            without a skeleton.
         collision: Hand collision shapes: ``"capsules"`` or ``"mesh"`` (skinned skeletons only).
 
     Returns:
@@ -226,7 +242,8 @@ def find_trial(
         UnsupportedTrialError: ``path`` is no kind of trial (the message lists the kinds).
         TrialError: An option that does not apply to the kind, no object to replay with, or a Tzionas
             sequence without its ``MODELS_INFO.txt``.
-        UnknownObjectError: The file name's object id is not in the catalogue.
+        UnknownObjectError: The file name's object id (the scripted grasp's object) is not in the catalogue.
+        FormatError: A scripted grasp that does not follow its format.
     """
     if collision not in HAND_COLLISIONS:
         raise TrialError(f"unknown hand collision {collision!r}; expected one of {list(HAND_COLLISIONS)}")
@@ -243,6 +260,15 @@ def find_trial(
                     "and objects (Configs/NN/MODELS_INFO.txt)"
                 )
         return _tzionas_trial(Path(path), skeleton, common)
+    if kind == "scripted":
+        refused = {"a skeleton": skeleton, "a calibration": calibration}
+        for what, value in refused.items():
+            if value is not None:
+                raise TrialError(
+                    f"{path}: {what} does not apply to a scripted grasp; it drives the parametric default "
+                    "hand (give a hand length to resize it)"
+                )
+        return _scripted_trial(Path(path), obj, hand_length, common)
     return _graspdb_trial(Path(path), skeleton, obj, calibration, hand_length, common)
 
 
@@ -288,6 +314,41 @@ def _tzionas_trial(path: Path, skeleton: str | Path | None, common: dict) -> Tri
         skeleton_path=str(own),
         objects=objects,
         notes=(f"hand {own.name} and objects {[o.track for o in objects]} from {info}",),
+        **common,
+    )
+
+
+def _scripted_trial(path: Path, obj: str | Path | None, hand_length: float | None, common: dict) -> Trial:
+    from handsim.builders import catalog
+    from handsim.builders.graspdb_objects import UnknownObjectError
+    from handsim.io.scripted import SYNTHETIC_NOTE, scripted_grasp_fields
+
+    fields = scripted_grasp_fields(path)
+    notes = [f"{SYNTHETIC_NOTE}: {path.name}"]
+    if obj is not None:
+        objects = (TrialObject(str(obj), "", "given"),)
+    else:
+        name = fields["object"]
+        if name not in catalog.names():
+            raise UnknownObjectError(
+                f"{path} [object]: unknown object {name!r}; catalogue objects are: "
+                f"{', '.join(sorted(catalog.names()))}"
+            )
+        objects = (TrialObject(name, "", "the scripted grasp's object"),)
+        notes.append(f"object {name!r}: named in the scripted grasp")
+    if hand_length is None:
+        hand_length = fields["hand_length"]
+    else:
+        notes.append(
+            f"hand length {hand_length:g} m given (the scripted grasp says {fields['hand_length']:g} m)"
+        )
+    return Trial(
+        kind="scripted",
+        trajectory_path=str(path),
+        skeleton_path=None,
+        objects=objects,
+        hand_length=float(hand_length),
+        notes=tuple(notes),
         **common,
     )
 
@@ -368,6 +429,8 @@ def load_trial(
         raise TrialError(f"unknown trial kind {trial.kind!r}; expected one of {list(TRIAL_KINDS)}")
     if trial.kind == "tzionas":
         return _load_tzionas(trial, progress)
+    if trial.kind == "scripted":
+        return _load_scripted(trial, metrics, progress)
     return _load_graspdb(trial, metrics, progress)
 
 
@@ -405,16 +468,46 @@ def _load_tzionas(trial: Trial, progress: bool) -> LoadedTrial:
     )
 
 
-def _load_graspdb(trial: Trial, metrics: MetricSpec | None, progress: bool) -> LoadedTrial:
-    from handsim.builders import build_hand, default_hand, default_skeleton
-    from handsim.glove import attach_phases, load_calibration
-    from handsim.io import read_skeleton, read_trajectory
+def _parametric_hand(trial: Trial) -> tuple[Skeleton, mujoco.MjSpec, str]:
+    """The parametric default hand of the trial's length: skeleton, hand spec, text for people."""
+    from handsim.builders import default_hand, default_skeleton
+
+    skeleton = default_skeleton(trial.hand_length)
+    hand = default_hand(trial.hand_length, collision=trial.collision)
+    return skeleton, hand, f"parametric default hand, {trial.hand_length:g} m ({skeleton.ndof} DoFs)"
+
+
+def _glove_loaded(
+    trial: Trial,
+    hand: mujoco.MjSpec,
+    hand_text: str,
+    trajectory: Trajectory,
+    metrics: MetricSpec | None,
+    progress: bool,
+    notes: tuple[str, ...] = (),
+) -> LoadedTrial:
+    """The trial's object placed in the hand by the glove scenario, and the loaded trial."""
     from handsim.sim.scenarios import glove_scene
 
+    specs, objects, object_notes = _build_objects(trial, progress)
+    scene = glove_scene(hand, trajectory, specs[0], spec=metrics)
+    return LoadedTrial(
+        trial=trial,
+        scene=scene,
+        trajectory=trajectory,
+        hand=hand_text,
+        objects=objects,
+        notes=(*trial.notes, *notes, *object_notes),
+    )
+
+
+def _load_graspdb(trial: Trial, metrics: MetricSpec | None, progress: bool) -> LoadedTrial:
+    from handsim.builders import build_hand
+    from handsim.glove import attach_phases, load_calibration
+    from handsim.io import read_skeleton, read_trajectory
+
     if trial.skeleton_path is None:
-        skeleton = default_skeleton(trial.hand_length)
-        hand = default_hand(trial.hand_length, collision=trial.collision)
-        hand_text = f"parametric default hand, {trial.hand_length:g} m ({skeleton.ndof} DoFs)"
+        skeleton, hand, hand_text = _parametric_hand(trial)
     else:
         skeleton = read_skeleton(trial.skeleton_path)
         hand = build_hand(skeleton, collision=trial.collision)
@@ -423,13 +516,13 @@ def _load_graspdb(trial: Trial, metrics: MetricSpec | None, progress: bool) -> L
     trajectory = read_trajectory(trial.trajectory_path, skeleton=skeleton, calibration=calibration)
     if trial.annotation_path is not None and not trajectory.phases:
         trajectory = attach_phases(trajectory, trial.annotation_path)
-    specs, objects, notes = _build_objects(trial, progress)
-    scene = glove_scene(hand, trajectory, specs[0], spec=metrics)
-    return LoadedTrial(
-        trial=trial,
-        scene=scene,
-        trajectory=trajectory,
-        hand=hand_text,
-        objects=objects,
-        notes=(*trial.notes, *(skeleton.notes if trial.skeleton_path else ()), *notes),
-    )
+    skeleton_notes = skeleton.notes if trial.skeleton_path else ()
+    return _glove_loaded(trial, hand, hand_text, trajectory, metrics, progress, skeleton_notes)
+
+
+def _load_scripted(trial: Trial, metrics: MetricSpec | None, progress: bool) -> LoadedTrial:
+    from handsim.io.scripted import read_scripted_grasp
+
+    skeleton, hand, hand_text = _parametric_hand(trial)
+    trajectory = read_scripted_grasp(trial.trajectory_path, skeleton=skeleton)
+    return _glove_loaded(trial, hand, hand_text, trajectory, metrics, progress)
