@@ -179,22 +179,44 @@ def _environment(**values: str) -> Iterator[None]:
                 os.environ[key] = value
 
 
+class _TrackingContext:
+    """The ``spawn`` multiprocessing context, remembering every process the pool starts with it.
+
+    The executor has no public list of its workers before Python 3.14, a broken pool drops them from its
+    private one, and it may start one after another: the pool's processes are the ones made here.
+    """
+
+    def __init__(self) -> None:
+        self._context = multiprocessing.get_context("spawn")
+        self.processes: list[multiprocessing.process.BaseProcess] = []
+
+    def __getattr__(self, name: str) -> object:
+        return getattr(self._context, name)
+
+    def Process(self, *args: object, **kwargs: object) -> multiprocessing.process.BaseProcess:  # noqa: N802
+        process = self._context.Process(*args, **kwargs)
+        self.processes.append(process)
+        return process
+
+
 def _stop_pool(pool: cf.ProcessPoolExecutor) -> None:
-    """End a pool now: cancel queued trials and terminate the workers (running trials are lost)."""
-    # no public API before Python 3.14; a broken pool may already have dropped its processes from
-    # ``_processes``, so the ones seen at start are ended too
-    current = list((getattr(pool, "_processes", None) or {}).values())
-    processes = list({id(p): p for p in (*_STARTED.pop(id(pool), ()), *current)}.values())
+    """End a pool now: cancel queued trials, terminate its workers (running trials are lost), reap them."""
+    thread = getattr(pool, "_executor_manager_thread", None)
     pool.shutdown(wait=False, cancel_futures=True)
+    context = pool._mp_context
+    processes = context.processes if isinstance(context, _TrackingContext) else []
     for process in processes:
         if process.is_alive():
             process.terminate()
+    if thread is not None:
+        thread.join(timeout=10)  # it may start no process after this
     for process in processes:
         process.join(timeout=5)
+        if process.is_alive():  # SIGTERM not acted on in time (e.g. inside native code): SIGKILL
+            process.kill()
+            process.join(timeout=5)
 
 
-_STARTED: dict[int, tuple] = {}
-"""Worker processes of each live pool, by ``id(pool)``, as started."""
 POOL_START_TIMEOUT_S = 300.0
 """Longest wait for a new worker process to start and import handsim, s."""
 
@@ -204,15 +226,13 @@ def _new_pool(workers: int) -> cf.ProcessPoolExecutor:
 
     A pool whose workers die at start would otherwise look like every trial crashing its worker.
     """
-    context = multiprocessing.get_context("spawn")
-    pool = cf.ProcessPoolExecutor(workers, mp_context=context, initializer=prepare_worker_process)
+    pool = cf.ProcessPoolExecutor(workers, mp_context=_TrackingContext(), initializer=prepare_worker_process)
     try:
-        # one task per worker submitted at once: the pool spawns every worker now (it spawns one per
-        # submit while none is idle), so all of them import handsim in parallel before the first trial
+        # one task per worker at once: the pool starts a worker per submit while none is idle, so all of
+        # them start and import handsim in parallel before the first trial
         started = [pool.submit(os.getpid) for _ in range(workers)]
         for future in started:
             future.result(timeout=POOL_START_TIMEOUT_S)
-        _STARTED[id(pool)] = tuple(pool._processes.values())
     except Exception as exc:
         _stop_pool(pool)
         raise RunnerError(
