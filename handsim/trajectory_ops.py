@@ -513,7 +513,7 @@ def resample(trajectory: Trajectory, rate_hz: float, *, method: ResampleMethod =
     gap = float(gaps[k]) if n > 1 else 0.0
     gap_at = float(times[k])
 
-    regular = n > 2 and float(gaps.max() - gaps.min()) <= 1e-9 * max(1.0, float(gaps.max()))
+    regular = n >= 2 and float(gaps.max() - gaps.min()) <= 1e-9 * max(1.0, float(gaps.max()))
     if regular or n < 2:
         spacing = "regular"
     else:

@@ -198,7 +198,7 @@ def test_graspdb_power_sphere_trial_places_the_ball_and_reports_the_hold_through
     assert rise[126 - 81] >= level > rise[125 - 81]
     assert len(scene.setup.placement["links"]) >= 3
     # contacts act from the approach: the hand at its targets lies inside the ball just before
-    contact = scene.setup.placement["contact_frame"]
+    contact = scene.setup.placement["contact_trajectory_frame"]
     assert 0 < contact <= 81 and scene.setup.placement["depth_before_contact_m"] > 0.002
     assert scene.setup.contact_time == trajectory.times[contact]
     result = replay(scene, trajectory)

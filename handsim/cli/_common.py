@@ -17,6 +17,25 @@ def add_hand_size(parser: argparse.ArgumentParser) -> None:
     )
 
 
+def non_negative_int(text: str) -> int:
+    """An argparse type: a whole number ≥ 0 (a usage error, exit 2, otherwise)."""
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a whole number, got {text!r}") from None
+    if value < 0:
+        raise argparse.ArgumentTypeError(f"expected a number ≥ 0, got {value}")
+    return value
+
+
+def positive_int(text: str) -> int:
+    """An argparse type: a whole number ≥ 1 (a usage error, exit 2, otherwise)."""
+    value = non_negative_int(text)
+    if value == 0:
+        raise argparse.ArgumentTypeError("expected a number ≥ 1, got 0")
+    return value
+
+
 def write_text(path: str | Path, text: str) -> Path:
     """Write ``text`` to ``path``, creating its folder, and return the path."""
     out = Path(path)

@@ -17,7 +17,7 @@ from dataclasses import replace
 from pathlib import Path
 from typing import TYPE_CHECKING
 
-from handsim.cli._common import add_hand_size
+from handsim.cli._common import add_hand_size, non_negative_int, positive_int
 
 if TYPE_CHECKING:
     from handsim.runner.discover import Discovery
@@ -120,9 +120,9 @@ def register(commands: argparse._SubParsersAction) -> None:
     add_hand_size(demo)
     demo.add_argument("-o", "--output", metavar="OUT", default=DEFAULT_OUT, help="output folder")
     demo.add_argument(
-        "--workers", type=int, default=None, metavar="N", help="trials at once (default: every core)"
+        "--workers", type=positive_int, default=None, metavar="N", help="trials at once (default: every core)"
     )
     demo.add_argument(
-        "--frames", type=int, default=4, metavar="N", help="frames rendered per trial (0: none)"
+        "--frames", type=non_negative_int, default=4, metavar="N", help="frames rendered per trial (0: none)"
     )
     demo.set_defaults(func=_run)

@@ -7,19 +7,14 @@ that no longer reproduces its record …); 2 a usage error.
 from __future__ import annotations
 
 import argparse
-import os
 import sys
 
-
-def _workers(text: str) -> int:
-    value = int(text)
-    if value < 1:
-        raise argparse.ArgumentTypeError(f"must be ≥ 1, got {value}")
-    return value
+from handsim.cli._common import positive_int
 
 
 def _run_minari(args: argparse.Namespace) -> int:
     from handsim.export import export_minari
+    from handsim.runner.execute import default_workers
 
     dataset = export_minari(
         args.out_dir,
@@ -28,7 +23,7 @@ def _run_minari(args: argparse.Namespace) -> int:
         include_failed=args.include_failed,
         skip_mismatched=args.skip_mismatched,
         overwrite=args.overwrite,
-        workers=args.workers,
+        workers=default_workers() if args.workers is None else args.workers,
         rtol=args.rtol,
         atol=args.atol,
         author=args.author,
@@ -90,7 +85,7 @@ def register(commands: argparse._SubParsersAction) -> None:
     )  # fmt: skip
     minari.add_argument("--overwrite", action="store_true", help="replace an existing dataset of that id")
     minari.add_argument(
-        "--workers", type=_workers, default=os.cpu_count() or 1, metavar="N",
+        "--workers", type=positive_int, default=None, metavar="N",
         help="processes replaying trials (default: all cores; 1 = in this process)",
     )  # fmt: skip
     minari.add_argument(

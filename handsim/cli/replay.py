@@ -9,7 +9,6 @@ from __future__ import annotations
 
 import argparse
 import json
-import math
 import sys
 
 from handsim.cli._common import write_text
@@ -142,25 +141,13 @@ def _stability_at(text: str) -> float | str:
         raise argparse.ArgumentTypeError(f"expected 'grasp' or a time in seconds, got {text!r}") from None
 
 
-def _json_ready(value):
-    """NaN and infinities as None, numpy scalars and tuples as plain JSON values."""
-    if isinstance(value, dict):
-        return {str(k): _json_ready(v) for k, v in value.items()}
-    if isinstance(value, (list, tuple)):
-        return [_json_ready(v) for v in value]
-    if hasattr(value, "tolist"):
-        return _json_ready(value.tolist())
-    if isinstance(value, float) and not math.isfinite(value):
-        return None
-    return value
-
-
 def _replay(args: argparse.Namespace) -> int:
     if args.video:
         prefer_headless_gl()
         from handsim.sim.render import check_video
 
         check_video(args.video, *args.size)  # before the replay: a missing encoder is known at once
+    from handsim.runner.records import json_ready
     from handsim.sim.replay import ReplayConfig, replay
     from handsim.sim.trial import TrialError, load_trial
 
@@ -203,7 +190,7 @@ def _replay(args: argparse.Namespace) -> int:
             "trial": loaded.trial.to_dict(),
             "curves": replay_curves(result).to_dict(),
         }
-        text = json.dumps(_json_ready(record), indent=1, allow_nan=False)
+        text = json.dumps(json_ready(record), indent=1, allow_nan=False)
         _line("wrote", str(write_text(args.json, text + "\n")))
     if args.plot:
         from handsim.replay_plots import plot_replay

@@ -13,28 +13,13 @@ import sys
 from pathlib import Path
 from typing import TYPE_CHECKING
 
+from handsim.cli._common import non_negative_int, positive_int
+
 if TYPE_CHECKING:
     from handsim.runner.discover import Discovery
     from handsim.sim.replay import ReplayConfig
 
 EXIT_INTERRUPTED = 130
-
-
-def _non_negative(text: str) -> int:
-    try:
-        value = int(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected a whole number, got {text!r}") from None
-    if value < 0:
-        raise argparse.ArgumentTypeError(f"expected a number ≥ 0, got {value}")
-    return value
-
-
-def _positive(text: str) -> int:
-    value = _non_negative(text)
-    if value == 0:
-        raise argparse.ArgumentTypeError("expected a number ≥ 1, got 0")
-    return value
 
 
 def _interrupt(signum: int, frame: object) -> None:
@@ -43,17 +28,8 @@ def _interrupt(signum: int, frame: object) -> None:
 
 def _render(out: Path) -> int:
     """Render the report of ``out`` from its records; print where it is."""
-    try:
-        from handsim.report import render_report
-    except ModuleNotFoundError as exc:
-        if exc.name not in ("handsim.report",):
-            raise
-        print(
-            "handsim report: error: this handsim has no report renderer (handsim.report); the records "
-            f"are in {out / 'records.jsonl'}",
-            file=sys.stderr,
-        )
-        return 1
+    from handsim.report import render_report
+
     files = render_report(out)
     print(f"report      {files.html}")
     print(f"markdown    {files.markdown}")
@@ -98,7 +74,7 @@ def run_and_render(
         command: The command line for ``run.json``.
 
     Returns:
-        0 done, 1 no report renderer, 2 no trial to run, 130 interrupted.
+        0 done, 2 no trial to run, 130 interrupted.
 
     Raises:
         HandsimError: The dataset is missing, OUT holds records of other parameters, Ray is missing …
@@ -180,15 +156,22 @@ def register(commands: argparse._SubParsersAction) -> None:
     report.add_argument("dataset", nargs="?", metavar="DATASET", help="dataset folder or one recording")
     report.add_argument("-o", "--output", metavar="OUT", help="output folder (records, frames, report)")
     report.add_argument(
-        "--workers", type=_positive, metavar="N", help="trials at once (default: all cores; 1 = in-process)"
+        "--workers",
+        type=positive_int,
+        metavar="N",
+        help="trials at once (default: all cores; 1 = in-process)",
     )
     report.add_argument("--backend", choices=("local", "ray"), default="local", help="process pool or Ray")
     report.add_argument("--address", metavar="ADDR", help="Ray cluster address (default: start a local Ray)")
     report.add_argument(
-        "--frames", type=_non_negative, default=4, metavar="N", help="frames rendered per trial (default 4)"
+        "--frames",
+        type=non_negative_int,
+        default=4,
+        metavar="N",
+        help="frames rendered per trial (default 4)",
     )
     report.add_argument(
-        "--limit", type=_non_negative, metavar="N", help="run only the first N trials (by id)"
+        "--limit", type=non_negative_int, metavar="N", help="run only the first N trials (by id)"
     )
     report.add_argument("--only", metavar="GLOB", help="run only trials whose id matches (e.g. '*su04*')")
     report.add_argument(

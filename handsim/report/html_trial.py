@@ -10,8 +10,8 @@ from handsim.report.aggregate import number
 from handsim.report.charts import Markers, Series, area_chart, line_chart
 from handsim.report.frames import FrameImage
 from handsim.report.markup import badge, esc, numbers, simple_table
+from handsim.runner.fingers import FINGER_GROUPS
 
-FINGERS: tuple[str, ...] = ("thumb", "index", "middle", "ring", "little", "palm")
 SUMMARY_FIELDS: tuple[tuple[str, str, int | None], ...] = (
     # key, label, decimals (None: whole number / boolean / text)
     ("frames", "frames", None),
@@ -128,7 +128,7 @@ def _curves(record: dict) -> str:
         )
     ]
     per_finger = curves.get("contacts_per_finger") or {}
-    names = [f for f in FINGERS if f in per_finger] + sorted(set(per_finger) - set(FINGERS))
+    names = [f for f in FINGER_GROUPS if f in per_finger] + sorted(set(per_finger) - set(FINGER_GROUPS))
     charts.append(
         area_chart(
             t,

@@ -13,8 +13,14 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from handsim.errors import InputFileError
-from handsim.runner.records import RECORDS_FILE, RUN_FILE, RecordsError, load_records, read_run_info
-from handsim.runner.worker import STATUSES
+from handsim.runner.records import (
+    RECORDS_FILE,
+    RUN_FILE,
+    STATUSES,
+    RecordsError,
+    load_records,
+    read_run_info,
+)
 
 
 @dataclass(frozen=True)

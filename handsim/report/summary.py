@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import hashlib
-import math
 import re
 from collections.abc import Sequence
 from typing import cast
@@ -19,6 +18,7 @@ from handsim.report.aggregate import (
     trial_row,
 )
 from handsim.report.records import RunRecords
+from handsim.runner.records import json_ready
 
 SUMMARY_SCHEMA = 1
 WORST_LISTED = 20
@@ -37,17 +37,6 @@ def trial_anchors(ids: Sequence[str]) -> dict[str, str]:
         i: f"trial-{s}" + (f"-{hashlib.sha1(i.encode()).hexdigest()[:8]}" if counts[s] > 1 else "")
         for i, s in slugs.items()
     }
-
-
-def json_safe(value: object) -> object:
-    """``value`` with every NaN or infinite float (as JSON allows none) replaced by None, tuples as lists."""
-    if isinstance(value, float):
-        return value if math.isfinite(value) else None
-    if isinstance(value, dict):
-        return {k: json_safe(v) for k, v in value.items()}
-    if isinstance(value, (list, tuple)):
-        return [json_safe(v) for v in value]
-    return value
 
 
 def _replay_metrics(record: dict) -> object:
@@ -106,4 +95,4 @@ def build_summary(run: RunRecords) -> dict:
         "trials": trials,
         "notes": list(run.notes),
     }
-    return cast(dict, json_safe(summary))
+    return cast(dict, json_ready(summary))

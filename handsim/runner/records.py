@@ -23,6 +23,8 @@ from handsim.errors import HandsimError
 RECORDS_FILE = "records.jsonl"
 RUN_FILE = "run.json"
 SCHEMA = 1
+STATUSES = ("ok", "diverged", "error")
+"""A record's ``status`` values."""
 """Version of the record schema (``docs/records.md``); changes when a key changes meaning or goes away."""
 
 

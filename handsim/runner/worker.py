@@ -26,8 +26,6 @@ from handsim.runner.discover import TrialEntry
 from handsim.runner.records import SCHEMA, json_ready, write_atomic
 from handsim.sim.replay import ReplayConfig
 
-STATUSES = ("ok", "diverged", "error")
-
 
 @dataclass(frozen=True)
 class TrialOutcome:

@@ -189,7 +189,7 @@ def glove_scene(
         placement={
             **placement.to_dict(),
             "grasp": grasp.to_dict(),
-            "contact_frame": contact.frame,
+            "contact_trajectory_frame": contact.frame,
             "depth_before_contact_m": contact.depth_before,
         },
         notes=(
