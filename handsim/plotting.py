@@ -4,12 +4,16 @@ from __future__ import annotations
 
 import math
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from handsim.errors import HandsimError
 from handsim.skeleton import Skeleton
 from handsim.trajectory import Trajectory
+
+if TYPE_CHECKING:
+    from matplotlib.figure import Figure
 
 PHASE_COLOURS = ("#e8eef7", "#f7eee8", "#eef7e8", "#f3e8f7", "#f7f5e8")
 
@@ -71,6 +75,12 @@ def plot_trajectory(trajectory: Trajectory, path: str | Path, skeleton: Skeleton
     title = Path(trajectory.source).name if trajectory.source else "trajectory"
     phases = ", ".join(p.name for p in trajectory.phases)
     fig.suptitle(f"{title} — joint targets (degrees)" + (f"; phases: {phases}" if phases else ""), fontsize=9)
+    return save_figure(fig, path)
+
+
+def save_figure(fig: Figure, path: str | Path) -> Path:
+    """Lay out ``fig``, write it to ``path`` (PNG/SVG/PDF by suffix, folders created), close it."""
+    plt = _pyplot()
     fig.tight_layout()
     out = Path(path)
     out.parent.mkdir(parents=True, exist_ok=True)

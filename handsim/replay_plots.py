@@ -13,7 +13,7 @@ from pathlib import Path
 
 import numpy as np
 
-from handsim.plotting import _pyplot
+from handsim.plotting import _pyplot, save_figure
 from handsim.sim.replay import ReplayResult
 
 MM, DEG = 1000.0, 180.0 / math.pi
@@ -240,9 +240,4 @@ def plot_replay(result: ReplayResult, path: str | Path, *, title: str | None = N
         if result.diverged is not None:
             title += "; DIVERGED"
     fig.suptitle(title, fontsize=9)
-    fig.tight_layout()
-    out = Path(path)
-    out.parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(out, dpi=110)
-    plt.close(fig)
-    return out
+    return save_figure(fig, path)

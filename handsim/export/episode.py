@@ -9,7 +9,6 @@ processes can make episodes for one writer.
 
 from __future__ import annotations
 
-import hashlib
 import json
 import math
 from dataclasses import dataclass, fields
@@ -19,6 +18,7 @@ import numpy as np
 
 from handsim.errors import HandsimError
 from handsim.export.errors import ExportError, RecordMismatchError
+from handsim.runner.trial_record import sha256_file
 from handsim.sim.metrics import MetricSpec
 from handsim.sim.replay import ReplayConfig
 from handsim.sim.stability import StabilitySpec
@@ -189,7 +189,10 @@ def input_problems(record: dict, root: str | Path | None = None) -> list[str]:
         if not p.is_file():
             problems.append(f"{role} {p} is missing")
             continue
-        digest = hashlib.sha256(p.read_bytes()).hexdigest()
+        digest = sha256_file(p)
+        if digest is None:
+            problems.append(f"{role} {p} cannot be read")
+            continue
         if digest != expected:
             problems.append(f"{role} {p} changed: sha256 {digest[:12]}… now, {expected[:12]}… in the record")
     return problems

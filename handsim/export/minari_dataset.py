@@ -14,7 +14,6 @@ stored in the episode's metadata.
 from __future__ import annotations
 
 import fnmatch
-import hashlib
 import json
 import math
 import multiprocessing
@@ -43,6 +42,7 @@ from handsim.export.errors import (
     MissingExtraError,
     RecordMismatchError,
 )
+from handsim.runner.trial_record import sha256_file
 
 if TYPE_CHECKING:
     import minari
@@ -293,7 +293,7 @@ def export_minari(
         writer.finish(
             {
                 "records": str(records_path.resolve()),
-                "records_sha256": hashlib.sha256(records_path.read_bytes()).hexdigest(),
+                "records_sha256": sha256_file(records_path),
                 "dataset_root": root,
                 "read_notes": list(notes),
             },
