@@ -235,7 +235,6 @@ class ReplayEnv(HandEnv):
         self.observation_space = spaces.Box(-np.inf, np.inf, (obs.size,), np.float64)
         self.action_space = spaces.Box(-1.0, 1.0, (nu,), np.float32)
         self._obs = np.zeros(obs.size)
-        self._frame = 0
         self._started = False
         self._views = (
             "_qpos",
@@ -269,7 +268,7 @@ class ReplayEnv(HandEnv):
     @property
     def frame(self) -> int:
         """Index of the control frame the simulation is at."""
-        return self._frame
+        return self._driver.frame
 
     # ---- gymnasium API ----------------------------------------------------------------------------------
     def reset(self, *, seed: int | None = None, options: dict | None = None) -> tuple[np.ndarray, dict]:
@@ -289,7 +288,6 @@ class ReplayEnv(HandEnv):
         else:
             start = 0
         self._driver.reset(start)
-        self._frame = start
         self._started = True
         self._observe()
         return self._obs.copy(), {"frame": start, "time": float(self._times[start])}
@@ -302,7 +300,7 @@ class ReplayEnv(HandEnv):
             ResetNeeded: The episode is over (or was never started).
         """
         a, squares = self._action(action)
-        k = self._frame
+        k = self._driver.frame
         if k >= self._last or not self._started:
             raise gym.error.ResetNeeded(
                 "the episode is over (last frame reached or terminated): call reset()"
@@ -316,7 +314,6 @@ class ReplayEnv(HandEnv):
         np.maximum(ctrl, self._ctrl_lo[n], out=ctrl)
         np.minimum(ctrl, self._ctrl_hi[n], out=self._data_ctrl)
         events = self._driver.advance()  # the controls are in data.ctrl already
-        self._frame = n
         penetration = self._observe()
 
         err = np.subtract(self._obs_hand, self._ref_ctrl[n], out=self._err)
@@ -363,6 +360,6 @@ class ReplayEnv(HandEnv):
         """Fill the observation buffer from the state; returns the penetration, m."""
         obs = self._obs
         penetration = self._observe_state()
-        self._obs_refs[:] = self._refs[min(self._frame + 1, self._last)]
-        obs[self._progress_index] = self._frame / self._last
+        self._obs_refs[:] = self._refs[min(self._driver.frame + 1, self._last)]
+        obs[self._progress_index] = self._driver.frame / self._last
         return penetration

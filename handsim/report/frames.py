@@ -7,8 +7,9 @@ import hashlib
 from dataclasses import dataclass
 from pathlib import Path
 
+from handsim.runner.png import PNG_SIGNATURE
+
 DEFAULT_EMBED_BUDGET = 32 * 1024 * 1024  # bytes of PNG embedded in one HTML file at most
-_PNG_SIGNATURE = b"\x89PNG\r\n\x1a\n"
 
 
 @dataclass(frozen=True)
@@ -67,7 +68,7 @@ def load_frames(record: dict, out_dir: Path, budget: FrameBudget) -> list[FrameI
             continue
         data = path.read_bytes()
         problem = None
-        if not data.startswith(_PNG_SIGNATURE):
+        if not data.startswith(PNG_SIGNATURE):
             images.append(FrameImage(frame, time_s, rel, None, f"{rel} is not a PNG file"))
             continue
         expected = render.get("sha256")

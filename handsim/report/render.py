@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import json
-import os
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -12,6 +11,7 @@ from handsim.report.html_doc import render_html
 from handsim.report.markdown import HTML_NAME, render_markdown
 from handsim.report.records import read_run
 from handsim.report.summary import build_summary
+from handsim.runner.records import write_atomic
 
 MARKDOWN_NAME = "report.md"
 JSON_NAME = "summary.json"
@@ -30,14 +30,6 @@ class ReportFiles:
     html: Path
     markdown: Path
     json: Path
-
-
-def _write(path: Path, text: str) -> None:
-    """Write ``text`` as UTF-8 (newlines untranslated), replacing ``path`` only once fully written."""
-    tmp = path.with_name(path.name + ".tmp")
-    with open(tmp, "w", encoding="utf-8", newline="\n") as f:
-        f.write(text)
-    os.replace(tmp, path)
 
 
 def render_report(out_dir: str | Path, *, embed_budget: int = DEFAULT_EMBED_BUDGET) -> ReportFiles:
@@ -65,9 +57,8 @@ def render_report(out_dir: str | Path, *, embed_budget: int = DEFAULT_EMBED_BUDG
     files = ReportFiles(
         html=run.out_dir / HTML_NAME, markdown=run.out_dir / MARKDOWN_NAME, json=run.out_dir / JSON_NAME
     )
-    _write(
-        files.json, json.dumps(summary, indent=2, sort_keys=True, ensure_ascii=False, allow_nan=False) + "\n"
-    )
-    _write(files.markdown, render_markdown(summary))
-    _write(files.html, render_html(run, summary, FrameBudget(embed_budget)))
+    text = json.dumps(summary, indent=2, sort_keys=True, ensure_ascii=False, allow_nan=False) + "\n"
+    write_atomic(files.json, text.encode("utf-8"))
+    write_atomic(files.markdown, render_markdown(summary).encode("utf-8"))
+    write_atomic(files.html, render_html(run, summary, FrameBudget(embed_budget)).encode("utf-8"))
     return files
