@@ -29,8 +29,8 @@ import time
 from pathlib import Path
 
 from handsim.assets import TZIONAS_DIR
-from handsim.runner.discover import discover
 from handsim.runner.records import load_records
+from handsim.trials import discover
 
 SHARED = Path(__file__).resolve().parents[1].parent / "shared" / "data" / "graspdb14"
 GRASPDB_SIZE = 2200
@@ -61,7 +61,7 @@ def synthesise(root: Path, copies: int) -> Path:
 _RUN = """
 import sys, time
 start = time.perf_counter()
-from handsim.runner.discover import discover
+from handsim.trials import discover
 from handsim.runner.execute import run_dataset
 run_dataset(discover(sys.argv[1]), sys.argv[2], workers=int(sys.argv[3]), frames=int(sys.argv[4]),
             progress=False, command=["benchmark"])
@@ -88,7 +88,7 @@ def mj_step_share() -> float:
     from handsim.sim.drive import ScheduleDriver, scenario_switches
     from handsim.sim.replay import replay
     from handsim.sim.stepper import Stepper
-    from handsim.sim.trial import load_trial
+    from handsim.trials import load_trial
 
     loaded = load_trial(TZIONAS_DIR / "Models" / "20")
     scene, trajectory = loaded.scene, loaded.trajectory

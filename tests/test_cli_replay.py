@@ -104,7 +104,7 @@ def test_replay_of_an_unknown_file_type_exits_2_naming_the_kinds(capsys, tmp_pat
 
 def test_replay_refuses_an_object_for_a_tzionas_sequence_with_exit_2(capsys):
     assert main(["replay", MOTION, "--object", "mug"]) == 2
-    assert "an object is for GraspDB14 recordings" in capsys.readouterr().err
+    assert "an object does not apply to a Tzionas sequence" in capsys.readouterr().err
 
 
 def test_replay_of_a_missing_file_exits_1(capsys, tmp_path):
@@ -203,7 +203,7 @@ def test_render_states_raises_error_listing_the_cameras_for_an_unknown_one():
 def test_a_diverging_replay_prints_the_divergence_and_exits_3(capsys, monkeypatch):
     from dataclasses import replace
 
-    import handsim.sim.trial as trial_module
+    import handsim.trials as trial_module
 
     real = trial_module.load_trial
 

@@ -25,7 +25,7 @@ from handsim.export import (
 )
 from handsim.export.episode import INFO_DOCS, STEP_INFO_KEYS
 from handsim.sim.replay import ReplayConfig, replay
-from handsim.sim.trial import Trial, find_trial, load_trial
+from handsim.trials import Trial, find_trial, load_trial
 
 minari = pytest.importorskip("minari", reason="the Minari export needs: pip install 'handsim[minari]'")
 pytest.importorskip("h5py", reason="minari's HDF5 storage needs h5py: pip install 'minari[hdf5]'")

@@ -15,8 +15,7 @@ from handsim.builders.graspdb_objects import UnknownObjectError
 from handsim.errors import FormatError
 from handsim.io import read_trajectory
 from handsim.io.scripted import SYNTHETIC_NOTE, read_scripted_grasp
-from handsim.runner.discover import discover
-from handsim.sim.trial import TRIAL_KINDS, Trial, TrialError, find_trial, load_trial, trial_kind
+from handsim.trials import TRIAL_KINDS, Trial, TrialError, discover, find_trial, load_trial, trial_kind
 
 DEMO_DIR = ASSETS_DIR / "demo"
 GRASP = {

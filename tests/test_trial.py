@@ -11,7 +11,7 @@ from handsim.assets import TZIONAS_DIR
 from handsim.builders.graspdb_objects import UnknownObjectError
 from handsim.errors import InputFileError
 from handsim.sim.replay import replay
-from handsim.sim.trial import (
+from handsim.trials import (
     TRIAL_KINDS,
     Trial,
     TrialError,
@@ -54,7 +54,9 @@ def test_find_trial_accepts_the_tzionas_motions_own_skeleton():
     ],
 )
 def test_find_trial_raises_error_if_a_glove_option_is_given_for_a_tzionas_motion(option, value, what):
-    with pytest.raises(TrialError, match=f"{what} is for GraspDB14 recordings"):
+    with pytest.raises(
+        TrialError, match=f"{what} does not apply to a Tzionas sequence; it brings its own hand and objects"
+    ):
         find_trial(MOTION, **{option: value})
 
 
@@ -188,9 +190,10 @@ def test_load_trial_raises_error_if_options_come_with_a_trial():
 
 
 def test_load_trial_raises_error_for_an_unknown_kind():
-    trial = Trial(kind="arctic", trajectory_path="x", skeleton_path=None, objects=())
+    trial = Trial(kind="vicon", trajectory_path="x", skeleton_path=None, objects=())
     with pytest.raises(
-        TrialError, match=r"unknown trial kind 'arctic'; expected one of \['tzionas', 'graspdb', 'scripted'\]"
+        TrialError,
+        match=r"unknown trial kind 'vicon'; expected one of \['tzionas', 'arctic', 'scripted', 'graspdb'\]",
     ):
         load_trial(trial)
 

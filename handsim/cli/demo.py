@@ -20,7 +20,7 @@ from typing import TYPE_CHECKING
 from handsim.cli._common import add_hand_size, non_negative_int, positive_int
 
 if TYPE_CHECKING:
-    from handsim.runner.discover import Discovery
+    from handsim.trials import Discovery
 
 DEFAULT_OUT = "handsim-demo"
 DEMO_OBJECTS = ("tennis_ball", "mug")
@@ -67,7 +67,7 @@ def demo_discovery() -> Discovery:
         The combined discovery, rooted at the assets folder, entries sorted by id.
     """
     from handsim.assets import ASSETS_DIR, TZIONAS_DIR
-    from handsim.runner.discover import CompanionFile, Discovery, UnknownFile, discover
+    from handsim.trials import CompanionFile, Discovery, UnknownFile, discover
 
     entries, companions, unknown = [], [], []
     for folder in (TZIONAS_DIR, ASSETS_DIR / "demo"):

@@ -149,7 +149,7 @@ def _replay(args: argparse.Namespace) -> int:
         check_video(args.video, *args.size)  # before the replay: a missing encoder is known at once
     from handsim.runner.records import json_ready
     from handsim.sim.replay import ReplayConfig, replay
-    from handsim.sim.trial import TrialError, load_trial
+    from handsim.trials import TrialError, load_trial
 
     config = ReplayConfig(control_rate=args.rate, keep_states=bool(args.video), stability_at=args.stability)
     try:
@@ -244,8 +244,8 @@ def register(commands: argparse._SubParsersAction) -> None:
         help="GraspDB14 without --skeleton: parametric hand length, wrist crease to middle fingertip (0.19)",
     )  # fmt: skip
     replay.add_argument(
-        "--collision", choices=("capsules", "mesh"), default="capsules",
-        help="hand collision shapes (mesh: per-bone hulls of a skinned .SKEL hand)",
+        "--collision", choices=("capsules", "mesh"), default=None,
+        help="hand collision shapes (default capsules; mesh: per-bone hulls of a skinned .SKEL hand)",
     )  # fmt: skip
     replay.add_argument("--rate", type=float, default=100.0, metavar="HZ", help="control rate (default 100)")
     replay.add_argument(

@@ -16,8 +16,8 @@ from typing import TYPE_CHECKING
 from handsim.cli._common import non_negative_int, positive_int
 
 if TYPE_CHECKING:
-    from handsim.runner.discover import Discovery
     from handsim.sim.replay import ReplayConfig
+    from handsim.trials import Discovery
 
 EXIT_INTERRUPTED = 130
 
@@ -79,8 +79,8 @@ def run_and_render(
     Raises:
         HandsimError: The dataset is missing, OUT holds records of other parameters, Ray is missing …
     """
-    from handsim.runner.discover import Discovery, discover, select
     from handsim.runner.execute import run_dataset
+    from handsim.trials import Discovery, discover, select
 
     out = Path(out)
     discovery = dataset if isinstance(dataset, Discovery) else discover(dataset)

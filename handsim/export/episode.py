@@ -272,7 +272,7 @@ def replay_record(
     """
     from handsim.envs.replay_env import ReplayEnv
     from handsim.sim.replay import replay
-    from handsim.sim.trial import Trial, load_trial
+    from handsim.trials import Trial, load_trial
 
     rid = str(record.get("id", "?"))
     if not isinstance(record.get("trial"), dict):

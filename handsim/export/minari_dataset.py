@@ -63,7 +63,7 @@ EPISODE_METADATA_DOCS = {
     "trial_id": "the record's trial id",
     "status": "the record's status (ok, or diverged with include_failed)",
     "kind": "kind of trial (tzionas, graspdb)",
-    "trial": "JSON of handsim.sim.trial.Trial.to_dict(): the files to load (Trial.from_dict gives it back)",
+    "trial": "JSON of handsim.trials.Trial.to_dict(): the files to load (Trial.from_dict gives it back)",
     "inputs": "JSON of the record's input files with their SHA-256 (checked before export)",
     "parameters": "JSON of the run's replay parameters (ReplayConfig.to_dict())",
     "model_sha256": "hash of the compiled scene (checked against the record)",
@@ -489,7 +489,7 @@ def recover_replay_env(dataset: minari.MinariDataset, episode_index: int, **kwar
         ExportError: The dataset was not written by :func:`export_minari`, or the index is out of range.
     """
     from handsim.envs.replay_env import ReplayEnv
-    from handsim.sim.trial import Trial, load_trial
+    from handsim.trials import Trial, load_trial
 
     if "handsim" not in dataset.storage.metadata:
         raise ExportError("the dataset was not written by handsim's Minari export (no metadata['handsim'])")

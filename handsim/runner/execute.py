@@ -35,7 +35,6 @@ from pathlib import Path
 from types import ModuleType
 
 from handsim.errors import HandsimError
-from handsim.runner.discover import Discovery, TrialEntry
 from handsim.runner.records import RecordWriter, load_records, repair_records, write_run_info
 from handsim.runner.worker import (
     TrialOutcome,
@@ -47,6 +46,7 @@ from handsim.runner.worker import (
     write_outcome_files,
 )
 from handsim.sim.replay import ReplayConfig
+from handsim.trials import Discovery, TrialEntry
 
 __all__ = [
     "BACKENDS",
@@ -365,7 +365,7 @@ def run_dataset(
     """Run the trials of a discovery (or a list of trials), appending a record per trial to ``OUT``.
 
     Args:
-        source: A :class:`~handsim.runner.discover.Discovery` (its overview goes into ``run.json``) or
+        source: A :class:`~handsim.trials.Discovery` (its overview goes into ``run.json``) or
             trial entries.
         out: Output folder (``records.jsonl``, ``run.json``, ``frames/``); created if missing.
         workers: Trials at once; default every core this process may use. 1 runs in this process.

@@ -14,11 +14,11 @@ from pathlib import Path
 
 import numpy as np
 
-from handsim.runner.discover import TrialEntry
 from handsim.runner.fingers import finger_groups
 from handsim.sim.compiled import SimScene
 from handsim.sim.replay import ReplayResult
 from handsim.trajectory import Trajectory
+from handsim.trials import TrialEntry
 
 MAX_CURVE_POINTS = 600
 """Most points per curve in a record."""

@@ -22,9 +22,9 @@ import traceback
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from handsim.runner.discover import TrialEntry
 from handsim.runner.records import SCHEMA, json_ready, write_atomic
 from handsim.sim.replay import ReplayConfig
+from handsim.trials import TrialEntry
 
 
 @dataclass(frozen=True)
@@ -140,18 +140,15 @@ def trial_outcome(entry: TrialEntry, config: ReplayConfig, frames: int = 4) -> T
     Returns:
         The record and the rendered frames' bytes.
     """
-    from handsim.runner.layouts import ARCTIC_UNSUPPORTED
     from handsim.runner.trial_record import curves, trajectory_quality
     from handsim.sim.replay import replay
-    from handsim.sim.trial import TrialError, load_trial
+    from handsim.trials import load_trial
 
     start = time.perf_counter()
     timing = {"load_s": 0.0, "replay_s": 0.0, "render_s": 0.0, "total_s": 0.0}
     record = base_record(entry, config, frames)
     files: dict[str, bytes] = {}
     try:
-        if entry.kind == "arctic":
-            raise TrialError(f"{entry.id}: {ARCTIC_UNSUPPORTED}")
         loaded = load_trial(entry.trial, metrics=config.metrics)
         timing["load_s"] = time.perf_counter() - start
         record["model_sha256"] = loaded.scene.model_sha256

@@ -1,22 +1,14 @@
 """Discovery: a dataset folder (or one recording) as a sorted list of trials, every other file accounted for.
 
-:func:`discover` walks the folder once (sorted; links to folders followed once) and sorts every file
-into exactly one of three lists:
+:func:`discover` walks the folder once (sorted; links to folders followed once) and sorts every file into
+exactly one of three lists:
 
 * **trials** (:class:`TrialEntry`): a recording handsim replays, with the files it reads (its inputs) and
-  its group-by fields. Kinds (the layouts of :mod:`handsim.runner.layouts`):
-
-  - GraspDB14 CyberGlove recordings, named per spec ``003_…`` §4.1.2 (``01_11_ex03-rad-004-grasp-su04.txt``);
-    the ``_annot-`` phase file beside one is an input of it;
-  - Tzionas/Ballan sequences: a folder with a ``Model_Hand_*.MOTION`` (``Models/20``) and its
-    ``Configs/NN/MODELS_INFO.txt``;
-  - ARCTIC sequences: ``raw_seqs/sXX/<seq>.mano.npy`` + ``<seq>.object.npy`` with the template
-    ``meta/object_vtemplates/<object>/`` (listed; see :data:`handsim.runner.layouts.ARCTIC_UNSUPPORTED`);
-  - handsim's synthetic scripted grasps ``NAME.grasp.json`` (:mod:`handsim.io.scripted`; not recordings).
-
+  its group-by fields. Each kind of trial (:class:`~handsim.trials.base.TrialKind`) claims the files of its
+  dataset layout in turn (:attr:`~handsim.trials.base.TrialKind.sort_files`);
 * **companions** (:class:`CompanionFile`): files that belong to a dataset's layout but are not replayed,
-  each with what it is (``.xmlskel``, Tzionas ``Calibration/``, ``VOIs/``, ``.ZONES``, GraspDB14's
-  ``fk_oracle/``, ARCTIC's images …);
+  each with what it is (``.xmlskel``, Tzionas ``Calibration/``, GraspDB14's ``fk_oracle/``, ARCTIC's
+  images …);
 * **unknown** (:class:`UnknownFile`): everything else, with the reason it is not a trial (never silently
   skipped).
 
@@ -27,14 +19,20 @@ A trial's id is the dataset-relative POSIX path of its recording (``r_01_11_ex03
 from __future__ import annotations
 
 import os
+import re
+from collections.abc import Sequence
 from dataclasses import dataclass, field
-from pathlib import Path
+from fnmatch import fnmatchcase
+from pathlib import Path, PurePosixPath
 
-from handsim.errors import InputFileError
-from handsim.sim.trial import Trial
+from handsim.errors import HandsimError, InputFileError
+from handsim.trials.base import Trial, TrialKind
 
 INPUT_ROLES = ("trajectory", "skeleton", "object", "annotation", "calibration", "models_info")
 """Roles of a trial's input files."""
+_DOCS = re.compile(
+    r"(?:readme|license|licence|copying|notice)(?:\..*)?|.*\.(?:md|rst|pdf|html?)", re.IGNORECASE
+)
 
 
 @dataclass(frozen=True)
@@ -58,7 +56,7 @@ class TrialEntry:
 
     Attributes:
         id: Dataset-relative POSIX path of the recording (a Tzionas sequence: its ``Models/NN`` folder).
-        trial: What :func:`handsim.sim.trial.load_trial` takes.
+        trial: What :func:`handsim.trials.load_trial` takes.
         meta: Group-by fields: ``object``, ``grasp``, ``grasp_id``, ``action``, ``scenario``, ``actor``,
             ``sequence`` (None where not applicable), and kind-specific extras.
         inputs: The files the trial reads.
@@ -71,7 +69,7 @@ class TrialEntry:
 
     @property
     def kind(self) -> str:
-        """The trial's kind (``graspdb``, ``tzionas``, ``arctic``)."""
+        """The trial's kind (``graspdb``, ``tzionas``, ``arctic`` …)."""
         return self.trial.kind
 
 
@@ -137,8 +135,17 @@ class Discovery:
 
 
 @dataclass
-class _Sorting:
-    """Where each file of a walk went (filled by the layouts)."""
+class Sorting:
+    """Where each file of a walk went: what the kinds' discovery passes fill in.
+
+    Attributes:
+        base: The folder the file paths are relative to.
+        files: Every file of the walk (dataset-relative POSIX paths, sorted).
+        entries: Trials found so far.
+        companions: Companion files so far, path → reason.
+        unknown: Unknown files so far, path → reason.
+        claimed: Files that are inputs of a trial.
+    """
 
     base: Path
     files: list[str]
@@ -158,14 +165,30 @@ class _Sorting:
         self.claimed.update(i.path for i in entry.inputs)
 
 
-def _walk(root: Path, base: Path, sorting_companions: dict[str, str]) -> list[str]:
+def relative(path: str | Path, base: Path) -> str:
+    """``path`` relative to ``base`` as a POSIX path."""
+    return PurePosixPath(Path(os.path.relpath(path, base))).as_posix()
+
+
+def trial_input(role: str, path: str | Path, base: Path) -> TrialInput:
+    """A trial's input file ``path`` in the role ``role``, with its path relative to ``base``."""
+    return TrialInput(role=role, path=relative(path, base), file=str(path))
+
+
+def group_fields(**fields) -> dict:
+    """Group-by fields: the seven every record has (None by default), then the extras given."""
+    meta = dict.fromkeys(("object", "grasp", "grasp_id", "action", "scenario", "actor", "sequence"))
+    meta.update(fields)
+    return meta
+
+
+def _walk(root: Path, base: Path, kinds: Sequence[TrialKind], companions: dict[str, str]) -> list[str]:
     """Every file under ``root`` as a path relative to ``base``.
 
     Links to folders are followed once (a folder reached again through a link is listed, not searched
     twice); hidden folders and the bulk folders of a layout are listed whole.
     """
-    from handsim.runner.layouts import bulk_folder
-
+    bulk = [k.bulk_folder for k in kinds if k.bulk_folder is not None]
     files: list[str] = []
     seen = {os.path.realpath(root)}
     for folder, dirs, names in os.walk(root, followlinks=True):
@@ -174,45 +197,72 @@ def _walk(root: Path, base: Path, sorting_companions: dict[str, str]) -> list[st
         for d in sorted(dirs):
             rel = (here / d).relative_to(base).as_posix() + "/"
             real = os.path.realpath(here / d)
-            what = "hidden folder (not searched)" if d.startswith(".") else bulk_folder(here, d)
+            what = "hidden folder (not searched)" if d.startswith(".") else None
+            what = what or next((w for w in (b(here, d) for b in bulk) if w), None)
             if what is None and real in seen:
                 what = f"link to a folder searched already ({real})"
             if what is None:
                 seen.add(real)
                 kept.append(d)
             else:
-                sorting_companions[rel] = what
+                companions[rel] = what
         dirs[:] = kept
         files.extend((here / name).relative_to(base).as_posix() for name in sorted(names))
     return sorted(files)
 
 
-def discover(dataset: str | Path) -> Discovery:
-    """List the trials of a dataset folder, or the one trial of a recording.
+def _is_trial_folder(folder: Path, kinds: Sequence[TrialKind]) -> bool:
+    for kind in kinds:
+        try:
+            if kind.matches(folder):
+                return True
+        except HandsimError:
+            continue
+    return False
+
+
+def _rest(sorting: Sorting, kinds: Sequence[TrialKind]) -> None:
+    recordings = "; ".join(f"{k.name}: {k.files}" for k in kinds)
+    explain = [k.explain_unknown for k in kinds if k.explain_unknown is not None]
+    for f in sorting.open_files():
+        p = PurePosixPath(f)
+        if p.name.startswith("."):
+            sorting.companions[f] = "hidden file (not read)"
+        elif _DOCS.fullmatch(p.name):
+            sorting.companions[f] = "documentation (not read)"
+        else:
+            what = f"file type {p.suffix!r}" if p.suffix else "a file without extension"
+            reason = next((r for r in (e(p) for e in explain) if r), None)
+            sorting.unknown[f] = reason or (
+                f"{what}: no recording handsim replays ({recordings}) nor a known companion file"
+            )
+
+
+def discover_with(dataset: str | Path, kinds: Sequence[TrialKind]) -> Discovery:
+    """List the trials of a dataset folder, or the one trial of a recording, with the given kinds.
 
     Args:
-        dataset: A dataset folder (GraspDB14 recordings, a Tzionas root with ``Models/`` and ``Configs/``,
-            an ARCTIC root with ``raw_seqs/`` and ``meta/``, or a folder holding several of them), a
-            Tzionas ``Models/NN`` folder, or a single recording.
+        dataset: A dataset folder, a trial folder (a Tzionas ``Models/NN``) or a single recording.
+        kinds: The kinds of trial, each claiming its layout's files in this order.
 
     Returns:
         The trials (sorted by id) and every other file (companion or unknown, each with its reason).
-        For a single recording or sequence folder the ids are relative to its parent folder.
+        For a single recording or trial folder the ids are relative to its parent folder.
 
     Raises:
         InputFileError: ``dataset`` does not exist.
     """
-    from handsim.runner.layouts import has_hand_motion, sort_files
-
     root = Path(dataset).resolve()
     if not root.exists():
         raise InputFileError(f"{dataset}: dataset not found (expected a folder or a recording)")
-    single = root.is_file() or has_hand_motion(root)
+    single = root.is_file() or _is_trial_folder(root, kinds)
     base = root.parent if single else root
     companions: dict[str, str] = {}
-    files = [root.relative_to(base).as_posix()] if root.is_file() else _walk(root, base, companions)
-    sorting = _Sorting(base=base, files=files, companions=companions)
-    sort_files(sorting)
+    files = [root.relative_to(base).as_posix()] if root.is_file() else _walk(root, base, kinds, companions)
+    sorting = Sorting(base=base, files=files, companions=companions)
+    for kind in kinds:
+        kind.sort_files(sorting)
+    _rest(sorting, kinds)
     return Discovery(
         root=str(base),
         entries=tuple(sorted(sorting.entries, key=lambda e: e.id)),
@@ -238,8 +288,6 @@ def select(
     Raises:
         ValueError: A negative limit.
     """
-    from fnmatch import fnmatchcase
-
     if limit is not None and limit < 0:
         raise ValueError(f"limit must be ≥ 0, got {limit}")
     chosen = tuple(e for e in entries if only is None or fnmatchcase(e.id, only))

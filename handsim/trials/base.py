@@ -1,0 +1,252 @@
+"""What every kind of trial shares: the plain trial records, the errors, and the kind interface.
+
+A trial is loaded in two steps, so that a dataset runner can list trials cheaply and load them in worker
+processes:
+
+* ``find`` looks at the recording's name and the files beside it (no parsing of motion data) and returns a
+  :class:`Trial`: plain paths and names, picklable.
+* ``load`` reads the files, builds the hand and the objects and compiles the scenario's scene; its
+  :class:`LoadedTrial` (scene + trajectory) is what :func:`handsim.sim.replay.replay` takes, and is picklable
+  too.
+
+Each kind of trial is one module of :mod:`handsim.trials` exposing a :class:`TrialKind`; the registry
+(:mod:`handsim.trials.registry`) is the one list of kinds that :func:`~handsim.trials.find_trial`, the CLI,
+dataset discovery and the runner use.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from collections.abc import Callable
+from dataclasses import asdict, dataclass, field
+from pathlib import Path, PurePosixPath
+from typing import TYPE_CHECKING
+
+from handsim.builders.default_hand import DEFAULT_HAND_LENGTH_M
+from handsim.errors import HandsimError, InputFileError
+
+if TYPE_CHECKING:
+    from handsim.sim.compiled import SimScene
+    from handsim.sim.metrics import MetricSpec
+    from handsim.trajectory import Trajectory
+    from handsim.trials.discovery import Sorting
+
+HAND_COLLISIONS = ("capsules", "mesh")
+"""Hand collision shapes: capsules and a convex palm, or per-bone hulls of a skinned mesh."""
+
+
+class TrialError(HandsimError):
+    """The files and options given do not make a trial (an option that does not apply, no object …)."""
+
+
+class UnsupportedTrialError(TrialError, InputFileError):
+    """A file that is no kind of trial handsim replays; the message lists the kinds."""
+
+
+@dataclass(frozen=True)
+class TrialObject:
+    """An object of a trial.
+
+    Attributes:
+        what: What :func:`handsim.builders.catalog.resolve` takes: a catalogue name, a mesh file, a
+            Tzionas ``.SKEL`` or an ARCTIC template folder.
+        track: The trajectory's object track it follows (``recorded`` scenario), or "" for none.
+        origin: Where it came from, for people (``"given"``, ``"object id 1 in the file name"`` …).
+    """
+
+    what: str
+    track: str = ""
+    origin: str = "given"
+
+
+@dataclass(frozen=True)
+class Trial:
+    """What to load for one trial: paths and names only (picklable, cheap).
+
+    Attributes:
+        kind: The name of its :class:`TrialKind` (``graspdb``, ``tzionas`` …).
+        trajectory_path: The recording.
+        skeleton_path: The hand's skeleton file, or None for the kind's default hand.
+        objects: The objects, the first one defining the support (recorded) or being grasped (glove); empty
+            for a hand-only sequence.
+        calibration_path: Glove calibration JSON for a raw-count recording, or None.
+        annotation_path: GraspDB14 phase annotation file, or None.
+        units: Units of a mesh-file object, ``"m"`` or ``"mm"``.
+        density: Object density in kg/m³ replacing the objects' own, or None.
+        mass: Object mass in kg replacing the objects' own, or None.
+        hand_length: Parametric default hand: wrist crease to middle fingertip, m.
+        collision: Hand collision shapes, one of :data:`HAND_COLLISIONS`.
+        notes: Decisions made while finding the files.
+    """
+
+    kind: str
+    trajectory_path: str
+    skeleton_path: str | None
+    objects: tuple[TrialObject, ...]
+    calibration_path: str | None = None
+    annotation_path: str | None = None
+    units: str | None = None
+    density: float | None = None
+    mass: float | None = None
+    hand_length: float = DEFAULT_HAND_LENGTH_M
+    collision: str = "capsules"
+    notes: tuple[str, ...] = ()
+
+    def to_dict(self) -> dict:
+        """JSON-ready fields (:meth:`from_dict` gives the trial back)."""
+        return asdict(self)
+
+    @classmethod
+    def from_dict(cls, fields: dict) -> Trial:
+        """The trial whose :meth:`to_dict` gave ``fields`` (as read back from JSON).
+
+        Raises:
+            TrialError: ``fields`` are not a trial's (a field missing or unknown).
+        """
+        names = {f.name for f in dataclasses.fields(cls)}
+        unknown, missing = (
+            set(fields) - names,
+            {"kind", "trajectory_path", "skeleton_path", "objects"} - set(fields),
+        )
+        if unknown or missing:
+            raise TrialError(
+                f"not a trial's fields: unknown {sorted(unknown)}, missing {sorted(missing)}; "
+                f"expected {sorted(names)}"
+            )
+        values = dict(fields)
+        values["objects"] = tuple(TrialObject(**o) for o in values["objects"])
+        values["notes"] = tuple(values.get("notes", ()))
+        return cls(**values)
+
+
+@dataclass(frozen=True)
+class LoadedObject:
+    """An object as built for the scene.
+
+    Attributes:
+        name: The object model's name.
+        source: The file or catalogue entry it was made from.
+        track: The trajectory's object track it follows, or "".
+        origin: Where it came from (:attr:`TrialObject.origin`).
+        mass: Total mass, kg.
+    """
+
+    name: str
+    source: str
+    track: str
+    origin: str
+    mass: float
+
+
+@dataclass(frozen=True)
+class LoadedTrial:
+    """A trial read and built: what :func:`handsim.sim.replay.replay` takes (picklable).
+
+    Attributes:
+        trial: What was loaded.
+        scene: The compiled scene of the trial's scenario.
+        trajectory: The recording as joint targets (with phases and object tracks).
+        hand: The hand, for people (skeleton file or the parametric hand's size, DoFs).
+        objects: The objects as built.
+        notes: Decisions made while loading (the scene's own are in ``scene.setup.notes``, the
+            trajectory reader's in ``trajectory.notes``).
+    """
+
+    trial: Trial
+    scene: SimScene
+    trajectory: Trajectory
+    hand: str
+    objects: tuple[LoadedObject, ...]
+    notes: tuple[str, ...] = field(default=())
+
+
+@dataclass(frozen=True)
+class TrialOptions:
+    """What a user may give besides the recording (the ``handsim replay`` options); None: not given.
+
+    Attributes:
+        skeleton: The hand's skeleton file.
+        obj: The object: a catalogue name or a mesh file.
+        calibration: A glove calibration JSON (raw-count recordings).
+        units: A mesh-file object's units, ``"m"`` or ``"mm"``.
+        density: Object density, kg/m³.
+        mass: Object mass, kg.
+        hand_length: Parametric default hand's length, m.
+        collision: Hand collision shapes, one of :data:`HAND_COLLISIONS`.
+    """
+
+    skeleton: str | Path | None = None
+    obj: str | Path | None = None
+    calibration: str | Path | None = None
+    units: str | None = None
+    density: float | None = None
+    mass: float | None = None
+    hand_length: float | None = None
+    collision: str | None = None
+
+
+OPTION_LABELS = {
+    "skeleton": "a skeleton",
+    "obj": "an object",
+    "calibration": "a calibration",
+    "units": "mesh units",
+    "density": "an object density",
+    "mass": "an object mass",
+    "hand_length": "a hand length",
+    "collision": "a hand collision shape",
+}
+"""How messages name each :class:`TrialOptions` field."""
+
+
+@dataclass(frozen=True)
+class TrialKind:
+    """One kind of trial: which files make it, how to find its inputs, load it and discover it in a dataset.
+
+    Attributes:
+        name: The kind's name (:attr:`Trial.kind`).
+        label: The kind for people, with an article (``"a GraspDB14 recording"``).
+        files: The files that make a trial of this kind (listed in messages and ``--help``).
+        options: The :class:`TrialOptions` fields it takes; the others are refused before ``find`` runs.
+        brings: Why it takes no other options (the end of a refusal message).
+        matches: True when a path (which exists) is a trial of this kind, judged by its name; may raise
+            :class:`UnsupportedTrialError` for a file of the kind's dataset that is not a recording.
+        find: The trial of a path, given the options (only those in ``options`` are set).
+        load: Read and build a :class:`Trial` of this kind: ``load(trial, metrics, progress)``.
+        sort_files: Dataset discovery: claim the files of this kind's layout
+            (:class:`~handsim.trials.discovery.Sorting`) as trials, companions or unknown files.
+        bulk_folder: Discovery: what a folder listed whole (not searched) is, or None.
+        explain_unknown: Discovery: why a file no kind claimed, whose name looks like this kind's, is not
+            a trial (or None to leave the general reason).
+    """
+
+    name: str
+    label: str
+    files: str
+    options: frozenset[str]
+    brings: str
+    matches: Callable[[Path], bool]
+    find: Callable[[Path, TrialOptions], Trial]
+    load: Callable[[Trial, MetricSpec | None, bool], LoadedTrial]
+    sort_files: Callable[[Sorting], None]
+    bulk_folder: Callable[[Path, str], str | None] | None = None
+    explain_unknown: Callable[[PurePosixPath], str | None] | None = None
+
+
+def build_objects(trial: Trial, progress: bool) -> tuple[list, tuple[LoadedObject, ...], list[str]]:
+    """Build a trial's objects: their specs, what was built, and the builders' notes.
+
+    Args:
+        trial: The trial (its objects, units, density or mass).
+        progress: Show a progress bar while an uncached convex decomposition runs.
+    """
+    from handsim.builders.catalog import resolve
+    from handsim.builders.objects import object_spec, prepare_object
+
+    specs, loaded, notes = [], [], []
+    for item in trial.objects:
+        model = resolve(item.what, units=trial.units, density=trial.density, mass=trial.mass)
+        prepared = prepare_object(model, progress=progress)
+        specs.append(object_spec(prepared))
+        loaded.append(LoadedObject(model.name, model.source, item.track, item.origin, prepared.total_mass))
+        notes.extend(f"object {model.name!r}: {n}" for n in (*model.notes, *prepared.notes))
+    return specs, tuple(loaded), notes

@@ -1,0 +1,61 @@
+"""Loading shared by the kinds whose recordings hold the hand alone (glove scenario): GraspDB14 and scripted.
+
+The hand is the parametric default hand unless a skeleton is given; the trial's object is placed in the hand
+by :func:`handsim.sim.scenarios.glove_scene`.
+"""
+
+from __future__ import annotations
+
+from typing import TYPE_CHECKING
+
+from handsim.trials.base import LoadedTrial, Trial, build_objects
+
+if TYPE_CHECKING:
+    import mujoco
+
+    from handsim.sim.metrics import MetricSpec
+    from handsim.skeleton import Skeleton
+    from handsim.trajectory import Trajectory
+
+
+def parametric_hand(trial: Trial) -> tuple[Skeleton, mujoco.MjSpec, str]:
+    """The parametric default hand of the trial's length: skeleton, hand spec, text for people."""
+    from handsim.builders import default_hand, default_skeleton
+
+    skeleton = default_skeleton(trial.hand_length)
+    hand = default_hand(trial.hand_length, collision=trial.collision)
+    return skeleton, hand, f"parametric default hand, {trial.hand_length:g} m ({skeleton.ndof} DoFs)"
+
+
+def glove_loaded(
+    trial: Trial,
+    hand: mujoco.MjSpec,
+    hand_text: str,
+    trajectory: Trajectory,
+    metrics: MetricSpec | None,
+    progress: bool,
+    notes: tuple[str, ...] = (),
+) -> LoadedTrial:
+    """The trial's object placed in the hand by the glove scenario, and the loaded trial.
+
+    Args:
+        trial: The trial (its first object is grasped).
+        hand: The hand the trajectory drives.
+        hand_text: The hand, for people.
+        trajectory: The recording as joint targets, with its phases.
+        metrics: Placement thresholds (default :class:`~handsim.sim.metrics.MetricSpec`).
+        progress: Show a progress bar while an uncached convex decomposition runs.
+        notes: Notes of the hand's reader.
+    """
+    from handsim.sim.scenarios import glove_scene
+
+    specs, objects, object_notes = build_objects(trial, progress)
+    scene = glove_scene(hand, trajectory, specs[0], spec=metrics)
+    return LoadedTrial(
+        trial=trial,
+        scene=scene,
+        trajectory=trajectory,
+        hand=hand_text,
+        objects=objects,
+        notes=(*trial.notes, *notes, *object_notes),
+    )

@@ -1,0 +1,195 @@
+"""Trial kind ``graspdb``: a GraspDB14 CyberGlove recording.
+
+A recording is a ``.txt`` file (GraspDB14's FK-oracle files have no extension). The hand is the parametric
+default hand unless a skeleton is given; the object is the one given, else the one whose id the file name
+carries (``r_01_11_ex03-…`` → id 1, the tennis ball); phases come from the
+recording's ``_annot-`` file beside it (scenario ``glove``).
+"""
+
+from __future__ import annotations
+
+from pathlib import Path, PurePosixPath
+from typing import TYPE_CHECKING
+
+from handsim.builders.default_hand import DEFAULT_HAND_LENGTH_M
+from handsim.errors import HandsimError
+from handsim.trials.base import (
+    LoadedTrial,
+    Trial,
+    TrialError,
+    TrialKind,
+    TrialObject,
+    TrialOptions,
+    UnsupportedTrialError,
+)
+from handsim.trials.discovery import Sorting, TrialEntry, TrialInput, trial_input
+from handsim.trials.glove import glove_loaded, parametric_hand
+
+if TYPE_CHECKING:
+    from handsim.sim.metrics import MetricSpec
+
+_NAME_HELP = "spec 003 §4.1.2: <objID>[_<graspID>|_<actionID>]_ex<NN>-rad|raw-<trialID>-grasp-su<actorID>.txt"
+
+
+def _matches(path: Path) -> bool:
+    if path.is_dir() or not (path.suffix.lower() == ".txt" or path.suffix == ""):
+        return False
+    if "_annot-" in path.name:
+        raise UnsupportedTrialError(
+            f"{path}: a GraspDB14 phase annotation file, not a recording; give the recording it annotates "
+            "(found beside it by name)"
+        )
+    return True
+
+
+def _find(path: Path, options: TrialOptions) -> Trial:
+    from handsim.builders.graspdb_objects import graspdb_object
+    from handsim.glove.phases import find_annotation_file
+    from handsim.io.graspdb import parse_graspdb_filename
+
+    if options.skeleton is not None and options.hand_length is not None:
+        raise TrialError(
+            "a hand length is for the parametric default hand; the skeleton gives the hand's size"
+        )
+    notes = []
+    if options.obj is not None:
+        objects = (TrialObject(str(options.obj), "", "given"),)
+    else:
+        name = parse_graspdb_filename(path)
+        if name is None:
+            raise TrialError(
+                f"{path.name}: the file name carries no GraspDB14 object id (<objID>_…_ex<NN>-rad-…); give "
+                "the object: a catalogue name (see `handsim catalog`) or a mesh file"
+            )
+        entry = graspdb_object(name.object_id)
+        objects = (TrialObject(entry.name, "", f"object id {name.object_id} in the file name"),)
+        notes.append(f"object {entry.name!r}: id {name.object_id} in the file name ({entry.description})")
+    annotation = find_annotation_file(path)
+    if annotation is None:
+        notes.append("no _annot- phase file beside the recording: the grasp frame is the peak flexion")
+    return Trial(
+        kind="graspdb",
+        trajectory_path=str(path),
+        skeleton_path=None if options.skeleton is None else str(options.skeleton),
+        objects=objects,
+        calibration_path=None if options.calibration is None else str(options.calibration),
+        annotation_path=None if annotation is None else str(annotation),
+        units=options.units,
+        density=options.density,
+        mass=options.mass,
+        hand_length=DEFAULT_HAND_LENGTH_M if options.hand_length is None else float(options.hand_length),
+        collision=options.collision or "capsules",
+        notes=tuple(notes),
+    )
+
+
+def _load(trial: Trial, metrics: MetricSpec | None, progress: bool) -> LoadedTrial:
+    from handsim.builders import build_hand
+    from handsim.glove import attach_phases, load_calibration
+    from handsim.io import read_skeleton, read_trajectory
+
+    if trial.skeleton_path is None:
+        skeleton, hand, hand_text = parametric_hand(trial)
+    else:
+        skeleton = read_skeleton(trial.skeleton_path)
+        hand = build_hand(skeleton, collision=trial.collision)
+        hand_text = f"{Path(trial.skeleton_path).name} ({skeleton.ndof} DoFs, {trial.collision})"
+    calibration = None if trial.calibration_path is None else load_calibration(trial.calibration_path)
+    trajectory = read_trajectory(trial.trajectory_path, skeleton=skeleton, calibration=calibration)
+    if trial.annotation_path is not None and not trajectory.phases:
+        trajectory = attach_phases(trajectory, trial.annotation_path)
+    skeleton_notes = skeleton.notes if trial.skeleton_path else ()
+    return glove_loaded(trial, hand, hand_text, trajectory, metrics, progress, skeleton_notes)
+
+
+def _inputs(trial: Trial, base: Path) -> tuple[TrialInput, ...]:
+    inputs = [trial_input("trajectory", trial.trajectory_path, base)]
+    for role, path in (
+        ("annotation", trial.annotation_path),
+        ("calibration", trial.calibration_path),
+        ("skeleton", trial.skeleton_path),
+    ):
+        if path is not None:
+            inputs.append(trial_input(role, path, base))
+    inputs += [trial_input("object", o.what, base) for o in trial.objects if Path(o.what).is_file()]
+    return tuple(inputs)
+
+
+def _sort_files(sorting: Sorting) -> None:
+    from handsim.builders.graspdb_objects import GRASPDB_OBJECTS
+    from handsim.io.graspdb import parse_graspdb_filename
+    from handsim.trials.graspdb_names import graspdb_meta
+
+    names = {o.graspdb_id: o.name for o in GRASPDB_OBJECTS}
+    open_files = sorting.open_files()
+    present = set(open_files)
+    annotations = []
+    for f in open_files:
+        p = PurePosixPath(f)
+        if "fk_oracle" in p.parts[:-1]:
+            sorting.companions[f] = (
+                "GraspDB14 tools' forward-kinematics oracle (calcJointTrajectories output and its input "
+                "motions): test data for the skeleton, not trials"
+            )
+            continue
+        if p.suffix.lower() == ".xmlskel":
+            sorting.companions[f] = (
+                "GraspDB14 hand skeleton (.xmlskel); trials replay the parametric default hand "
+                "(handsim replay --skeleton uses this one)"
+            )
+            continue
+        if "_calib-" in p.name.lower():
+            sorting.companions[f] = (
+                "CyberGlove calibration sequence (raw counts): estimate a calibration from it to replay "
+                "-raw- recordings (handsim.glove.estimate_calibration)"
+            )
+            continue
+        parsed = parse_graspdb_filename(p.name)
+        if parsed is None:
+            continue
+        if parsed.annotation:
+            annotations.append(f)
+            continue
+        twin = f.replace("-raw-", "-rad-", 1)
+        if parsed.datatype == "raw" and twin in present:
+            sorting.companions[f] = f"raw sensor counts of {twin}, which is replayed"
+            continue
+        try:
+            trial = _find(sorting.base / p, TrialOptions())
+        except HandsimError as exc:
+            sorting.unknown[f] = f"a GraspDB14 recording name, but not a trial: {exc}"
+            continue
+        meta = graspdb_meta(parsed, names.get(parsed.object_id))
+        sorting.add(TrialEntry(f, trial, meta, _inputs(trial, sorting.base)))
+    for f in annotations:
+        if f not in sorting.claimed:
+            sorting.unknown[f] = (
+                "a GraspDB14 phase annotation file, not a recording; the recording it annotates is not in "
+                "the dataset"
+            )
+
+
+def _explain_unknown(path: PurePosixPath) -> str | None:
+    if path.suffix.lower() != ".txt":
+        return None
+    return (
+        f"a .txt file whose name is not a GraspDB14 motion file name ({_NAME_HELP}) and that is not part of "
+        "another dataset's layout"
+    )
+
+
+KIND = TrialKind(
+    name="graspdb",
+    label="a GraspDB14 recording",
+    files="GraspDB14 CyberGlove recording .txt (radians; raw counts with a calibration)",
+    options=frozenset(
+        {"skeleton", "obj", "calibration", "units", "density", "mass", "hand_length", "collision"}
+    ),
+    brings="a glove recording takes the hand's skeleton, the object and the glove calibration",
+    matches=_matches,
+    find=_find,
+    load=_load,
+    sort_files=_sort_files,
+    explain_unknown=_explain_unknown,
+)
+"""The ``graspdb`` kind of trial."""

@@ -1,0 +1,214 @@
+"""Trial kind ``tzionas``: a Tzionas/Ballan sequence (``Models/NN`` with ``Configs/NN/MODELS_INFO.txt``).
+
+The hand is the motion's own ``.SKEL`` (+ ``.LIMITS``, ``.OFF``, ``.SKIN`` beside it); the objects are the
+``Model_Object_*`` that ``Configs/NN/MODELS_INFO.txt`` lists, each following its recorded track (scenario
+``recorded``).
+"""
+
+from __future__ import annotations
+
+import re
+from pathlib import Path, PurePosixPath
+from typing import TYPE_CHECKING
+
+from handsim.errors import HandsimError
+from handsim.trials.base import (
+    LoadedTrial,
+    Trial,
+    TrialError,
+    TrialKind,
+    TrialObject,
+    TrialOptions,
+    build_objects,
+)
+from handsim.trials.discovery import Sorting, TrialEntry, TrialInput, group_fields, trial_input
+
+if TYPE_CHECKING:
+    from handsim.sim.metrics import MetricSpec
+
+_HAND_MOTION = re.compile(r"Model_Hand.*\.motion", re.IGNORECASE)
+_MODEL_FILE = re.compile(r"Model_(?:Hand|Object).*\.(?:skel|limits|motion|off|skin|voi|zones)", re.IGNORECASE)
+_CONFIGS = ("MODELS_INFO.txt", "INDEX_BOUNDS.txt")
+
+
+def has_hand_motion(folder: Path) -> bool:
+    """True if ``folder`` is a Tzionas sequence folder (holds a ``Model_Hand_*.MOTION``)."""
+    return folder.is_dir() and any(p.is_file() and _HAND_MOTION.fullmatch(p.name) for p in folder.iterdir())
+
+
+def _matches(path: Path) -> bool:
+    return has_hand_motion(path) if path.is_dir() else path.suffix.lower() == ".motion"
+
+
+def _find(path: Path, options: TrialOptions) -> Trial:
+    from handsim.io.tzionas_motion import config_dir_of, object_track_name, read_models_info
+
+    models_dir = path if path.is_dir() else path.parent
+    info = config_dir_of(models_dir) / "MODELS_INFO.txt"
+    if not info.is_file():
+        raise TrialError(
+            f"{path}: no {info} beside the sequence's Models folder; it lists the sequence's hand and objects"
+        )
+    models = read_models_info(info)
+    if path.is_dir():
+        hands = [name for name, _ in models if name.startswith("Model_Hand")]
+        if not hands:
+            raise TrialError(f"{info}: lists no hand (Model_Hand_*); it lists {[n for n, _ in models]}")
+        motion = models_dir / f"{hands[0]}.MOTION"
+    else:
+        motion = path
+        if not motion.stem.startswith("Model_Hand"):
+            raise TrialError(f"{motion}: not a hand motion; give the sequence's Model_Hand_*.MOTION")
+    own = motion.with_suffix(".SKEL")
+    if options.skeleton is not None and Path(options.skeleton).resolve() != own.resolve():
+        raise TrialError(
+            f"{motion}: a Tzionas motion drives its own skeleton {own.name}, not {options.skeleton}; a "
+            "skeleton is given only for GraspDB14 recordings"
+        )
+    objects = tuple(
+        TrialObject(str(models_dir / f"{name}.SKEL"), object_track_name(name), f"{info.name}:{line}")
+        for name, line in models
+        if name.startswith("Model_Object")
+    )
+    listed = [o.track for o in objects]
+    return Trial(
+        kind="tzionas",
+        trajectory_path=str(motion),
+        skeleton_path=str(own),
+        objects=objects,
+        density=options.density,
+        mass=options.mass,
+        collision=options.collision or "capsules",
+        notes=(f"hand {own.name} and objects {listed} from {info}",),
+    )
+
+
+def _load(trial: Trial, metrics: MetricSpec | None, progress: bool) -> LoadedTrial:
+    from handsim.builders import build_hand
+    from handsim.io import read_skeleton, read_trajectory
+    from handsim.sim.scenarios import recorded_scene
+
+    trajectory = read_trajectory(trial.trajectory_path)
+    skeleton = read_skeleton(trial.skeleton_path)
+    hand = build_hand(skeleton, collision=trial.collision)
+    specs, objects, notes = build_objects(trial, progress)
+    scene = recorded_scene(hand, trajectory, {o.track: s for o, s in zip(objects, specs, strict=True)})
+    return LoadedTrial(
+        trial=trial,
+        scene=scene,
+        trajectory=trajectory,
+        hand=f"{Path(skeleton.source).name} ({skeleton.ndof} DoFs, {trial.collision})",
+        objects=objects,
+        notes=(*trial.notes, *skeleton.notes, *notes),
+    )
+
+
+def _siblings(path: Path, exts: tuple[str, ...]) -> list[Path]:
+    """The files beside ``path`` with its stem and one of ``exts`` (either case), in ``exts`` order."""
+    found = []
+    for ext in exts:
+        for candidate in (path.with_suffix("." + ext.upper()), path.with_suffix("." + ext.lower())):
+            if candidate.is_file():
+                found.append(candidate)
+                break
+    return found
+
+
+def _inputs(trial: Trial, base: Path) -> tuple[TrialInput, ...]:
+    from handsim.io.tzionas_motion import config_dir_of
+
+    motion = Path(trial.trajectory_path)
+    configs = config_dir_of(motion.parent)
+    inputs = [trial_input("trajectory", motion, base)]
+    if (configs / "INDEX_BOUNDS.txt").is_file():
+        inputs.append(trial_input("trajectory", configs / "INDEX_BOUNDS.txt", base))
+    skeleton = Path(trial.skeleton_path or motion.with_suffix(".SKEL"))
+    inputs += [
+        trial_input("skeleton", p, base)
+        for p in _siblings(skeleton, ("SKEL", "LIMITS", "OFF", "SKIN", "VOI"))
+    ]
+    for obj in trial.objects:
+        files = _siblings(Path(obj.what), ("SKEL", "LIMITS", "MOTION", "OFF", "SKIN"))
+        inputs += [trial_input("object", p, base) for p in files]
+    inputs.append(trial_input("models_info", configs / "MODELS_INFO.txt", base))
+    return tuple(inputs)
+
+
+def _sort_sequences(sorting: Sorting) -> None:
+    folders: dict[str, list[str]] = {}
+    for f in sorting.open_files():
+        folders.setdefault(PurePosixPath(f).parent.as_posix(), []).append(f)
+    for folder, files in sorted(folders.items()):
+        hands = [f for f in files if _HAND_MOTION.fullmatch(PurePosixPath(f).name)]
+        for hand in hands:
+            try:
+                trial = _find(sorting.base / hand, TrialOptions())
+            except HandsimError as exc:
+                sorting.unknown[hand] = f"a Tzionas hand motion, but not a trial: {exc}"
+                continue
+            tracks = [o.track for o in trial.objects]
+            meta = group_fields(
+                object="+".join(tracks) if tracks else None,
+                sequence=PurePosixPath(folder).name,
+                objects=tracks,
+            )
+            trial_id = folder if len(hands) == 1 and folder != "." else hand
+            sorting.add(TrialEntry(trial_id, trial, meta, _inputs(trial, sorting.base)))
+
+
+def _is_root(path: PurePosixPath, base: Path) -> bool:
+    """True if ``path``'s folder is a Tzionas dataset root (has ``Models/`` and ``Configs/``)."""
+    folder = base / path
+    return (folder / "Models").is_dir() and (folder / "Configs").is_dir()
+
+
+def _sort_companions(sorting: Sorting) -> None:
+    for f in sorting.open_files():
+        p = PurePosixPath(f)
+        folder = p.parent
+        if _MODEL_FILE.fullmatch(p.name):
+            if has_hand_motion(sorting.base / folder) and p.suffix.lower() != ".zones":
+                sorting.unknown[f] = (
+                    "a Tzionas model file beside a hand motion, not listed in MODELS_INFO.txt"
+                )
+            elif has_hand_motion(sorting.base / folder):
+                sorting.companions[f] = "Tzionas skinning zones (.ZONES; not read by handsim)"
+            else:
+                sorting.companions[f] = (
+                    f"Tzionas/Ballan model of sequence {folder.name}, which has no hand motion here "
+                    "(no Model_Hand_*.MOTION): not a trial"
+                )
+        elif folder.parent.name == "Configs" and p.name in _CONFIGS:
+            sorting.companions[f] = (
+                f"Tzionas configuration of sequence {folder.name}, which has no hand motion here: not a trial"
+            )
+        elif len(p.parts) >= 2 and _is_root(folder.parent, sorting.base):
+            if folder.name == "Calibration":
+                sorting.companions[f] = (
+                    "Tzionas camera calibration (not read: motion times use the sensor's 30 Hz, "
+                    "docs/conventions.md)"
+                )
+            elif folder.name == "VOIs":
+                sorting.companions[f] = (
+                    "Tzionas vertex-of-interest list of the dataset's models (not read; a hand's own .VOI is)"
+                )
+
+
+def _sort_files(sorting: Sorting) -> None:
+    _sort_sequences(sorting)
+    _sort_companions(sorting)
+
+
+KIND = TrialKind(
+    name="tzionas",
+    label="a Tzionas sequence",
+    files="Tzionas/Ballan hand motion Model_Hand_*.MOTION (or its Models/NN folder), with the sequence's "
+    "Configs/NN/MODELS_INFO.txt",
+    options=frozenset({"skeleton", "density", "mass", "collision"}),
+    brings="it brings its own hand and objects (Configs/NN/MODELS_INFO.txt)",
+    matches=_matches,
+    find=_find,
+    load=_load,
+    sort_files=_sort_files,
+)
+"""The ``tzionas`` kind of trial."""
