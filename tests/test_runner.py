@@ -18,11 +18,11 @@ import pytest
 
 from handsim.assets import TZIONAS_DIR
 from handsim.cli import main
+from handsim.fingers import FINGER_GROUPS, TZIONAS_FINGERS, finger_groups, finger_of
 from handsim.io import read_skeleton
 from handsim.io.graspdb import parse_graspdb_filename
 from handsim.runner import execute
 from handsim.runner.execute import RunnerError, run_dataset
-from handsim.runner.fingers import FINGER_GROUPS, TZIONAS_FINGERS, finger_groups, finger_of
 from handsim.runner.png import encode_png
 from handsim.runner.records import (
     RECORDS_FILE,
@@ -45,7 +45,8 @@ CONFIG = ReplayConfig(stability_at="grasp")
 FRAMES = 4
 RECORD_KEYS = [
     "schema", "id", "kind", "status", "meta", "trial", "inputs", "parameters", "metric_spec_version",
-    "versions", "model_sha256", "scenario", "summary", "hold", "stability", "warnings", "diverged", "notes",
+    "versions", "model_sha256", "scenario", "summary", "hold", "robustness", "release_stability", "stability",
+    "warnings", "diverged", "notes",
     "trajectory_quality", "curves", "renders", "error", "timing",
 ]  # fmt: skip
 GRASPDB_IDS = [

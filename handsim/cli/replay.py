@@ -96,12 +96,24 @@ def _print_summary(result) -> None:
     if placement:
         links = placement.get("links", [])
         grasp = placement.get("grasp", {})
+        grip = placement.get("grip") or {}
         _line(
             "placement",
+            f"fits at frame {placement.get('fit_frame')} "
+            f"(flexion fraction {placement.get('fit_fraction', 0):.2f} of the closing "
+            f"{grasp.get('open')}–{grasp.get('closed')}, {grasp.get('source')}), "
             f"{len(links)} links touching ({', '.join(links)}), penetration "
-            f"{placement.get('penetration_m', 0.0) * 1000:.2f} mm at grasp frame {grasp.get('frame')} "
-            f"({grasp.get('source')})",
+            f"{placement.get('penetration_m', 0.0) * 1000:.2f} mm"
+            + ("" if placement.get("feasible", True) else "; INFEASIBLE"),
         )
+        if grip:
+            _line(
+                "grip",
+                f"the recorded closing presses with {grip['normal_force_n']:.1f} N (servo torque "
+                f"{grip['servo_torque_nm']:.2f} N·m); it resists {grip['directions_held']} of 6 gravity "
+                f"directions; best of {placement.get('grip_tests')} grip tests, "
+                f"{placement.get('candidates')} poses tried",
+            )
         if scene.get("contact_frame", 0) > 0:
             _line(
                 "contacts",
@@ -116,10 +128,30 @@ def _print_summary(result) -> None:
             f"+ {result.config['metrics']['release_delay']:g} s); hold window "
             f"{hold.window[0]:.2f}–{hold.window[1]:.2f} s",
         )
-        verdict = "yes" if hold.held else f"no: lost at {hold.lost_at:.2f} s ({hold.reason})"
-        _line("held", f"{verdict}; held {hold.time_held:.2f} s")
-        _line("slip", f"max {hold.max_slip * 1000:.1f} mm relative to the hand")
-        _line("drop", f"{hold.drop * 1000:.1f} mm (object origin, release to the window's end)")
+        if hold.held is None:
+            _line("held", hold.reason or "not judged")
+        else:
+            verdict = "yes" if hold.held else f"no: lost at {hold.lost_at:.2f} s ({hold.reason})"
+            _line("held", f"{verdict}; held {hold.time_held:.2f} s")
+            _line("slip", f"max {hold.max_slip * 1000:.1f} mm relative to the hand")
+            _line("drop", f"{hold.drop * 1000:.1f} mm (object origin, release to the window's end)")
+    robustness = result.robustness
+    if robustness is not None:
+        lost = [m.label for m in robustness.members if m.held is False]
+        _line(
+            "robustness",
+            f"{_num(robustness.fraction)}: {robustness.held} of {robustness.judged} placements held "
+            "(the winner, the next best, the winner moved ±2 mm and turned ±5°)"
+            + (f"; lost: {', '.join(lost)}" if lost else ""),
+        )
+    if result.release_stability is not None:
+        directions = result.release_stability.directions
+        held = [d.direction for d in directions if d.success]
+        _line(
+            "at release",
+            f"{len(held)} of {len(directions)} gravity directions held ({', '.join(held) or 'none'}); "
+            "the hold itself is judged palm down",
+        )
     stability = result.stability
     if stability is not None:
         passed = sum(d.success for d in stability.directions)

@@ -1,7 +1,7 @@
 """``handsim/Grasp-v0``: a hand above a catalogue object on the table; lift the object and hold it.
 
 The hand is handsim's parametric default hand without its wrist DoFs, palm down
-(:func:`handsim.sim.placement.hand_frame`: fingers along +x), its root welded to a mocap target
+(:func:`handsim.sim.hand_pose.hand_frame`: fingers along +x), its root welded to a mocap target
 (``hand_root="weld"``): the weld replaces the arm, so the hand can carry the object up while contacts
 still push back. The object rests on the table with its centre under a point
 :data:`GRASP_AHEAD` ahead of the palm's centre, the palm ``hand_clearance`` above its top.
@@ -31,8 +31,7 @@ from gymnasium import spaces
 from handsim.envs._base import DEFAULT_CAMERA, DEFAULT_SIZE, HandEnv
 from handsim.envs._observation import ContactSummary, ObservationLayout, add_state
 from handsim.sim.compiled import SceneSetup, SimScene, compile_scene
-from handsim.sim.control import substeps_for
-from handsim.sim.replay import DEFAULT_CONTROL_RATE
+from handsim.sim.control import DEFAULT_CONTROL_RATE, substeps_for
 
 ROOT_CONTROLS = ("velocity", "scripted")
 GRASP_AHEAD = 0.03
@@ -124,7 +123,7 @@ def grasp_scene(object_name: str = "tennis_ball", hand_clearance: float = 0.02) 
     from handsim.builders.catalog import get
     from handsim.builders.objects import object_bounds
     from handsim.builders.scene import resting_position
-    from handsim.sim.placement import hand_frame
+    from handsim.sim.hand_pose import hand_frame
 
     obj = build_object(get(object_name))
     hand = _wristless_default_hand()

@@ -23,10 +23,9 @@ from gymnasium import spaces
 from handsim.envs._base import DEFAULT_CAMERA, DEFAULT_SIZE, HandEnv
 from handsim.envs._observation import POSE_LABELS, ContactSummary, ObservationLayout, add_state
 from handsim.sim.compiled import SimScene
-from handsim.sim.control import ControlSchedule, control_schedule
+from handsim.sim.control import DEFAULT_CONTROL_RATE, ControlSchedule, control_schedule
 from handsim.sim.drive import ScheduleDriver, scenario_switches
 from handsim.sim.metrics import MetricSpec
-from handsim.sim.replay import DEFAULT_CONTROL_RATE
 from handsim.trajectory import Trajectory
 
 DEFAULT_SEQUENCE = ("Models", "20")

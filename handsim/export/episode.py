@@ -21,7 +21,6 @@ from handsim.export.errors import ExportError, RecordMismatchError
 from handsim.runner.trial_record import sha256_file
 from handsim.sim.metrics import MetricSpec
 from handsim.sim.replay import ReplayConfig
-from handsim.sim.stability import StabilitySpec
 
 ENV_ID = "handsim/Replay-v0"
 """The environment the episodes are steps of."""
@@ -152,16 +151,13 @@ def replay_config(record: dict) -> ReplayConfig:
             f"version {MetricSpec.version!r}: run the dataset again (handsim report) with this handsim"
         )
     try:
-        stability = dict(metrics.get("stability") or {})
-        if "obman_direction" in stability:
-            stability["obman_direction"] = tuple(stability["obman_direction"])
-        spec = MetricSpec(**{**metrics, "stability": StabilitySpec(**stability)})
+        spec = MetricSpec.from_dict(metrics)
         return ReplayConfig(
             control_rate=float(params.get("control_rate", ReplayConfig.control_rate)),
             metrics=spec,
             keep_states=True,
         )
-    except (TypeError, ValueError) as exc:
+    except (KeyError, TypeError, ValueError) as exc:
         raise ExportError(f"trial {rid!r}: parameters.replay are not this handsim's: {exc}") from exc
 
 

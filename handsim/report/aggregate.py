@@ -24,13 +24,16 @@ DISTRIBUTIONS: dict[str, str] = {
     "mean_tracking_error_deg": "Mean tracking error per trial (deg)",
 }
 RANKING = (
-    "Errors first, then diverged runs, then glove trials whose object was not held, then every other "
-    "trial; within each of these tiers by max penetration (deepest first), then by max drift (largest "
-    "first), then by trial id."
+    "Errors first, then diverged runs, then glove trials whose object was not held, then glove trials whose "
+    "hold could not be judged, then every other trial; within each of these tiers by max penetration "
+    "(deepest first), then by max drift (largest first), then by trial id."
 )
-_TIERS = ("error", "diverged", "not held", "ok")
-OUTCOMES: tuple[str, ...] = ("held", "not held", "ran", "diverged", "error")
-"""How a trial ended: its object held or not (glove trials), ran without a hold test, diverged, failed."""
+_TIERS = ("error", "diverged", "not held", "not judged", "ok")
+OUTCOMES: tuple[str, ...] = ("held", "not held", "not judged", "ran", "diverged", "error")
+"""How a trial ended: its object held or not (glove trials), its hold not judged (with the reason: too short
+a window after release, an infeasible placement …), ran without a hold test, diverged, failed."""
+ROBUST = 0.8
+"""A held trial counts as robustly held when at least this fraction of its robustness ensemble held."""
 
 
 def number(value: object) -> float | None:
@@ -52,6 +55,16 @@ def held(record: dict) -> bool | None:
     if value is None:
         value = (record.get("hold") or {}).get("held")
     return value if isinstance(value, bool) else None
+
+
+def hold_judged(record: dict) -> bool:
+    """The trial has a hold outcome (a glove trial) that was judged (held or not held)."""
+    return held(record) is not None
+
+
+def has_hold(record: dict) -> bool:
+    """The trial has a hold outcome, judged or not (a glove trial that ran)."""
+    return record.get("hold") is not None
 
 
 def quality_value(record: dict, key: str) -> float | None:
@@ -92,7 +105,10 @@ def outcome(record: dict) -> str:
     """The trial's entry of :data:`OUTCOMES`."""
     if record["status"] != "ok":
         return record["status"]
-    return {True: "held", False: "not held", None: "ran"}[held(record)]
+    value = held(record)
+    if value is None:
+        return "not judged" if has_hold(record) else "ran"
+    return "held" if value else "not held"
 
 
 def outcome_counts(records: Sequence[dict], key: Callable[[dict], str | None]) -> dict[str, dict[str, int]]:
@@ -119,6 +135,8 @@ def trial_row(record: dict) -> dict:
         "frames": count(summary_value(record, "frames")),
         "duration_s": summary_value(record, "duration_s"),
         "held": held(record),
+        "hold_reason": (record.get("hold") or {}).get("reason"),
+        "hold_robustness": summary_value(record, "hold_robustness"),
         "time_held_s": summary_value(record, "time_held_s"),
         "max_slip_mm": summary_value(record, "max_slip_mm"),
         "max_penetration_mm": summary_value(record, "max_penetration_mm"),
@@ -139,14 +157,19 @@ def group_stats(records: Sequence[dict]) -> dict:
     """Statistics over a group of trials.
 
     Returns:
-        ``trials`` and counts per status; ``held`` of ``hold_judged`` (glove trials with a hold outcome)
-        and ``hold_rate``; ``slip_median_mm``/``slip_max_mm`` over each trial's max slip;
+        ``trials`` and counts per status; ``held`` of ``hold_judged`` (glove trials whose hold was judged:
+        those not judged are counted in ``not_judged`` and left out of the rates) and ``hold_rate``;
+        ``robust_held`` (held, with at least :data:`ROBUST` of the robustness ensemble held) and
+        ``robustness_mean`` (over judged trials with an ensemble); ``slip_median_mm``/``slip_max_mm`` over
+        each trial's max slip;
         ``penetration_p50_mm``/``_p95_mm``/``_max_mm`` over each trial's max penetration;
         ``drift_mean_mm`` (mean of each trial's mean drift) and ``drift_max_mm``; totals of
         ``limit_violations`` and ``gaps_filled`` (None if no trial reports them).
     """
     status = Counter(r["status"] for r in records)
     holds = [h for h in map(held, records) if h is not None]
+    judged = [r for r in records if hold_judged(r)]
+    robustness = _present(summary_value(r, "hold_robustness") for r in judged)
     slip = _present(summary_value(r, "max_slip_mm") for r in records)
     penetration = _present(summary_value(r, "max_penetration_mm") for r in records)
     drift_mean = _present(summary_value(r, "mean_drift_mm") for r in records)
@@ -159,6 +182,11 @@ def group_stats(records: Sequence[dict]) -> dict:
         "held": sum(holds),
         "hold_judged": len(holds),
         "hold_rate": sum(holds) / len(holds) if holds else None,
+        "not_judged": sum(1 for r in records if has_hold(r) and not hold_judged(r)),
+        "robust_held": sum(
+            1 for r in judged if held(r) and (summary_value(r, "hold_robustness") or 0.0) >= ROBUST
+        ),
+        "robustness_mean": _stat(robustness, np.mean),
         "slip_median_mm": _stat(slip, np.median),
         "slip_max_mm": _stat(slip, np.max),
         "penetration_p50_mm": percentile(penetration, 50),
@@ -211,7 +239,10 @@ def _tier(record: dict) -> int:
         return 0
     if record["status"] == "diverged":
         return 1
-    return 2 if held(record) is False else 3
+    value = held(record)
+    if value is False:
+        return 2
+    return 3 if value is None and has_hold(record) else 4
 
 
 def _reason(record: dict) -> str:
@@ -228,6 +259,8 @@ def _reason(record: dict) -> str:
     if tier == 2:
         reason = (record.get("hold") or {}).get("reason")
         parts.append(f"object lost: {reason}" if reason else "object not held")
+    if tier == 3:
+        parts.append(str((record.get("hold") or {}).get("reason") or "hold not judged"))
     penetration = summary_value(record, "max_penetration_mm")
     if penetration is not None:
         parts.append(f"max penetration {penetration:.2f} mm")

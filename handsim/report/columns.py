@@ -39,6 +39,18 @@ GROUP_COLUMNS: tuple[Column, ...] = (
         lambda r: fmt.rate(r["held"], r["hold_judged"]),
         help="glove trials whose object stayed in hand through the hold window, of those judged",
     ),
+    Column(
+        "robust holds",
+        lambda r: fmt.rate(r["robust_held"], r["hold_judged"]),
+        help="glove trials held with at least 80 % of their robustness ensemble (the top placements and the "
+        "winner moved ±2 mm and turned ±5°) held, of those judged",
+    ),
+    Column(
+        "not judged",
+        lambda r: str(r["not_judged"]),
+        help="glove trials whose hold could not be judged (too short a window after release, no feasible "
+        "placement …): left out of the rates",
+    ),
     Column("slip p50 mm", lambda r: fmt.num(r["slip_median_mm"], 1), help="median of each trial's max slip"),
     Column("slip max mm", lambda r: fmt.num(r["slip_max_mm"], 1), help="largest max slip"),
     Column(
@@ -78,7 +90,13 @@ TRIAL_COLUMNS: tuple[Column, ...] = (
         "outcome",
         lambda r: r["outcome"],
         numeric=False,
-        help="held, not held, ran (no hold test), diverged, error",
+        help="held, not held, not judged (why: in the trial's section), ran (no hold test), diverged, error",
+    ),
+    Column(
+        "robustness",
+        lambda r: fmt.num(r["hold_robustness"]),
+        help="fraction of the robustness ensemble (the top placements and the winner moved ±2 mm and turned "
+        "±5°) whose object was held",
     ),
     Column("object", lambda r: fmt.text(r["object"]), numeric=False),
     Column("grasp", lambda r: fmt.text(r["grasp"]), numeric=False),

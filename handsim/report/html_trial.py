@@ -5,12 +5,12 @@ from __future__ import annotations
 import json
 from collections.abc import Sequence
 
+from handsim.fingers import FINGER_GROUPS
 from handsim.report import fmt
 from handsim.report.aggregate import number
 from handsim.report.charts import Markers, Series, area_chart, line_chart
 from handsim.report.frames import FrameImage
 from handsim.report.markup import badge, esc, numbers, simple_table
-from handsim.runner.fingers import FINGER_GROUPS
 
 SUMMARY_FIELDS: tuple[tuple[str, str, int | None], ...] = (
     # key, label, decimals (None: whole number / boolean / text)
@@ -212,9 +212,14 @@ def _hold(record: dict) -> str:
     items = [
         ("released at s", fmt.num(number(hold.get("released_at")), 3)),
         ("hold window s", f"{fmt.num(number(window[0]), 2)} – {fmt.num(number(window[1]), 2)}"),
-        ("held", fmt.yes_no(hold.get("held"))),
+        ("held", "not judged" if hold.get("held") is None else fmt.yes_no(hold.get("held"))),
         ("lost at s", fmt.num(number(hold.get("lost_at")), 3)),
-        ("why lost", fmt.text(hold.get("reason"))),
+        ("why lost" if hold.get("held") is False else "why not judged", fmt.text(hold.get("reason"))),
+        ("robustness", fmt.num(number((record.get("summary") or {}).get("hold_robustness")))),
+        (
+            "gravity directions held at release",
+            fmt.integer(number((record.get("summary") or {}).get("release_directions_held"))),
+        ),
     ]
     return "<h4>Hold outcome</h4>" + numbers(items)
 
@@ -309,7 +314,7 @@ def trial_section(record: dict, row: dict, images: Sequence[FrameImage], trials:
     tier_class = {"error": "error", "diverged": "diverged"}.get(record["status"], "")
     reason = (
         f'<div class="reason {tier_class}">{esc(row["reason"])}</div>'
-        if row["outcome"] in ("not held", "diverged")
+        if row["outcome"] in ("not held", "not judged", "diverged")
         else ""
     )
     diverged = record.get("diverged") or {}

@@ -6,6 +6,7 @@ STATUS_COLOURS: dict[str, str] = {
     "held": "#2f8f5b",
     "ok": "#2f8f5b",
     "not held": "#e0a030",
+    "not judged": "#8c96a3",
     "ran": "#6b8fc7",
     "diverged": "#b45fc4",
     "error": "#c8423b",

@@ -14,7 +14,7 @@ from pathlib import Path
 
 import numpy as np
 
-from handsim.runner.fingers import finger_groups
+from handsim.fingers import finger_groups
 from handsim.sim.compiled import SimScene
 from handsim.sim.replay import ReplayResult
 from handsim.trajectory import Trajectory

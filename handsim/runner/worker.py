@@ -80,6 +80,8 @@ def base_record(entry: TrialEntry, config: ReplayConfig, frames: int) -> dict:
         "scenario": None,
         "summary": None,
         "hold": None,
+        "robustness": None,
+        "release_stability": None,
         "stability": None,
         "warnings": [],
         "diverged": None,
@@ -162,6 +164,10 @@ def trial_outcome(entry: TrialEntry, config: ReplayConfig, frames: int = 4) -> T
             status="diverged" if result.diverged is not None else "ok",
             summary=result.summary,
             hold=None if result.hold is None else result.hold.to_dict(),
+            robustness=None if result.robustness is None else result.robustness.to_dict(),
+            release_stability=None
+            if result.release_stability is None
+            else result.release_stability.to_dict(),
             stability=None if result.stability is None else result.stability.to_dict(),
             warnings=[dataclasses.asdict(w) for w in result.warnings],
             diverged=None if result.diverged is None else dataclasses.asdict(result.diverged),

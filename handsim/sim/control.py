@@ -19,6 +19,9 @@ from handsim.sim.stepper import check_controls
 from handsim.trajectory import ObjectTrack, Trajectory
 from handsim.trajectory_ops import resample
 
+DEFAULT_CONTROL_RATE = 100.0
+"""Hz: 5 steps of 2 ms per frame; above the GraspDB14 glove's ~60 Hz and Tzionas' 30 Hz."""
+
 
 @dataclass(frozen=True)
 class ControlSchedule:

@@ -10,6 +10,7 @@ recorded state.
 
 from __future__ import annotations
 
+import math
 from dataclasses import asdict, dataclass, field
 
 import mujoco
@@ -19,26 +20,33 @@ from handsim.poses import compose, inverse, quat_angle
 from handsim.sim.compiled import SimScene
 from handsim.sim.control import ControlSchedule
 from handsim.sim.layout import _SLOT, CONTACT_SLOTS
+from handsim.sim.placement import PlacementSpec
 from handsim.sim.stability import StabilitySpec
 
-METRIC_SPEC_VERSION = "1"
+METRIC_SPEC_VERSION = "2"
 
 
 @dataclass(frozen=True)
 class MetricSpec:
-    """Every parameter the metrics and scenarios use; written into each result.
+    """Every parameter the metrics and scenarios use; written into each result (sources: docs/physics.md).
 
     Attributes:
         version: Changes whenever a definition or default below changes.
         drift_tolerance: Recorded objects: a frame is "on track" when the object's position is within this
             distance of the recording, m (the issue's 1 cm).
-        release_delay: Glove scenario: the support is switched off this long after the grasp frame, s
+        release_delay: Glove scenario: the support is switched off this long after the grasp has closed, s
             (lets the fingers reach the grasp the recording reached; ~3 servo time constants).
         slip_limit: Glove scenario: the object is lost once it moved this far relative to the hand root
             since release, m.
         contact_gap: Glove scenario: the object is lost once no hand link touched it for this long, s.
-        placement_penetration: Glove placement: largest penetration allowed at the grasp frame, m.
-        placement_touch: Glove placement: a link within this distance of the object counts as touching, m.
+        min_hold_window: Glove scenario: holding is judged only over at least this long after release, s;
+            a shorter window is "not judged". An object in free fall crosses the 2 cm slip limit in 64 ms
+            (√(2 · 0.02 / 9.81)); over 0.3 s any slip accelerating at 0.45 m/s² (5 % of g) or more does.
+        robustness_shift: Glove scenario: the hold-robustness ensemble moves the placed object by this much
+            along each axis of the scene, m.
+        robustness_turn_deg: … and turns it by this much about each axis, degrees.
+        placement: The glove placement search's parameters
+            (:class:`~handsim.sim.placement.PlacementSpec`).
         stability: The grasp stability tests' parameters (:class:`~handsim.sim.stability.StabilitySpec`).
     """
 
@@ -47,13 +55,50 @@ class MetricSpec:
     release_delay: float = 0.1
     slip_limit: float = 0.02
     contact_gap: float = 0.1
-    placement_penetration: float = 0.002
-    placement_touch: float = 0.002
+    min_hold_window: float = 0.3
+    robustness_shift: float = 0.002
+    robustness_turn_deg: float = 5.0
+    placement: PlacementSpec = field(default_factory=PlacementSpec)
     stability: StabilitySpec = field(default_factory=StabilitySpec)
+
+    def __post_init__(self) -> None:
+        if self.version != METRIC_SPEC_VERSION:
+            raise ValueError(
+                f"unknown metric spec version {self.version!r}; this handsim knows {METRIC_SPEC_VERSION!r}"
+            )
+        for name in ("drift_tolerance", "slip_limit", "contact_gap", "min_hold_window"):
+            value = getattr(self, name)
+            if not (math.isfinite(value) and value > 0):
+                raise ValueError(f"{name} must be a positive finite number, got {value}")
+        for name in ("release_delay", "robustness_shift", "robustness_turn_deg"):
+            value = getattr(self, name)
+            if not (math.isfinite(value) and value >= 0):
+                raise ValueError(f"{name} must be a finite number ≥ 0, got {value}")
 
     def to_dict(self) -> dict:
         """JSON-ready parameters."""
-        return asdict(self)
+        result = asdict(self)
+        result["placement"] = self.placement.to_dict()
+        result["stability"] = self.stability.to_dict()
+        return result
+
+    @classmethod
+    def from_dict(cls, fields: dict) -> MetricSpec:
+        """The spec whose :meth:`to_dict` gave ``fields`` (as read back from JSON).
+
+        Raises:
+            ValueError: ``fields`` are of another version, or a value is out of its range.
+        """
+        values = dict(fields)
+        if values.get("version") != METRIC_SPEC_VERSION:
+            raise ValueError(
+                f"metric spec version {values.get('version')!r}; this handsim reads {METRIC_SPEC_VERSION!r}"
+            )
+        stability = dict(values["stability"])
+        stability["obman_direction"] = tuple(stability["obman_direction"])
+        values["stability"] = StabilitySpec(**stability)
+        values["placement"] = PlacementSpec.from_dict(values["placement"])
+        return cls(**values)
 
 
 @dataclass(frozen=True)

@@ -1,407 +1,541 @@
-"""Where to put the object a glove recording grasped.
+"""Where to put the object a glove recording grasped: where it fits in the closing hand and is gripped best.
 
-The grasp frame, the hand's palm-down frame, and a search for the object pose with the most touching hand
-links and little penetration.
+GraspDB14 records the hand, not the object, and a CyberGlove's calibration usually over-reports flexion:
+at the closed frame the recorded fingers lie *inside* the object they held (fingertips 22–26 mm from the
+thumb tip around a 64 mm ball in the shared recordings). So the object is placed where it fits in the hand
+*before* closure, and the recorded closing then grips it — the fingers the recording closes past the object
+stop at its surface and press on it.
 
-GraspDB14 records the hand, not the object. The object is placed where the recorded grasp closes on it:
-at the grasp frame the hand is put at its targets and candidate object poses (a grid over the hand's
-reach, and 24 axis-aligned orientations unless the object is a sphere) are scored by MuJoCo's own
-collision detection: the number of hand links within :attr:`MetricSpec.placement_touch` of the object,
-among poses whose deepest penetration is at most :attr:`MetricSpec.placement_penetration`; ties go to the
-shallower penetration, then to the pose nearest the fingertips' centre (the search is deterministic). The
-best few are refined on finer grids (10 mm → 2.5 mm → 1 mm).
+The search (:func:`place_object`):
+
+1. **Candidates.** At the closing-ramp frames of :attr:`PlacementSpec.search_fractions`
+   (:func:`handsim.sim.grasp_frame.closing_frames`), object poses on a grid over the hand's reach (24
+   axis-aligned orientations unless the object is a sphere) are scored by MuJoCo's own collision detection
+   (:class:`~handsim.sim.collide.HandObjectCollider`): poses with at most
+   :attr:`PlacementSpec.penetration` of penetration that touch the most hand links, ties to the pose nearest
+   the fingertips' centre at the closed frame. The best :attr:`PlacementSpec.seeds` of each level are
+   refined on a finer grid.
+2. **Fit frame.** Each candidate's fit frame is the latest frame of the closing ramp at which the hand at its
+   targets penetrates it at most :attr:`PlacementSpec.penetration`: its flexion fraction says how far the
+   recorded closing passes the object (1.0: it fits at full closure).
+3. **Grip.** From its fit frame to the release, the recorded closing grips each candidate held in place, and
+   the grasp stability test (gravity along ±x ±y ±z, after DexGraspNet; :mod:`handsim.sim.grip`) counts the
+   directions the grip resists. The winner resists the most directions; ties go to the later fit (less
+   over-closure assumed), then to the smaller mean displacement, then to more links and less penetration.
+
+Every pose within the tolerance is a candidate: when none touches the hand, the feasible pose nearest the
+fingertips' centre is kept (with a note); only when no pose of any level is within the tolerance is the
+placement infeasible, and then it says so with the numbers (the replay's hold is then not judged).
 """
 
 from __future__ import annotations
 
-import copy
 import itertools
-from dataclasses import dataclass
+import math
+from dataclasses import asdict, dataclass, field, replace
 
 import mujoco
 import numpy as np
 
-from handsim.errors import TrajectoryError
+from handsim.fingers import finger_of
 from handsim.poses import quat_multiply
+from handsim.sim.collide import HandObjectCollider
 from handsim.sim.compiled import SimScene
-from handsim.sim.metrics import MetricSpec
+from handsim.sim.grasp_frame import GraspFrame, closing_frames, flexion_fraction
+from handsim.sim.grip import GripBench, GripResult
+from handsim.sim.hand_pose import targets_qpos
+from handsim.sim.stability import StabilitySpec
 from handsim.trajectory import Trajectory
 
-GRASP_PHASE = "grasp"
-PEAK_WINDOW = 0.8
-"""Without a ``grasp`` phase, the hold window is the frames around peak flexion above this fraction of
-the flexion range."""
-CLOSED_FRACTION = 0.98
-"""The grasp has closed at the first frame of the window whose flexion has risen this fraction of the way
-from the window's first frame to its peak."""
-GRID_STEPS = (0.01, 0.0025, 0.001)
-"""Search grid spacings, m; each refinement spans ±2 steps of the previous grid around each seed."""
-SEEDS = 6
-"""Best candidates of a grid level that seed the next, finer level."""
+PLACEMENT_SPEC_VERSION = "2"
+_FINGERS = frozenset({"index", "middle", "ring", "little"})
 
 
 @dataclass(frozen=True)
-class GraspFrame:
-    """The frame a glove trial's grasp closes at, and the frames holding is judged over.
+class PlacementSpec:
+    """Every parameter of the glove placement search (written into each result).
 
     Attributes:
-        frame: Trajectory frame index of first contact, where the object is placed.
-        closed: Frame at which the grasp has closed (flexion reaches its peak within the window): the
-            object's support is released from there.
-        window: First and last frame of the hold window (inclusive).
-        source: ``"phase"`` (the annotated ``grasp`` phase) or ``"peak flexion"``.
-        note: For people.
+        version: Changes whenever a definition or default below changes.
+        penetration: Largest penetration of the hand at its targets into the placed object at its fit
+            frame, m (about a finger pad's compression under 1 N; see docs/physics.md).
+        touch: A link within this distance of the object counts as touching, m.
+        search_fractions: Flexion fractions of the closing ramp at which the pose grid is searched.
+        coarse_step: Smallest spacing of the coarse grid, m.
+        coarse_points: Most grid positions per orientation on the coarse grid (its spacing grows for big
+            objects to stay under it).
+        fine_step: Finest spacing of the refinement around each seed, m: the spacing is halved from the
+            coarse step down to it, each time on the 5 × 5 × 5 grid around the best pose so far.
+        seeds: Best coarse poses per search level that are refined and grip-tested.
+        grip: The stability test that scores each candidate's grip (the documented test: 1 s per direction;
+            a direction's run stops once the object has moved its limit).
+        alternatives: Next-best placements kept for the hold-robustness ensemble.
     """
 
-    frame: int
-    closed: int
-    window: tuple[int, int]
-    source: str
-    note: str
+    version: str = PLACEMENT_SPEC_VERSION
+    penetration: float = 0.002
+    touch: float = 0.002
+    search_fractions: tuple[float, ...] = (0.8, 0.6)
+    coarse_step: float = 0.01
+    coarse_points: int = 3000
+    fine_step: float = 0.0025
+    seeds: int = 4
+    grip: StabilitySpec = field(default_factory=StabilitySpec)
+    alternatives: int = 2
+
+    def __post_init__(self) -> None:
+        if self.version != PLACEMENT_SPEC_VERSION:
+            raise ValueError(
+                f"unknown placement spec version {self.version!r}; "
+                f"this handsim knows {PLACEMENT_SPEC_VERSION!r}"
+            )
+        for name in ("penetration", "touch", "coarse_step", "fine_step"):
+            value = getattr(self, name)
+            if not (math.isfinite(value) and value > 0):
+                raise ValueError(f"placement {name} must be a positive finite number, got {value}")
+        if not self.search_fractions or not all(0.0 <= s <= 1.0 for s in self.search_fractions):
+            raise ValueError(f"search_fractions must be fractions in [0, 1], got {self.search_fractions}")
+        for name in ("coarse_points", "seeds"):
+            if getattr(self, name) < 1:
+                raise ValueError(f"placement {name} must be ≥ 1, got {getattr(self, name)}")
+        if self.alternatives < 0:
+            raise ValueError(f"placement alternatives must be ≥ 0, got {self.alternatives}")
+        object.__setattr__(self, "search_fractions", tuple(float(s) for s in self.search_fractions))
 
     def to_dict(self) -> dict:
-        """JSON-ready fields."""
-        return {
-            "frame": self.frame,
-            "closed": self.closed,
-            "window": list(self.window),
-            "source": self.source,
-        }
+        """JSON-ready parameters."""
+        result = asdict(self)
+        result["search_fractions"] = list(self.search_fractions)
+        result["grip"] = self.grip.to_dict()
+        return result
 
-
-def _flexion(trajectory: Trajectory) -> np.ndarray:
-    cols = [i for i, n in enumerate(trajectory.dof_names) if "flex" in n and not n.startswith("root")]
-    if not cols:
-        raise TrajectoryError(
-            f"{trajectory.source or 'trajectory'}: no finger flexion DoFs (names containing 'flex') "
-            "to find the grasp frame from; annotate a 'grasp' phase"
-        )
-    return np.asarray(trajectory.targets, dtype=float)[:, cols].sum(axis=1)
-
-
-def grasp_frame(trajectory: Trajectory) -> GraspFrame:
-    """The grasp frame and the frame the grasp has closed at.
-
-    With an annotated ``grasp`` phase: its first frame (the hand reaches the object), closed at
-    :data:`CLOSED_FRACTION` of the flexion rise within the phase; the window is the phase. Without one:
-    the frames above :data:`PEAK_WINDOW` of the flexion range around the peak; the grasp frame is their
-    first, closed at the same fraction of the rise to the peak.
-
-    Raises:
-        TrajectoryError: No flexion DoFs (names containing ``flex``).
-    """
-    flex = _flexion(trajectory)
-    for phase in trajectory.phases:
-        if phase.name.strip(".") == GRASP_PHASE and phase.stop > phase.start:
-            lo, hi = phase.start, phase.stop - 1
-            closed = _closed(flex, lo, hi)
-            return GraspFrame(
-                frame=lo,
-                closed=closed,
-                window=(lo, hi),
-                source="phase",
-                note=f"grasp frame {lo} = start of the annotated 'grasp' phase (frames {lo}–{hi}, 0-based); "
-                f"closed at frame {closed}",
-            )
-    peak = int(np.argmax(flex))
-    level = flex.min() + PEAK_WINDOW * (flex[peak] - flex.min())
-    lo = peak
-    while lo > 0 and flex[lo - 1] >= level:
-        lo -= 1
-    hi = peak
-    while hi + 1 < flex.shape[0] and flex[hi + 1] >= level:
-        hi += 1
-    closed = _closed(flex, lo, hi)
-    return GraspFrame(
-        frame=lo,
-        closed=closed,
-        window=(lo, hi),
-        source="peak flexion",
-        note=f"no 'grasp' phase: grasp frame {lo} = first of frames {lo}–{hi} above {PEAK_WINDOW:.0%} of the "
-        f"flexion range (peak at {peak}); closed at frame {closed}",
-    )
-
-
-def _closed(flex: np.ndarray, lo: int, hi: int) -> int:
-    window = flex[lo : hi + 1]
-    level = window[0] + CLOSED_FRACTION * (window.max() - window[0])
-    return lo + int(np.argmax(window >= level))
-
-
-def _targets_qpos(scene: SimScene, trajectory: Trajectory, frame: int) -> np.ndarray:
-    layout = scene.layout
-    qpos = scene.model.qpos0.copy()
-    column = {n: i for i, n in enumerate(trajectory.dof_names)}
-    values = np.array(
-        [trajectory.targets[frame, column[n]] if n in column else 0.0 for n in layout.dof_names]
-    )
-    qpos[layout.dof_qpos] = np.clip(values, layout.ctrl_range[:, 0], layout.ctrl_range[:, 1])
-    return qpos
-
-
-def hand_frame(scene: SimScene) -> np.ndarray:
-    """Orientation (w, x, y, z) to attach the hand with: fingers along +x, palm facing −z (palm down).
-
-    The palm normal is where the fingertips move when every finger flexion DoF goes to half its upper
-    limit, so it does not depend on the hand being left or right.
-
-    Args:
-        scene: A scene with the hand attached with the identity orientation.
-    """
-    model, layout = scene.model, scene.layout
-    data = mujoco.MjData(model)
-    flex = np.array(["flex" in n and not n.startswith("root") for n in layout.dof_names])
-    rest = np.clip(0.0, layout.ctrl_range[:, 0], layout.ctrl_range[:, 1])
-    data.qpos[layout.dof_qpos] = rest
-    mujoco.mj_kinematics(model, data)
-    tips0 = data.site_xpos[layout.tip_sites].copy()
-    root = data.xpos[layout.root_body].copy()
-    data.qpos[layout.dof_qpos] = np.where(flex, 0.5 * layout.ctrl_range[:, 1], rest)
-    mujoco.mj_kinematics(model, data)
-    tips1 = data.site_xpos[layout.tip_sites]
-    fingers = tips0.mean(axis=0) - root
-    fingers /= np.linalg.norm(fingers)
-    palm = (tips1 - tips0).mean(axis=0)
-    palm -= fingers * (palm @ fingers)
-    palm /= np.linalg.norm(palm)
-    hand = np.column_stack([fingers, palm, np.cross(fingers, palm)])
-    world = np.column_stack([[1.0, 0, 0], [0, 0, -1.0], [0, 1.0, 0]])
-    quat = np.empty(4)
-    mujoco.mju_mat2Quat(quat, (world @ hand.T).ravel())
-    return quat
-
-
-def _orientations(model: mujoco.MjModel, bodies: tuple[int, ...]) -> np.ndarray:
-    geoms = [
-        g
-        for g in range(model.ngeom)
-        if model.geom_bodyid[g] in bodies and (model.geom_contype[g] or model.geom_conaffinity[g])
-    ]
-    if all(int(model.geom_type[g]) == int(mujoco.mjtGeom.mjGEOM_SPHERE) for g in geoms) and len(bodies) == 1:
-        return np.array([[1.0, 0.0, 0.0, 0.0]])
-    h = np.sqrt(0.5)
-    faces = [
-        [1, 0, 0, 0],
-        [h, h, 0, 0],
-        [0, 1, 0, 0],
-        [h, -h, 0, 0],
-        [h, 0, h, 0],
-        [h, 0, -h, 0],
-    ]  # which axis is up
-    spins = [[np.cos(a / 2), 0, 0, np.sin(a / 2)] for a in (0, np.pi / 2, np.pi, 3 * np.pi / 2)]
-    return np.array([quat_multiply(s, f) for f, s in itertools.product(faces, spins)])
+    @classmethod
+    def from_dict(cls, fields: dict) -> PlacementSpec:
+        """The spec whose :meth:`to_dict` gave ``fields``."""
+        values = dict(fields)
+        values["search_fractions"] = tuple(values["search_fractions"])
+        grip = dict(values["grip"])
+        grip["obman_direction"] = tuple(grip["obman_direction"])
+        values["grip"] = StabilitySpec(**grip)
+        return cls(**values)
 
 
 @dataclass(frozen=True)
-class Placement:
-    """The object pose a search found.
+class Candidate:
+    """An object pose the search keeps, with what it found out about it.
 
     Attributes:
-        pose: Object pose (x, y, z, qw, qx, qy, qz) in the search scene's world.
-        links: Hand links touching it.
-        penetration: Deepest penetration, m.
-        candidates: Poses evaluated.
-        lowest_z: World height of the object's lowest collision point at ``pose``, m.
-        note: For people.
+        pose: (x, y, z, qw, qx, qy, qz) in the search scene's world.
+        links: Hand links touching it at its fit frame.
+        depth: Deepest penetration at its fit frame, m.
+        fit_frame: Latest closing-ramp frame at which it fits (penetration within the tolerance).
+        fit_fraction: The fit frame's flexion fraction (1.0: it fits at full closure).
+        contact_frame: First frame of the run of frames up to the fit frame in which it fits: hand–object
+            contacts act from there.
+        depth_before_contact: Deepest penetration in the frame before ``contact_frame``, m (0 when the run
+            starts at frame 0).
+        grip: Its grip test, or None before it is run.
     """
 
     pose: np.ndarray
     links: tuple[str, ...]
-    penetration: float
-    candidates: int
-    lowest_z: float
-    note: str
+    depth: float
+    fit_frame: int
+    fit_fraction: float
+    contact_frame: int
+    depth_before_contact: float
+    grip: GripResult | None = None
+
+    def score(self) -> tuple:
+        """Larger is better: directions held, later fit, smaller mean displacement, more links, less depth."""
+        held = -1 if self.grip is None else self.grip.directions_held
+        moved = np.inf if self.grip is None else self.grip.mean_displacement
+        return (held, round(self.fit_fraction, 6), -moved, len(self.links), -self.depth)
 
     def to_dict(self) -> dict:
         """JSON-ready fields."""
         return {
             "pose": self.pose.tolist(),
             "links": list(self.links),
-            "penetration_m": self.penetration,
-            "candidates": self.candidates,
+            "penetration_m": self.depth,
+            "fit_frame": self.fit_frame,
+            "fit_fraction": self.fit_fraction,
+            "contact_frame": self.contact_frame,
+            "depth_before_contact_m": self.depth_before_contact,
+            "grip": None if self.grip is None else self.grip.to_dict(),
         }
 
 
-class _Scorer:
-    def __init__(self, scene: SimScene, qpos: np.ndarray, spec: MetricSpec) -> None:
-        self.model = copy.deepcopy(scene.model)
-        layout = scene.layout
-        self.obj = layout.objects[0]
-        body_of = self.model.geom_bodyid
-        self.is_obj = np.isin(body_of, self.obj.part_bodies)
-        self.model.geom_margin[self.is_obj] = spec.placement_touch
-        self.link_index = np.full(self.model.nbody, -1)
-        self.link_index[layout.link_bodies] = np.arange(layout.link_bodies.size)
-        self.data = mujoco.MjData(self.model)
-        self.data.qpos[:] = qpos
-        self.tolerance = spec.placement_penetration
-        self.touch = spec.placement_touch
-        self.count = 0
+@dataclass(frozen=True)
+class Placement:
+    """The object pose a search found, and how it found it.
 
-    def __call__(self, pos: np.ndarray, quat: np.ndarray) -> tuple[int, float, np.ndarray]:
-        d, a = self.data, self.obj.free_qpos
-        d.qpos[a : a + 3] = pos
-        d.qpos[a + 3 : a + 7] = quat
-        mujoco.mj_kinematics(self.model, d)
-        mujoco.mj_collision(self.model, d)
-        self.count += 1
-        n = d.ncon
-        if n == 0:
-            return 0, 0.0, np.zeros(0, dtype=np.int64)
-        geom = d.contact.geom[:n]
-        dist = d.contact.dist[:n]
-        obj1, obj2 = self.is_obj[geom[:, 0]], self.is_obj[geom[:, 1]]
-        other = np.where(obj1, geom[:, 1], geom[:, 0])
-        link = self.link_index[self.model.geom_bodyid[other]]
-        mask = (obj1 ^ obj2) & (link >= 0)
-        if not mask.any():
-            return 0, 0.0, np.zeros(0, dtype=np.int64)
-        depth = float(max(0.0, -dist[mask].min()))
-        links = np.unique(link[mask & (dist <= self.touch)])
-        return int(links.size), depth, links
+    Attributes:
+        best: The winning candidate (its pose in the search scene's world).
+        alternatives: The next-best grip-tested candidates, best first (for the robustness ensemble).
+        perturbations: The winner moved and turned by fixed amounts (for the robustness ensemble), each with
+            its label (``"+x 2 mm"``, ``"-z 5°"`` …) and its own fit and contact frames.
+        feasible: Some pose was within the penetration tolerance; False: ``best`` is the least penetrating
+            pose seen and the hold cannot be judged.
+        queries: Collision queries run (poses and frames tried).
+        grip_tests: Candidates whose grip was tested.
+        feasible_poses: Poses within the tolerance seen on the grids.
+        lowest_z: World height of the object's lowest collision point at ``best.pose``, m.
+        spec: The :class:`PlacementSpec` used (JSON-ready).
+        note: For people.
+    """
+
+    best: Candidate
+    alternatives: tuple[Candidate, ...]
+    perturbations: tuple[tuple[str, Candidate], ...]
+    feasible: bool
+    queries: int
+    grip_tests: int
+    feasible_poses: int
+    lowest_z: float
+    spec: dict
+    note: str
+
+    @property
+    def pose(self) -> np.ndarray:
+        """The winning pose."""
+        return self.best.pose
+
+    def to_dict(self) -> dict:
+        """JSON-ready fields."""
+        return {
+            **self.best.to_dict(),
+            "feasible": self.feasible,
+            "candidates": self.queries,
+            "grip_tests": self.grip_tests,
+            "feasible_poses": self.feasible_poses,
+            "alternatives": [c.to_dict() for c in self.alternatives],
+            "perturbations": [{"label": label, **c.to_dict()} for label, c in self.perturbations],
+            "spec": self.spec,
+        }
 
 
-def _grid(center: np.ndarray, half: np.ndarray, step: float) -> np.ndarray:
+def _orientations(model: mujoco.MjModel, collider: HandObjectCollider) -> np.ndarray:
+    geoms = np.flatnonzero(collider.is_obj)
+    sphere = int(mujoco.mjtGeom.mjGEOM_SPHERE)
+    if len(collider.obj.part_bodies) == 1 and all(int(model.geom_type[g]) == sphere for g in geoms):
+        return np.array([[1.0, 0.0, 0.0, 0.0]])
+    h = np.sqrt(0.5)
+    faces = [[1, 0, 0, 0], [h, h, 0, 0], [0, 1, 0, 0], [h, -h, 0, 0], [h, 0, h, 0], [h, 0, -h, 0]]
+    spins = [[np.cos(a / 2), 0, 0, np.sin(a / 2)] for a in (0, np.pi / 2, np.pi, 3 * np.pi / 2)]
+    return np.array([quat_multiply(s, f) for f, s in itertools.product(faces, spins)])
+
+
+def _object_points(collider: HandObjectCollider) -> np.ndarray:
+    """The object's collision points in its root body's frame (mesh vertices; primitive bounding boxes)."""
+    model, data = collider.model, collider.data
+    a = collider.obj.free_qpos
+    data.qpos[a : a + 7] = [0, 0, 0, 1, 0, 0, 0]
+    mujoco.mj_kinematics(model, data)
+    points = []
+    for g in np.flatnonzero(collider.is_obj):
+        rot, pos = data.geom_xmat[g].reshape(3, 3), data.geom_xpos[g]
+        mesh = int(model.geom_dataid[g])
+        if int(model.geom_type[g]) == int(mujoco.mjtGeom.mjGEOM_MESH) and mesh >= 0:
+            start, count = model.mesh_vertadr[mesh], model.mesh_vertnum[mesh]
+            points.append(model.mesh_vert[start : start + count] @ rot.T + pos)
+        else:
+            r = model.geom_rbound[g]
+            corners = np.array(list(itertools.product((-r, r), repeat=3)))
+            points.append(corners + pos)
+    return np.vstack(points)
+
+
+def _grid(lo: np.ndarray, hi: np.ndarray, step: float) -> np.ndarray:
     axes = [
-        np.arange(-np.floor(h / step), np.floor(h / step) + 1) * step + c
-        for c, h in zip(center, half, strict=True)
+        np.arange(a, b + 1e-9, step) if b > a else np.array([(a + b) / 2])
+        for a, b in zip(lo, hi, strict=True)
     ]
     return np.stack(np.meshgrid(*axes, indexing="ij"), axis=-1).reshape(-1, 3)
 
 
-def place_object(scene: SimScene, trajectory: Trajectory, frame: int, spec: MetricSpec) -> Placement:
-    """Search the object pose that the hand, at its targets of ``frame``, touches with the most links.
+def _around(center: np.ndarray, half: float, step: float) -> np.ndarray:
+    n = int(np.floor(half / step + 1e-9))
+    offsets = np.arange(-n, n + 1) * step
+    return center + np.stack(np.meshgrid(offsets, offsets, offsets, indexing="ij"), axis=-1).reshape(-1, 3)
+
+
+class _Search:
+    """The grid search at one hand posture (see the module docstring)."""
+
+    def __init__(
+        self, scene: SimScene, trajectory: Trajectory, grasp: GraspFrame, spec: PlacementSpec
+    ) -> None:
+        self.scene, self.trajectory, self.grasp, self.spec = scene, trajectory, grasp, spec
+        self.collider = HandObjectCollider(scene, spec.touch)
+        self.quats = _orientations(self.collider.model, self.collider)
+        self.points = _object_points(self.collider)
+        self.radius = float(np.linalg.norm(self.points, axis=1).max())
+        layout = scene.layout
+        collider = self.collider
+        collider.set_hand(targets_qpos(scene, trajectory, grasp.closed))
+        mujoco.mj_kinematics(collider.model, collider.data)
+        tips = collider.data.site_xpos[layout.tip_sites].copy()
+        self.centre = tips.mean(axis=0)
+        thumbs = [i for i, name in enumerate(layout.tip_names) if finger_of(name) == "thumb"]
+        others = [i for i in range(len(tips)) if i not in thumbs]
+        self.grasp_points = np.vstack(
+            [self.centre, *((tips[t] + tips[o]) / 2 for t in thumbs for o in others)]
+        )
+        self.groups = [finger_of(name) for name in layout.link_names]
+        self.feasible_poses = 0
+        self.least: tuple[float, np.ndarray] | None = None  # least penetration seen, pose
+        self.nearest: tuple[float, np.ndarray] | None = None  # feasible pose nearest the centre
+
+    def _reach(self) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        collider, layout = self.collider, self.scene.layout
+        mujoco.mj_kinematics(collider.model, collider.data)
+        data = collider.data
+        reach = np.vstack([data.xpos[layout.link_bodies], data.site_xpos[layout.tip_sites]])
+        centres, radii = collider.hand_spheres()
+        return reach.min(axis=0), reach.max(axis=0), centres, radii
+
+    def _consider(self, pose: np.ndarray, depth: float) -> None:
+        if self.least is None or depth < self.least[0]:
+            self.least = (depth, pose)
+        if depth <= self.spec.penetration:
+            self.feasible_poses += 1
+            distance = float(np.linalg.norm(pose[:3] - self.centre))
+            if self.nearest is None or distance < self.nearest[0]:
+                self.nearest = (distance, pose)
+
+    def _fits(self, frame: int, poses: list[np.ndarray]) -> list[tuple[np.ndarray, int]]:
+        """The poses that fit (within the tolerance) and touch the hand at ``frame``, with their links."""
+        self.collider.set_hand(targets_qpos(self.scene, self.trajectory, frame))
+        fitting = []
+        for pose in poses:
+            touch = self.collider.touch_at(pose[:3], pose[3:])
+            self._consider(pose, touch.depth)
+            if touch.depth <= self.spec.penetration and touch.links.size:
+                fitting.append((pose, int(touch.links.size)))
+        return fitting
+
+    def _ranked(self, fitting: list[tuple[np.ndarray, int]]) -> list[tuple[tuple, np.ndarray]]:
+        """Fitting poses ranked by what the recorded closing does to them (best first).
+
+        At the closed frame a finger whose links lie deeper than the tolerance inside the object is one the
+        recording closes past it: it will press on it. The key: the pressing fingers oppose each other (the
+        thumb or the palm against a finger), how many finger groups press, how many links touch where it
+        fits, and closeness to the fingertips' centre.
+        """
+        self.collider.set_hand(targets_qpos(self.scene, self.trajectory, self.grasp.closed))
+        ranked = []
+        for pose, links in fitting:
+            touch = self.collider.touch_at(pose[:3], pose[3:])
+            pressing = {self.groups[i] for i in np.flatnonzero(touch.distance < -self.spec.penetration)}
+            pressing |= {"palm" for i in touch.links if self.groups[i] == "palm"}
+            opposed = bool(pressing & {"thumb", "palm"}) and bool(pressing & _FINGERS)
+            key = (opposed, len(pressing), links, -float(np.linalg.norm(pose[:3] - self.centre)))
+            ranked.append((key, pose))
+        ranked.sort(key=lambda item: item[0], reverse=True)
+        return ranked
+
+    def level(self, frame: int) -> list[np.ndarray]:
+        """The seeds of one closing frame, each refined on the fine grid around it: poses, best first."""
+        spec, collider = self.spec, self.collider
+        collider.set_hand(targets_qpos(self.scene, self.trajectory, frame))
+        lo, hi, centres, radii = self._reach()
+        coarse, steps = [], {}
+        for quat in self.quats:
+            rot = np.empty(9)
+            mujoco.mju_quat2Mat(rot, quat)
+            extent = self.points @ rot.reshape(3, 3).T
+            # the object's box holds a point the closing converges on, and it lies within the hand's reach
+            low = np.maximum(lo, self.grasp_points.min(axis=0) - spec.coarse_step) - extent.max(axis=0)
+            high = np.minimum(hi, self.grasp_points.max(axis=0) + spec.coarse_step) - extent.min(axis=0)
+            step = max(spec.coarse_step, float(np.prod(high - low) / spec.coarse_points) ** (1 / 3))
+            grid = _grid(low, high, step)
+            gap = np.linalg.norm(grid[:, None, :] - centres[None], axis=-1) - radii - self.radius
+            grid = grid[(gap <= spec.touch).any(axis=1)]  # can touch some link at all
+            steps[tuple(quat)] = step
+            coarse.extend(np.concatenate([pos, quat]) for pos in grid)
+        seeds = self._diverse(self._ranked(self._fits(frame, coarse)), steps)
+        refined = []
+        for key, pose in seeds:
+            span = steps[tuple(pose[3:])]
+            while span > spec.fine_step + 1e-12:  # halve the spacing around the best pose until fine
+                span /= 2
+                around = [np.concatenate([p, pose[3:]]) for p in _around(pose[:3], 2 * span, span)]
+                best = self._ranked(self._fits(frame, around))
+                if best and best[0][0] > key:
+                    key, pose = best[0]
+            refined.append(pose)
+        return refined
+
+    def _diverse(self, ranked: list, steps: dict) -> list:
+        kept: list = []
+        for key, pose in ranked:
+            step = steps[tuple(pose[3:])]
+            if all(
+                not np.array_equal(pose[3:], other[3:]) or np.linalg.norm(pose[:3] - other[:3]) > 1.5 * step
+                for _, other in kept
+            ):
+                kept.append((key, pose))
+            if len(kept) == self.spec.seeds:
+                break
+        return kept
+
+    def depth_at(self, frame: int, pose: np.ndarray) -> tuple[float, np.ndarray]:
+        """Penetration and touching links of ``pose`` with the hand at the targets of ``frame``."""
+        self.collider.set_hand(targets_qpos(self.scene, self.trajectory, frame))
+        touch = self.collider.touch_at(pose[:3], pose[3:])
+        return touch.depth, touch.links
+
+    def candidate(self, pose: np.ndarray) -> Candidate:
+        """The candidate at ``pose`` with its fit frame, searched down from the closed frame.
+
+        Its contact frame is left at its fit frame until :meth:`with_contact`.
+        """
+        grasp, tolerance = self.grasp, self.spec.penetration
+        frame, depth, links = grasp.open, *self.depth_at(grasp.open, pose)
+        for f in range(grasp.closed, grasp.open - 1, -1):
+            d, touching = self.depth_at(f, pose)
+            if d <= tolerance:
+                frame, depth, links = f, d, touching
+                break
+        return Candidate(
+            pose=pose,
+            links=tuple(self.scene.layout.link_names[i] for i in links),
+            depth=depth,
+            fit_frame=frame,
+            fit_fraction=flexion_fraction(self.trajectory, grasp, frame),
+            contact_frame=frame,
+            depth_before_contact=0.0,
+        )
+
+    def with_contact(self, candidate: Candidate) -> Candidate:
+        """The candidate with its contact frame (hand–object contacts act from there).
+
+        It is the first frame of the run of frames up to its fit frame in which the hand at its targets is
+        within the tolerance of it, searched back to the closing's open frame at most: the object is reached
+        during the closing, and the hand moving before it (at rest, reaching) does not touch it.
+        """
+        opened = min(self.grasp.open, candidate.fit_frame)
+        for f in range(candidate.fit_frame - 1, opened - 1, -1):
+            depth, _ = self.depth_at(f, candidate.pose)
+            if depth > self.spec.penetration:
+                return replace(candidate, contact_frame=f + 1, depth_before_contact=depth)
+        return replace(candidate, contact_frame=opened, depth_before_contact=0.0)
+
+
+def _perturbed(pose: np.ndarray, shift: float, turn_deg: float, sphere: bool) -> list[tuple[str, np.ndarray]]:
+    """The pose moved by ±``shift`` along each world axis and turned by ±``turn_deg`` about each axis.
+
+    Turns are about axes through the object's origin, and left out for a sphere, which they do not change.
+    """
+    variants = []
+    for axis, name in enumerate("xyz" if shift > 0 else ""):
+        for sign, mark in ((1.0, "+"), (-1.0, "-")):
+            moved = pose.copy()
+            moved[axis] += sign * shift
+            variants.append((f"{mark}{name} {shift * 1000:g} mm", moved))
+    if sphere or turn_deg == 0:
+        return variants
+    for axis, name in enumerate("xyz"):
+        for sign, mark in ((1.0, "+"), (-1.0, "-")):
+            half = math.radians(sign * turn_deg) / 2
+            turn = np.zeros(4)
+            turn[0], turn[1 + axis] = math.cos(half), math.sin(half)
+            turned = pose.copy()
+            turned[3:] = quat_multiply(turn, pose[3:])
+            variants.append((f"{mark}{name} {turn_deg:g}°", turned))
+    return variants
+
+
+def place_object(
+    scene: SimScene,
+    trajectory: Trajectory,
+    grasp: GraspFrame,
+    spec: PlacementSpec,
+    release_delay: float,
+    control_rate: float,
+    shift: float = 0.0,
+    turn_deg: float = 0.0,
+) -> Placement:
+    """Search the object pose that fits in the closing hand and that the recorded closing grips best.
 
     Args:
-        scene: A scene with the hand (fixed root) and one free object, no table.
+        scene: A scene with the hand (fixed root) and one free object on its support weld, no table.
         trajectory: The glove trajectory.
-        frame: The grasp frame.
-        spec: Touch distance and penetration tolerance.
+        grasp: Its grasp frames (:func:`handsim.sim.grasp_frame.grasp_frame`).
+        spec: The search's parameters.
+        release_delay: Seconds after the closed frame at which the support comes off: the grip is tested
+            at that time.
+        control_rate: Control frames per second of the replay the grip tests reproduce.
+        shift: Distance the robustness ensemble moves the winner along each axis, m (0: no moves).
+        turn_deg: Angle it turns the winner about each axis, degrees (0: no turns).
 
     Returns:
-        The best pose found (with the touching links); when no pose touches the hand without too much
-        penetration, the pose nearest the fingertips' centre without penetration, and a note saying so.
+        The placement (see the module docstring); never raises for want of a feasible pose: an infeasible
+        placement says so (``feasible`` False, with the least penetration seen in the note).
     """
-    layout = scene.layout
-    qpos = _targets_qpos(scene, trajectory, frame)
-    score = _Scorer(scene, qpos, spec)
-    data = score.data
-    mujoco.mj_kinematics(score.model, data)
-    reach = np.vstack([data.xpos[layout.link_bodies], data.site_xpos[layout.tip_sites]])
-    lo, hi = reach.min(axis=0), reach.max(axis=0)
-    center, half = (lo + hi) / 2, (hi - lo) / 2 + 0.01
-    tips = data.site_xpos[layout.tip_sites].mean(axis=0)
-    quats = _orientations(score.model, score.obj.part_bodies)
+    search = _Search(scene, trajectory, grasp, spec)
+    seeds: list[np.ndarray] = []
+    for frame in closing_frames(trajectory, grasp, spec.search_fractions):
+        for pose in search.level(frame):
+            if all(not np.allclose(pose, other, atol=1e-9) for other in seeds):
+                seeds.append(pose)
+    times = np.asarray(trajectory.times, dtype=float)
+    bench = GripBench(scene, trajectory, control_rate, float(times[grasp.closed]) + release_delay)
 
-    survivors = [(center, half, quat) for quat in quats]
-    best: list[tuple] = []
-    for level, step in enumerate(GRID_STEPS):
-        # a coarse grid cannot hit the thin shell where many links touch without penetrating: coarse levels
-        # accept half a step more penetration, and the best few seed the next, finer level
-        tolerance = spec.placement_penetration + (step / 2 if level < len(GRID_STEPS) - 1 else 0.0)
-        scored = []
-        for c, h, quat in survivors:
-            for pos in _grid(c, h, step):
-                links, depth, touched = score(pos, quat)
-                if depth <= tolerance:
-                    scored.append(((links, -depth, -float(np.linalg.norm(pos - tips))), touched, pos, quat))
-        scored.sort(key=lambda item: item[0], reverse=True)
-        best = scored
-        survivors = [(item[2], np.full(3, 2 * step), item[3]) for item in scored[:SEEDS]]
-        if not survivors:
-            break
-    if not best:
-        raise TrajectoryError(
-            f"{trajectory.source or 'trajectory'}: no object pose within the hand's reach at frame {frame} "
-            f"penetrates less than {spec.placement_penetration * 1000:g} mm"
-        )
-    best = best[0]
-    names = tuple(layout.link_names[i] for i in best[1])
-    pose = np.concatenate([best[2], best[3]])
-    _, depth, _ = score(best[2], best[3])
-    data.qpos[score.obj.free_qpos : score.obj.free_qpos + 7] = pose
-    mujoco.mj_kinematics(score.model, data)
-    lowest = _lowest_point(score.model, data, score.is_obj)
-    if names:
+    def gripped(candidate: Candidate) -> Candidate:
+        grip = bench.grip(candidate.pose, float(times[candidate.contact_frame]), spec.grip)
+        return replace(candidate, grip=grip)
+
+    tested = [gripped(search.with_contact(search.candidate(pose))) for pose in seeds]
+    tested.sort(key=Candidate.score, reverse=True)
+    queries = search.collider.queries
+    if tested:
+        best = tested[0]
         note = (
-            f"object placed touching {len(names)} links ({', '.join(names)}), "
-            f"penetration {depth * 1000:.2f} mm, {score.count} poses tried"
+            f"object placed where it fits at frame {best.fit_frame} (flexion fraction "
+            f"{best.fit_fraction:.2f} of the closing {grasp.open}–{grasp.closed}), touching "
+            f"{len(best.links)} links ({', '.join(best.links)}), penetration {best.depth * 1000:.2f} mm; the "
+            f"recorded closing grips it against {best.grip.directions_held} of 6 gravity directions; best of "
+            f"{len(tested)} grip tests, {queries} poses tried, {search.feasible_poses} within "
+            f"{spec.penetration * 1000:g} mm"
         )
+        feasible = True
+    elif search.nearest is not None:
+        best = gripped(search.with_contact(search.candidate(search.nearest[1])))
+        note = (
+            f"no object pose within {spec.penetration * 1000:g} mm of penetration touches the hand on the "
+            f"closing ramp: placed nearest the fingertips' centre without penetration ({queries} poses tried)"
+        )
+        feasible = True
     else:
-        note = (
-            f"no object pose touches the hand at frame {frame}: placed nearest the fingertips "
-            f"without penetration ({score.count} poses tried)"
+        depth, pose = (
+            search.least if search.least is not None else (np.inf, np.array([0, 0, 0, 1, 0, 0, 0.0]))
         )
+        best = search.with_contact(search.candidate(pose))
+        note = (
+            f"no object pose on the closing ramp penetrates the hand less than "
+            f"{spec.penetration * 1000:g} mm: the least penetrating of {queries} poses tried goes "
+            f"{depth * 1000:.1f} mm deep; placement infeasible, the hold is not judged"
+        )
+        feasible = False
+    perturbations = []
+    if feasible and (shift > 0 or turn_deg > 0):
+        sphere = len(search.quats) == 1
+        for label, pose in _perturbed(best.pose, shift, turn_deg, sphere):
+            perturbations.append((label, search.with_contact(search.candidate(pose))))
+    collider = search.collider
+    a = collider.obj.free_qpos
+    collider.data.qpos[a : a + 7] = best.pose
     return Placement(
-        pose=pose, links=names, penetration=depth, candidates=score.count, lowest_z=lowest, note=note
+        best=best,
+        alternatives=tuple(tested[1 : 1 + spec.alternatives]),
+        perturbations=tuple(perturbations),
+        feasible=feasible,
+        queries=queries,
+        grip_tests=len(tested) + (1 if not tested and feasible else 0),
+        feasible_poses=search.feasible_poses,
+        lowest_z=collider.lowest_point(),
+        spec=spec.to_dict(),
+        note=note,
     )
-
-
-@dataclass(frozen=True)
-class ContactStart:
-    """From which frame on the hand may touch the placed object.
-
-    Attributes:
-        frame: Trajectory frame.
-        depth_before: Deepest penetration of the hand at its targets in the frame before, m (0 when the
-            hand is clear of the object from the first frame on).
-        note: For people.
-    """
-
-    frame: int
-    depth_before: float
-    note: str
-
-
-def contact_start(
-    scene: SimScene, trajectory: Trajectory, frame: int, pose: np.ndarray, spec: MetricSpec
-) -> ContactStart:
-    """The first frame of the run of frames up to ``frame`` in which the hand stays out of the object.
-
-    The glove records the hand alone: where the object was while the hand reached is unknown, and the
-    placed object (where the grasp closes) often lies where the fingers were earlier (a relaxed ring finger
-    at the start of a recording, say). Walking back from the grasp frame with the hand at its targets, the
-    frames whose deepest penetration of the object at ``pose`` is at most
-    :attr:`MetricSpec.placement_penetration` are the approach; contacts act from its first frame.
-
-    Args:
-        scene: The placement search's scene (:func:`place_object`'s).
-        trajectory: The glove trajectory.
-        frame: The grasp frame.
-        pose: The placed object's pose in that scene.
-        spec: The penetration tolerance.
-
-    Returns:
-        The frame, the penetration just before it, and a note.
-    """
-    score = _Scorer(scene, _targets_qpos(scene, trajectory, frame), spec)
-    pos, quat = pose[:3], pose[3:]
-    for f in range(frame, -1, -1):
-        score.data.qpos[:] = _targets_qpos(scene, trajectory, f)
-        _, depth, _ = score(pos, quat)
-        if depth > spec.placement_penetration:
-            times = trajectory.times
-            return ContactStart(
-                frame=f + 1,
-                depth_before=depth,
-                note=f"hand–object contacts act from frame {f + 1} ({times[f + 1]:.3f} s); at frame {f} the "
-                f"hand at its targets is {depth * 1000:.1f} mm inside the placed object",
-            )
-    return ContactStart(frame=0, depth_before=0.0, note="the hand is clear of the placed object from frame 0")
-
-
-def _lowest_point(model: mujoco.MjModel, data: mujoco.MjData, mask: np.ndarray) -> float:
-    """World z of the lowest point of the geoms in ``mask`` (mesh vertices; primitive bounding radius)."""
-    lowest = np.inf
-    for g in np.flatnonzero(mask):
-        if not (model.geom_contype[g] or model.geom_conaffinity[g]):
-            continue
-        mesh = int(model.geom_dataid[g])
-        if int(model.geom_type[g]) == int(mujoco.mjtGeom.mjGEOM_MESH) and mesh >= 0:
-            start, count = model.mesh_vertadr[mesh], model.mesh_vertnum[mesh]
-            verts = model.mesh_vert[start : start + count]
-            world = verts @ data.geom_xmat[g].reshape(3, 3).T + data.geom_xpos[g]
-            lowest = min(lowest, float(world[:, 2].min()))
-        else:
-            lowest = min(lowest, float(data.geom_xpos[g, 2] - model.geom_rbound[g]))
-    return lowest

@@ -7,21 +7,19 @@ The gymnasium environments drive the same :class:`~handsim.sim.drive.ScheduleDri
 
 from __future__ import annotations
 
-from dataclasses import asdict, dataclass, field
+from dataclasses import asdict, dataclass, field, replace
 
 import numpy as np
 
 from handsim.sim.compiled import SimScene
-from handsim.sim.control import ControlSchedule, control_schedule
+from handsim.sim.control import DEFAULT_CONTROL_RATE, ControlSchedule, control_schedule
 from handsim.sim.drive import ScheduleDriver, scenario_switches
 from handsim.sim.metrics import FrameMetrics, MetricSpec, frame_metrics
+from handsim.sim.robustness import HoldRobustness, hold_robustness
 from handsim.sim.stability import StabilityResult, stability_test
 from handsim.sim.stepper import Stepper, WarningEvent
-from handsim.sim.summary import HoldOutcome, hold_outcome, summarize
+from handsim.sim.summary import HoldOutcome, hold_outcome, not_judged, summarize
 from handsim.trajectory import Trajectory
-
-DEFAULT_CONTROL_RATE = 100.0
-"""Hz: 5 steps of 2 ms per frame; above the GraspDB14 glove's ~64 Hz and Tzionas' 30 Hz."""
 
 
 @dataclass(frozen=True)
@@ -36,12 +34,15 @@ class ReplayConfig:
         stability_at: Run the grasp stability tests (:func:`~handsim.sim.stability.stability_test`) on the
             state at this trajectory time, s; ``"grasp"``: at the end of the scene's hold window (glove
             scenario); None: no test.
+        ensemble: Glove scenario: judge the hold over the scene's robustness ensemble too
+            (:mod:`handsim.sim.robustness`) and test the grip at the release in six gravity directions.
     """
 
     control_rate: float = DEFAULT_CONTROL_RATE
     metrics: MetricSpec = field(default_factory=MetricSpec)
     keep_states: bool = False
     stability_at: float | str | None = None
+    ensemble: bool = True
 
     def __post_init__(self) -> None:
         if isinstance(self.stability_at, str) and self.stability_at != "grasp":
@@ -56,6 +57,7 @@ class ReplayConfig:
             "metrics": self.metrics.to_dict(),
             "keep_states": self.keep_states,
             "stability_at": self.stability_at,
+            "ensemble": self.ensemble,
         }
 
 
@@ -69,6 +71,9 @@ class ReplayResult:
         warnings: MuJoCo warnings with the step they happened at.
         diverged: The divergence that stopped the run, or None.
         hold: Glove scenario: the hold outcome, else None.
+        robustness: Glove scenario with ``config.ensemble``: the hold over the robustness ensemble, else None.
+        release_stability: Glove scenario with ``config.ensemble``: the stability tests on the state at the
+            release (six gravity directions: the verdict does not rest on one), else None.
         stability: The grasp stability tests (``config.stability_at``), else None.
         states: qpos per frame when ``config.keep_states``, else None.
         frame_dt: Seconds per control frame.
@@ -85,6 +90,8 @@ class ReplayResult:
     warnings: tuple[WarningEvent, ...]
     diverged: WarningEvent | None
     hold: HoldOutcome | None
+    robustness: HoldRobustness | None
+    release_stability: StabilityResult | None
     stability: StabilityResult | None
     states: np.ndarray | None
     frame_dt: float
@@ -102,6 +109,8 @@ class ReplayResult:
             "diverged": None if self.diverged is None else asdict(self.diverged),
             "warnings": [asdict(w) for w in self.warnings],
             "hold": None if self.hold is None else self.hold.to_dict(),
+            "robustness": None if self.robustness is None else self.robustness.to_dict(),
+            "release_stability": None if self.release_stability is None else self.release_stability.to_dict(),
             "stability": None if self.stability is None else self.stability.to_dict(),
             "frame_dt": self.frame_dt,
             "substeps": self.substeps,
@@ -176,17 +185,25 @@ def replay(scene: SimScene, trajectory: Trajectory, config: ReplayConfig | None 
     summary = summarize(frames, spec)
     summary["diverged"] = diverged is not None
     summary["warnings"] = len(warnings)
-    hold = None
+    hold = robustness = release_stability = None
     if release >= 0 and setup.hold_window is not None and scene.layout.objects:
-        obj = scene.layout.objects[0]
-        hold = hold_outcome(
-            frames, qpos[:, obj.free_qpos + 2], float(schedule.times[release]), setup.hold_window, spec
-        )
+        hold = _hold(scene, schedule, frames, qpos, release, spec)
         summary.update(
             held=hold.held,
+            hold_reason=hold.reason,
             time_held_s=hold.time_held,
             max_slip_mm=hold.max_slip * 1000.0,
             drop_mm=hold.drop * 1000.0,
+        )
+        if config.ensemble and hold.judged:
+            quiet = replace(config, ensemble=False, keep_states=False, stability_at=None)
+            robustness = hold_robustness(scene, hold, lambda variant: replay(variant, trajectory, quiet).hold)
+            release_stability = _release_stability(scene, schedule, qpos, release, spec)
+        summary.update(
+            hold_robustness=None if robustness is None else robustness.fraction,
+            release_directions_held=None
+            if release_stability is None
+            else sum(d.success for d in release_stability.directions),
         )
     stability = _stability(scene, schedule, qpos, config)
     if stability is not None:
@@ -202,6 +219,8 @@ def replay(scene: SimScene, trajectory: Trajectory, config: ReplayConfig | None 
         warnings=tuple(warnings),
         diverged=diverged,
         hold=hold,
+        robustness=robustness,
+        release_stability=release_stability,
         stability=stability,
         states=qpos if config.keep_states else None,
         frame_dt=schedule.frame_dt,
@@ -226,6 +245,33 @@ def replay(scene: SimScene, trajectory: Trajectory, config: ReplayConfig | None 
         },
         notes=notes,
     )
+
+
+def _hold(
+    scene: SimScene, schedule: ControlSchedule, frames: FrameMetrics, qpos: np.ndarray, release: int, spec
+) -> HoldOutcome:
+    """The hold outcome of a glove replay, or not judged when the placement was infeasible."""
+    placement = scene.setup.placement
+    window = scene.setup.hold_window
+    released = float(schedule.times[release])
+    if placement.get("feasible", True) is False:
+        return not_judged(
+            released,
+            window,
+            "not judged: the object could not be placed without penetrating the hand "
+            "(the placement note says how deep)",
+        )
+    obj = scene.layout.objects[0]
+    return hold_outcome(frames, qpos[:, obj.free_qpos + 2], released, window, spec)
+
+
+def _release_stability(
+    scene: SimScene, schedule: ControlSchedule, qpos: np.ndarray, release: int, spec: MetricSpec
+) -> StabilityResult | None:
+    """The stability tests on the state at the release frame (None when the run stopped before it)."""
+    if release >= qpos.shape[0]:
+        return None
+    return stability_test(scene, qpos[release], schedule.ctrl[release], spec=spec.stability)
 
 
 def _stability(

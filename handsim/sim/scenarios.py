@@ -7,8 +7,9 @@
   point along it. The scene's world puts that plane at z = 0 (the table top) with z up, the object's first
   position above the origin.
 * **Glove only** (:func:`glove_scene`; GraspDB14): the hand's root is fixed, palm down, and the object is
-  placed where the grasp closes (:mod:`handsim.sim.placement`), held there by a support weld that the replay
-  switches off :attr:`MetricSpec.release_delay` after the grasp frame.
+  placed where it fits in the closing hand and the recorded closing grips it best
+  (:mod:`handsim.sim.placement`), held there by a support weld that the replay switches off
+  :attr:`MetricSpec.release_delay` after the grasp has closed.
 """
 
 from __future__ import annotations
@@ -24,8 +25,11 @@ from handsim.builders.scene import build_scene
 from handsim.errors import TrajectoryError
 from handsim.poses import compose, quat_rotate, transform_points
 from handsim.sim.compiled import SceneSetup, SimScene, compile_scene
+from handsim.sim.control import DEFAULT_CONTROL_RATE
+from handsim.sim.grasp_frame import GraspFrame, grasp_frame
+from handsim.sim.hand_pose import hand_frame
 from handsim.sim.metrics import MetricSpec
-from handsim.sim.placement import GraspFrame, contact_start, grasp_frame, hand_frame, place_object
+from handsim.sim.placement import place_object
 from handsim.trajectory import Trajectory
 
 CAMERA_DOWN = (0.0, 1.0, 0.0)
@@ -151,52 +155,81 @@ def glove_scene(
     *,
     grasp: GraspFrame | None = None,
     spec: MetricSpec | None = None,
+    control_rate: float = DEFAULT_CONTROL_RATE,
 ) -> SimScene:
-    """Scene for a glove recording: hand fixed palm down, the object placed where the grasp closes.
+    """Scene for a glove recording: hand fixed palm down, the object where the recorded closing grips it.
 
     Args:
         hand: The hand the trajectory drives (its root fixed; wrist DoFs stay hinges).
         trajectory: Joint targets named like the hand's DoFs.
         obj: The object (:func:`handsim.builders.build_object`).
-        grasp: The grasp frame and hold window; default :func:`grasp_frame` (the ``grasp`` phase, else peak
-            flexion).
-        spec: Placement thresholds (default :class:`MetricSpec`).
+        grasp: The grasp frames and hold window; default :func:`~handsim.sim.grasp_frame.grasp_frame` (the
+            ``grasp`` phase, else peak flexion).
+        spec: Placement, release and robustness parameters (default :class:`MetricSpec`).
+        control_rate: Control frames per second of the replays the placement's grip tests reproduce.
 
     Returns:
-        The compiled scene (scenario ``glove``) with the object on an active support.
+        The compiled scene (scenario ``glove``) with the object on an active support. Its setup's
+        ``placement`` holds the search's result and the robustness ensemble's poses in the scene's world.
     """
     spec = spec or MetricSpec()
     grasp = grasp or grasp_frame(trajectory)
     probe = compile_scene(build_scene(hand, obj, table=False))
     quat = hand_frame(probe)
-    search = compile_scene(build_scene(hand, obj, hand_quat=quat, hand_pos=(0.0, 0.0, 0.0), table=False))
-    placement = place_object(search, trajectory, grasp.frame, spec)
-    contact = contact_start(search, trajectory, grasp.frame, placement.pose, spec)
-    lift = HOLD_HEIGHT - placement.lowest_z
-    hand_pos = (0.0, 0.0, lift)
-    pose = placement.pose.copy()
-    pose[2] += lift
+    search = compile_scene(
+        build_scene(hand, obj, hand_quat=quat, hand_pos=(0.0, 0.0, 0.0), table=False, object_support=True)
+    )
+    placement = place_object(
+        search,
+        trajectory,
+        grasp,
+        spec.placement,
+        spec.release_delay,
+        control_rate,
+        shift=spec.robustness_shift,
+        turn_deg=spec.robustness_turn_deg,
+    )
+    lift = np.array([0.0, 0.0, HOLD_HEIGHT - placement.lowest_z])
+    best = placement.best
+    pose = best.pose.copy()
+    pose[:3] += lift
     scene = build_scene(
-        hand, obj, hand_pos=hand_pos, hand_quat=quat, object_poses=[pose], object_support=True
+        hand, obj, hand_pos=tuple(lift), hand_quat=quat, object_poses=[pose], object_support=True
     )
     times = trajectory.times
+    ensemble = [
+        {"label": label, "pose": (c.pose + np.concatenate([lift, np.zeros(4)])).tolist(),
+         "contact_time": float(times[c.contact_frame])}
+        for label, c in (
+            *((f"alternative {i + 1}", c) for i, c in enumerate(placement.alternatives)),
+            *placement.perturbations,
+        )
+    ]  # fmt: skip
+    contact_note = (
+        f"hand–object contacts act from frame {best.contact_frame} ({times[best.contact_frame]:.3f} s); at "
+        f"frame {best.contact_frame - 1} the hand at its targets is "
+        f"{best.depth_before_contact * 1000:.1f} mm inside the placed object"
+        if best.contact_frame > 0
+        else "the hand is clear of the placed object from frame 0"
+    )
     setup = SceneSetup(
         scenario="glove",
-        contact_time=float(times[contact.frame]),
+        contact_time=float(times[best.contact_frame]),
         release_time=float(times[grasp.closed]),
         grasp_time=float(times[grasp.frame]),
         hold_window=(float(times[grasp.window[0]]), float(times[grasp.window[1]])),
         placement={
             **placement.to_dict(),
             "grasp": grasp.to_dict(),
-            "contact_trajectory_frame": contact.frame,
-            "depth_before_contact_m": contact.depth_before,
+            "contact_trajectory_frame": best.contact_frame,
+            "ensemble": ensemble,
         },
         notes=(
             grasp.note,
             placement.note,
-            contact.note,
-            f"hand palm down, the object's lowest point {HOLD_HEIGHT} m up",
+            contact_note,
+            f"hand palm down (GraspDB14's objects are picked up from a table; the wrist's orientation is not "
+            f"recorded), the object's lowest point {HOLD_HEIGHT} m up",
         ),
     )
     return compile_scene(scene, setup)

@@ -214,6 +214,7 @@ def stability_test(
     object_index: int = 0,
     mocap_pos: npt.ArrayLike | None = None,
     mocap_quat: npt.ArrayLike | None = None,
+    stop_at_failure: bool = False,
 ) -> StabilityResult:
     """Test whether the hand holds an object against gravity along ±x ±y ±z, and ObMan's displacement.
 
@@ -229,6 +230,10 @@ def stability_test(
         mocap_pos: Position (3,) of the hand's mocap target, metres (``hand_root="weld"`` only); default:
             the root's position in ``qpos``, so the weld holds the hand where it is.
         mocap_quat: Orientation (4,) of the mocap target (w, x, y, z); default: the root's in ``qpos``.
+        stop_at_failure: End a direction's run as soon as the object has moved ``spec.max_displacement``
+            (checked every 10 steps): the direction fails as it would at the end, its displacement and
+            rotation are those at the stop, and ``simulated_time`` says how long it ran. For searches that
+            only need the outcome; off for a full test.
 
     Returns:
         The per-direction results, the overall success, the ObMan simulation displacement and the spec.
@@ -253,12 +258,12 @@ def stability_test(
     run = _Run(replace(scene, model=frozen), qpos, ctrl, mocap, object_index)
     steps = max(1, round(spec.duration / frozen.opt.timestep))
     directions = tuple(
-        run.direction(label, spec.gravity * np.asarray(unit), steps, spec)
+        run.direction(label, spec.gravity * np.asarray(unit), steps, spec, stop_at_failure)
         for label, unit in DIRECTIONS.items()
     )
     obman_dir = np.asarray(spec.obman_direction) / np.linalg.norm(spec.obman_direction)
     obman_steps = max(1, round(spec.obman_duration / frozen.opt.timestep))
-    obman = run.direction("obman", spec.gravity * obman_dir, obman_steps, spec)
+    obman = run.direction("obman", spec.gravity * obman_dir, obman_steps, spec, stop_at_failure)
     return StabilityResult(
         directions=directions,
         success=all(d.success for d in directions),
@@ -370,18 +375,23 @@ class _Run:
         root = self.object.root_body
         return data.subtree_com[root].copy(), data.xquat[root].copy()
 
-    def direction(self, label: str, gravity: np.ndarray, steps: int, spec: StabilitySpec) -> DirectionResult:
+    def direction(
+        self, label: str, gravity: np.ndarray, steps: int, spec: StabilitySpec, stop_at_failure: bool = False
+    ) -> DirectionResult:
         self._start(gravity)
         com0, quat0 = self._pose()
         warnings: list[str] = []
         diverged = False
         done = 0
+        com = self.stepper.data.subtree_com[self.object.root_body]
         for _ in range(steps):
             events = self.stepper.step()
             done += 1
             warnings.extend(e.describe() for e in events)
             if any(e.diverged for e in events):
                 diverged = True
+                break
+            if stop_at_failure and done % 10 == 0 and np.linalg.norm(com - com0) >= spec.max_displacement:
                 break
         vector = tuple(float(x) for x in gravity)
         simulated = done * float(self.model.opt.timestep)

@@ -17,10 +17,10 @@ class HoldOutcome:
     Attributes:
         released_at: Trajectory time the support was switched off, s.
         window: Trajectory times (start, stop) the hold is judged over, s (start ≥ release).
-        held: The object was not lost before the window's end.
-        time_held: From release until lost (or the window's end), s.
+        held: The object was not lost before the window's end; None: not judged (``reason`` says why).
+        time_held: From release until lost (or the window's end, or the last frame simulated), s.
         lost_at: Time it was lost, s, or None.
-        reason: Why it counts as lost (slip or contact gap), or None.
+        reason: Why it counts as lost (slip or contact gap), or why the hold is not judged; None when held.
         max_slip: Largest displacement relative to the hand root from release until lost or the window's
             end, m.
         drop: How far the object's origin fell in the world (−z) from release to the window's end, m.
@@ -28,16 +28,28 @@ class HoldOutcome:
 
     released_at: float
     window: tuple[float, float]
-    held: bool
+    held: bool | None
     time_held: float
     lost_at: float | None
     reason: str | None
     max_slip: float
     drop: float
 
+    @property
+    def judged(self) -> bool:
+        """The hold was judged (``held`` is True or False)."""
+        return self.held is not None
+
     def to_dict(self) -> dict:
         """JSON-ready fields."""
         return asdict(self)
+
+
+def not_judged(release_time: float, window: tuple[float, float], reason: str) -> HoldOutcome:
+    """A hold outcome that is not judged, with the reason (it starts with ``not judged:``)."""
+    return HoldOutcome(
+        release_time, (max(release_time, window[0]), window[1]), None, 0.0, None, reason, 0.0, 0.0
+    )
 
 
 def hold_outcome(
@@ -48,13 +60,16 @@ def hold_outcome(
     spec: MetricSpec,
     object_index: int = 0,
 ) -> HoldOutcome:
-    """Judge holding after release.
+    """Judge holding after release, or say why it cannot be judged.
 
     The object is lost at the first slip beyond ``spec.slip_limit`` or contact gap longer than
-    ``spec.contact_gap``.
+    ``spec.contact_gap``. Holding is judged only over a window of at least ``spec.min_hold_window`` after
+    the release: a shorter one (the grasp closes near the end of the recording, or the release falls after
+    the window's end) is not judged, nor is a run that stopped (diverged) before the window ended without
+    the object having been lost.
 
     Args:
-        frames: Per-frame metrics (the run may have stopped early: then the object counts as lost there).
+        frames: Per-frame metrics (the run may have stopped early).
         object_z: World height of the object's origin per frame, m.
         release_time: When the support was switched off, s.
         window: The hold window (trajectory times), s.
@@ -63,18 +78,28 @@ def hold_outcome(
     """
     t = frames.times
     start = max(release_time, window[0])
+    length = window[1] - start
+    if length < spec.min_hold_window - 1e-9:
+        return not_judged(
+            release_time,
+            window,
+            f"not judged: the hold window after release lasts {max(length, 0.0):.3f} s, less than the "
+            f"{spec.min_hold_window:g} s a hold is judged over (release at {release_time:.3f} s, window "
+            f"{window[0]:.3f}–{window[1]:.3f} s)",
+        )
+    if t.shape[0] == 0 or release_time > t[-1] + 1e-9:
+        return not_judged(
+            release_time, window, f"not judged: the run stopped before the release at {release_time:.3f} s"
+        )
     r = int(np.searchsorted(t, release_time - 1e-9))
     stop_index = int(np.searchsorted(t, window[1] + 1e-9))
-    if r >= t.shape[0]:
-        return HoldOutcome(
-            release_time, (start, window[1]), False, 0.0, release_time, "never released", 0.0, 0.0
-        )
+    last = min(stop_index, t.shape[0]) - 1
     rel = frames.object_in_hand[:, object_index]
     slip = np.linalg.norm(rel - rel[r], axis=1)
     contact = frames.hand_contact[:, object_index]
     lost, reason = None, None
     gap_start = None
-    for k in range(r, min(stop_index, t.shape[0])):
+    for k in range(r, last + 1):
         if slip[k] > spec.slip_limit:
             lost, reason = k, f"slipped {slip[k] * 100:.1f} cm relative to the hand"
             break
@@ -85,14 +110,19 @@ def hold_outcome(
             if t[k] - t[gap_start] >= spec.contact_gap:
                 lost, reason = gap_start, f"no hand contact for {spec.contact_gap:g} s"
                 break
-    last = min(stop_index, t.shape[0]) - 1
-    if lost is None and stop_index > t.shape[0]:
-        lost, reason = t.shape[0] - 1, "the run stopped before the window ended"
     end = last if lost is None else lost
+    held: bool | None = lost is None
+    frame_dt = float(t[1] - t[0]) if t.shape[0] > 1 else 0.0
+    if lost is None and t[-1] < window[1] - frame_dt - 1e-9:  # the schedule's frames end within one of it
+        held = None
+        reason = (
+            f"not judged: the run stopped at {t[-1]:.3f} s, before the window's end at {window[1]:.3f} s, "
+            "with the object still held"
+        )
     return HoldOutcome(
         released_at=float(t[r]),
         window=(float(start), float(window[1])),
-        held=lost is None,
+        held=held,
         time_held=float(t[end] - t[r]),
         lost_at=None if lost is None else float(t[lost]),
         reason=reason,

@@ -1,0 +1,177 @@
+"""When a glove recording's grasp closes: the closing ramp, the closed frame and the hold window.
+
+A glove records the hand alone. What the recording says about the grasp is its finger flexion over time:
+the sum of the flexion targets (every DoF named ``…flex…`` except the wrist's ``root_…``). From it:
+
+* the **closed** frame: the first frame of the hold window whose flexion has risen :data:`CLOSED_FRACTION`
+  of the way from the window's first frame to its peak;
+* the **open** frame: the most open frame (least flexion) of the reach before it, within
+  :data:`OPEN_SEARCH_S` seconds: where the closing that grips the object starts;
+* the **closing ramp** ``open … closed`` and its **flexion fraction** ``φ(f) = (F(f) − F(open)) /
+  (F(closed) − F(open))``: 0 at the open hand, 1 at the closed grasp. The placement search looks for the
+  object at the ramp frames of given fractions (:func:`closing_frames`).
+
+The hold window is the annotated ``grasp`` phase, or without one the frames above :data:`PEAK_WINDOW` of
+the flexion range around its peak.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from handsim.errors import TrajectoryError
+from handsim.trajectory import Trajectory
+
+GRASP_PHASE = "grasp"
+PEAK_WINDOW = 0.8
+"""Without a ``grasp`` phase, the hold window is the frames around peak flexion above this fraction of
+the flexion range."""
+CLOSED_FRACTION = 0.98
+"""The grasp has closed at the first frame of the window whose flexion has risen this fraction of the way
+from the window's first frame to its peak."""
+OPEN_SEARCH_S = 2.0
+"""The open frame is searched this long before the closed frame, s: a reach-to-grasp movement, with the
+hand opening to its maximum grip aperture and closing on the object, lasts under a second (Jeannerod 1984,
+"The timing of natural prehension movements", J Motor Behav 16(3):235–254), so 2 s covers the whole
+closing of one grasp; GraspDB14's annotated sample reaches and closes in 0.95 s (frames 25–81 at 60 Hz)."""
+
+
+@dataclass(frozen=True)
+class GraspFrame:
+    """The frames a glove trial's grasp closes over, and the frames holding is judged over.
+
+    Attributes:
+        frame: Trajectory frame index where the grasp phase starts (first contact in the annotation).
+        closed: Frame at which the grasp has closed: the object's support is released from there.
+        window: First and last frame of the hold window (inclusive).
+        source: ``"phase"`` (the annotated ``grasp`` phase) or ``"peak flexion"``.
+        note: For people.
+        open: The most open frame of the reach before ``closed`` (start of the closing ramp).
+    """
+
+    frame: int
+    closed: int
+    window: tuple[int, int]
+    source: str
+    note: str
+    open: int = 0
+
+    def to_dict(self) -> dict:
+        """JSON-ready fields."""
+        return {
+            "frame": self.frame,
+            "open": self.open,
+            "closed": self.closed,
+            "window": list(self.window),
+            "source": self.source,
+        }
+
+
+def flexion(trajectory: Trajectory) -> np.ndarray:
+    """Sum of the finger flexion targets per frame, rad (N,).
+
+    Raises:
+        TrajectoryError: No finger flexion DoFs (names containing ``flex``, not the wrist's ``root_…``).
+    """
+    cols = [i for i, n in enumerate(trajectory.dof_names) if "flex" in n and not n.startswith("root")]
+    if not cols:
+        raise TrajectoryError(
+            f"{trajectory.source or 'trajectory'}: no finger flexion DoFs (names containing 'flex') "
+            "to find the grasp frame from; annotate a 'grasp' phase"
+        )
+    return np.asarray(trajectory.targets, dtype=float)[:, cols].sum(axis=1)
+
+
+def grasp_frame(trajectory: Trajectory) -> GraspFrame:
+    """The grasp frame, the closing ramp and the hold window of a glove recording.
+
+    With an annotated ``grasp`` phase: its first frame (the hand reaches the object), closed at
+    :data:`CLOSED_FRACTION` of the flexion rise within the phase; the window is the phase. Without one:
+    the frames above :data:`PEAK_WINDOW` of the flexion range around the peak; the grasp frame is their
+    first, closed at the same fraction of the rise to the peak. The open frame is the least flexed frame
+    within :data:`OPEN_SEARCH_S` before the closed frame.
+
+    Raises:
+        TrajectoryError: No flexion DoFs (names containing ``flex``).
+    """
+    flex = flexion(trajectory)
+    times = np.asarray(trajectory.times, dtype=float)
+    for phase in trajectory.phases:
+        if phase.name.strip(".") == GRASP_PHASE and phase.stop > phase.start:
+            lo, hi = phase.start, phase.stop - 1
+            closed = _closed(flex, lo, hi)
+            opened = _open(flex, times, closed)
+            return GraspFrame(
+                frame=lo,
+                closed=closed,
+                window=(lo, hi),
+                source="phase",
+                note=f"grasp frame {lo} = start of the annotated 'grasp' phase (frames {lo}–{hi}, 0-based); "
+                f"closing from frame {opened}, closed at frame {closed}",
+                open=opened,
+            )
+    peak = int(np.argmax(flex))
+    level = flex.min() + PEAK_WINDOW * (flex[peak] - flex.min())
+    lo = peak
+    while lo > 0 and flex[lo - 1] >= level:
+        lo -= 1
+    hi = peak
+    while hi + 1 < flex.shape[0] and flex[hi + 1] >= level:
+        hi += 1
+    closed = _closed(flex, lo, hi)
+    opened = _open(flex, times, closed)
+    return GraspFrame(
+        frame=lo,
+        closed=closed,
+        window=(lo, hi),
+        source="peak flexion",
+        note=f"no 'grasp' phase: grasp frame {lo} = first of frames {lo}–{hi} above {PEAK_WINDOW:.0%} of the "
+        f"flexion range (peak at {peak}); closing from frame {opened}, closed at frame {closed}",
+        open=opened,
+    )
+
+
+def _closed(flex: np.ndarray, lo: int, hi: int) -> int:
+    window = flex[lo : hi + 1]
+    level = window[0] + CLOSED_FRACTION * (window.max() - window[0])
+    return lo + int(np.argmax(window >= level))
+
+
+def _open(flex: np.ndarray, times: np.ndarray, closed: int) -> int:
+    first = int(np.searchsorted(times, times[closed] - OPEN_SEARCH_S - 1e-9))
+    return first + int(np.argmin(flex[first : closed + 1]))
+
+
+def flexion_fraction(trajectory: Trajectory, grasp: GraspFrame, frame: int) -> float:
+    """How far the closing has come at ``frame``: 0 at the open frame, 1 at the closed frame.
+
+    Returns 1.0 for a grasp without a rise (the open frame is the closed frame).
+    """
+    flex = flexion(trajectory)
+    rise = flex[grasp.closed] - flex[grasp.open]
+    return 1.0 if rise <= 0 else float((flex[frame] - flex[grasp.open]) / rise)
+
+
+def closing_frames(trajectory: Trajectory, grasp: GraspFrame, fractions: tuple[float, ...]) -> list[int]:
+    """The first frame of the closing ramp at or past each flexion fraction (distinct, most closed first).
+
+    Args:
+        trajectory: The glove trajectory.
+        grasp: Its grasp frames (:func:`grasp_frame`).
+        fractions: Flexion fractions in [0, 1].
+
+    Returns:
+        Frames in ``[grasp.open, grasp.closed]``, each the first whose fraction reaches one of
+        ``fractions``, without repeats, the most closed first.
+    """
+    flex = flexion(trajectory)[grasp.open : grasp.closed + 1]
+    rise = flex[-1] - flex[0]
+    frames = set()
+    for s in fractions:
+        if rise <= 0:
+            frames.add(grasp.closed)
+            continue
+        frames.add(grasp.open + int(np.argmax(flex >= flex[0] + s * rise - 1e-12)))
+    return sorted(frames, reverse=True)

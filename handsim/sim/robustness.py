@@ -1,0 +1,102 @@
+"""Hold robustness: the hold outcome over a small deterministic ensemble of placements, not one lucky pose.
+
+A glove scene's setup lists, beside the winning placement, the next-best placements of the search and the
+winner moved by ±:attr:`~handsim.sim.metrics.MetricSpec.robustness_shift` along each axis and turned by
+±:attr:`~handsim.sim.metrics.MetricSpec.robustness_turn_deg` about each axis (:mod:`handsim.sim.placement`),
+each with its own contact time. Each member is replayed in a private copy of the scene's model with only the
+object's starting pose (and its support) changed; ``hold_robustness`` is the fraction of judged members,
+the winner included, whose object was held.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass, replace
+
+from handsim.sim.compiled import SimScene
+from handsim.sim.grip import object_pose_variant
+from handsim.sim.summary import HoldOutcome
+
+
+@dataclass(frozen=True)
+class EnsembleMember:
+    """One replay of the robustness ensemble.
+
+    Attributes:
+        label: ``"placement"`` (the winner), ``"alternative 1"`` …, ``"+x 2 mm"``, ``"-z 5°"`` ….
+        held: Its hold outcome (None: not judged).
+        reason: Why it was lost or not judged, or None.
+    """
+
+    label: str
+    held: bool | None
+    reason: str | None
+
+
+@dataclass(frozen=True)
+class HoldRobustness:
+    """The ensemble's hold outcomes.
+
+    Attributes:
+        fraction: Held members over judged members (the winner included), or None when none was judged.
+        held: Members held.
+        judged: Members judged.
+        members: Every member's outcome, the winner first.
+    """
+
+    fraction: float | None
+    held: int
+    judged: int
+    members: tuple[EnsembleMember, ...]
+
+    def to_dict(self) -> dict:
+        """JSON-ready fields."""
+        return {
+            "fraction": self.fraction,
+            "held": self.held,
+            "judged": self.judged,
+            "members": [{"label": m.label, "held": m.held, "reason": m.reason} for m in self.members],
+        }
+
+
+def ensemble_scenes(scene: SimScene) -> list[tuple[str, SimScene]]:
+    """The ensemble's scenes (without the winner's own): each member's model copy and contact time.
+
+    Args:
+        scene: A glove scene whose ``setup.placement`` holds an ``ensemble`` list (label, pose in the
+            scene's world, contact time).
+    """
+    members = []
+    for member in scene.setup.placement.get("ensemble", ()):
+        model = object_pose_variant(scene, member["pose"])
+        setup = replace(scene.setup, contact_time=float(member["contact_time"]))
+        members.append((member["label"], replace(scene, model=model, setup=setup)))
+    return members
+
+
+def hold_robustness(
+    scene: SimScene, winner: HoldOutcome, judge: Callable[[SimScene], HoldOutcome | None]
+) -> HoldRobustness:
+    """Judge the hold of every ensemble member and count.
+
+    Args:
+        scene: The glove scene (its winner already replayed).
+        winner: The winner's hold outcome.
+        judge: Replays a member's scene and returns its hold outcome (None when it has none).
+
+    Returns:
+        The robustness (``fraction`` None when no member was judged).
+    """
+    members = [EnsembleMember("placement", winner.held, winner.reason)]
+    for label, variant in ensemble_scenes(scene):
+        outcome = judge(variant)
+        held = None if outcome is None else outcome.held
+        members.append(EnsembleMember(label, held, None if outcome is None else outcome.reason))
+    judged = [m for m in members if m.held is not None]
+    held = sum(bool(m.held) for m in judged)
+    return HoldRobustness(
+        fraction=held / len(judged) if judged else None,
+        held=held,
+        judged=len(judged),
+        members=tuple(members),
+    )
