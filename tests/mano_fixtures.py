@@ -10,7 +10,17 @@ chumpy is never installed or imported.
 Geometry: the bundled mean-shape joints; around each joint a ring of 6 vertices (the joint regressor row
 of the joint: random convex weights over them); around each bone a blob of vertices skinned mostly to it;
 the five fingertip vertices (MANO ids 744/320/443/554/671) just beyond each finger's last joint, skinned
-fully to it. Shape and pose blend shapes, the PCA basis and the mean pose are random but seeded.
+fully to it. Shape and pose blend shapes and the PCA basis are random but seeded; the mean pose
+``hands_mean`` is a relaxed, slightly curled hand like MANO's (finger flexion about +z on the right hand).
+The left model is the right one of the same seed mirrored in x, as MANO's is: vertices and joints x → −x,
+faces reversed, ``hands_mean`` mirrored (axis-angle (x, y, z) → (x, −y, −z)); its ``shapedirs`` are the
+right's unchanged, like the real ``MANO_LEFT.pkl`` (whose x shape directions are known not to be mirrored,
+smplx issue #48).
+
+ARCTIC sequences (:func:`arctic_hand_params`, :func:`write_arctic_mano_npy`, :func:`arctic_object_values`)
+are written in exactly the real layout (``../shared/data/SOURCES.md``): a pickled ``{'right', 'left'}`` dict,
+float32 arrays, ``shape`` (10,), ``fitting_err`` a plain Python list of N floats; the world is z-up with the
+hands about 1 m up around the object; object rows are float32 [articulation rad, axis-angle, translation mm].
 """
 
 from __future__ import annotations
@@ -43,8 +53,34 @@ def mean_joints(side: str = "right") -> np.ndarray:
     return joints * np.array([-1.0, 1.0, 1.0]) if side == "left" else joints
 
 
+MIRROR_AA = np.array([1.0, -1.0, -1.0])
+"""An axis-angle rotation mirrored in x: (x, y, z) → (x, −y, −z)."""
+
+
+def plausible_hands_mean(rng: np.random.Generator) -> np.ndarray:
+    """A relaxed right-hand mean pose (45 axis-angle values): fingers curled about +z, the thumb turned."""
+    mean = np.zeros((15, 3))
+    for finger in range(4):  # index, middle, pinky, ring: MCP, PIP, DIP flexion like MANO's mean hand
+        mean[3 * finger : 3 * finger + 3, 2] = [0.45, 0.75, 0.2]
+    mean[12:15] = [[0.6, 0.2, -0.3], [0.1, 0.1, 0.3], [0.0, 0.0, 0.2]]  # thumb
+    return (mean + rng.normal(scale=0.05, size=(15, 3))).reshape(45)
+
+
+def mirror_mano_arrays(arrays: dict[str, np.ndarray]) -> dict[str, np.ndarray]:
+    """The left model of a right one: x → −x, faces reversed, mean pose mirrored, shapedirs as is."""
+    flip = np.array([-1.0, 1.0, 1.0])
+    return {
+        **arrays,
+        "v_template": arrays["v_template"] * flip,
+        "f": arrays["f"][:, ::-1].copy(),
+        "hands_mean": (arrays["hands_mean"].reshape(15, 3) * MIRROR_AA).reshape(45),
+    }
+
+
 def synthetic_mano_arrays(seed: int = 0, nverts: int = 778, side: str = "right") -> dict[str, np.ndarray]:
-    """The arrays of a synthetic MANO model (all plain numpy; J_regressor dense)."""
+    """The arrays of a synthetic MANO model (all plain numpy; J_regressor dense); left = right mirrored."""
+    if side == "left":
+        return mirror_mano_arrays(synthetic_mano_arrays(seed, nverts, "right"))
     rng = np.random.default_rng(seed)
     joints = mean_joints(side)
     index = {n: i for i, n in enumerate(NAMES)}
@@ -103,7 +139,7 @@ def synthetic_mano_arrays(seed: int = 0, nverts: int = 778, side: str = "right")
         "f": np.vstack(faces).astype(np.uint32),
         "posedirs": rng.normal(scale=1e-3, size=(nverts, 3, 135)),
         "hands_components": components,
-        "hands_mean": rng.normal(scale=0.2, size=45),
+        "hands_mean": plausible_hands_mean(rng),
     }
 
 
@@ -172,16 +208,50 @@ def write_synthetic_mano_pkl(
     return arrays
 
 
-def mano_hand_params(n: int, seed: int = 1, *, scale: float = 0.4) -> dict[str, np.ndarray]:
-    """Random MANO parameters of one hand in ARCTIC's layout (trans in metres)."""
+WRIST_AT = {"right": (0.18, -0.12, 1.12), "left": (-0.18, -0.12, 1.12)}
+"""Where the synthetic hands' wrists hover in ARCTIC's z-up world (metres): beside an object ~1 m up."""
+
+
+def mano_hand_params(n: int, seed: int = 1, *, scale: float = 0.4, side: str = "right") -> dict:
+    """MANO parameters of one hand in ARCTIC's real layout.
+
+    float32 arrays ``rot`` (n, 3), ``pose`` (n, 45, relative to the mean pose), ``trans`` (n, 3) metres,
+    ``shape`` (10,), and ``fitting_err`` a plain list of n Python floats. The wrist drifts smoothly (≤ 5 cm,
+    ≈ 0.3 m/s) around :data:`WRIST_AT` of ``side``; rotations and poses are random.
+    """
     rng = np.random.default_rng(seed)
+    t = np.arange(n) / 30.0
+    phase = rng.uniform(0.0, 2.0 * np.pi, size=3)
+    wrist = np.asarray(WRIST_AT[side]) + 0.05 * np.sin(2.0 * np.pi * 1.0 * t[:, None] + phase)
+    joint0 = mean_joints(side)[0]
     return {
         "rot": rng.normal(scale=1.0, size=(n, 3)).astype(np.float32),
         "pose": rng.normal(scale=scale, size=(n, 45)).astype(np.float32),
-        "trans": rng.uniform(-0.5, 0.5, size=(n, 3)).astype(np.float32),
+        "trans": (wrist - joint0).astype(np.float32),
         "shape": rng.normal(scale=0.5, size=10).astype(np.float32),
-        "fitting_err": rng.uniform(0.0, 0.01, size=n).astype(np.float32),
+        "fitting_err": [float(x) for x in rng.uniform(0.002, 0.01, size=n)],
     }
+
+
+def arctic_object_values(
+    n: int, seed: int = 0, *, articulation: tuple[float, float] = (0.0, 1.5)
+) -> np.ndarray:
+    """ARCTIC object rows, float32 (n, 7): articulation rad, axis-angle, translation mm, in a z-up world.
+
+    The object stands about 1 m up and drifts smoothly (≤ 40 mm); its articulation runs between the given
+    bounds and its rotation varies smoothly around a random axis-angle.
+    """
+    rng = np.random.default_rng(seed)
+    t = np.arange(n) / 30.0
+    lo, hi = articulation
+    art = lo + (hi - lo) * 0.5 * (1.0 - np.cos(2.0 * np.pi * 0.5 * t))
+    rotvec = rng.normal(scale=1.0, size=3) + 0.2 * np.sin(
+        2.0 * np.pi * 0.5 * t[:, None] + rng.uniform(0, 6, 3)
+    )
+    trans = np.array([20.0, -30.0, 1050.0]) + 40.0 * np.sin(
+        2.0 * np.pi * 0.5 * t[:, None] + rng.uniform(0, 6, 3)
+    )
+    return np.column_stack([art, rotvec, trans]).astype(np.float32)
 
 
 def write_arctic_mano_npy(path: str | Path, right: dict, left: dict) -> None:

@@ -7,8 +7,9 @@ Entry points:
   calibration), Tzionas/Ballan hand ``.MOTION`` files (with the sequence's object tracks) and handsim's
   synthetic scripted grasps (``.grasp.json``, :mod:`handsim.io.scripted`).
 
-Other sources, with their own readers: ARCTIC (:mod:`handsim.io.arctic_motion`: ``read_arctic_mano``,
-``read_arctic_object``; templates in :mod:`handsim.io.arctic`), MANO models and poses
+Other sources, with their own readers: ARCTIC (:mod:`handsim.io.arctic_motion`: ``read_arctic_sequence``
+— both hands and the object —, ``read_arctic_mano``, ``read_arctic_object``; templates in
+:mod:`handsim.io.arctic`), MANO models and poses
 (:mod:`handsim.io.mano`: ``read_mano_model``, ``mano_pose_to_trajectory``), meshes (:mod:`handsim.io.mesh`).
 """
 
