@@ -36,6 +36,7 @@ from pathlib import Path
 
 import numpy as np
 from scipy.spatial import ConvexHull
+from scipy.spatial.transform import Rotation
 
 from handsim.io.mano import MEAN_JOINTS_FILE
 
@@ -254,6 +255,21 @@ def arctic_object_values(
     return np.column_stack([art, rotvec, trans]).astype(np.float32)
 
 
+def numpy_mano_fk(arrays, betas, rot, pose, trans):
+    """Independent MANO kinematics (smplx's batch_rigid_transform) of one frame with the full pose.
+
+    Returns the rest joints (16, 3), the joints' world rotations (16, 3, 3) and world positions (16, 3).
+    """
+    joints = arrays["J_regressor"] @ (arrays["v_template"] + arrays["shapedirs"] @ betas)
+    rotations = Rotation.from_rotvec(np.vstack([rot, np.reshape(pose, (15, 3))])).as_matrix()
+    frames, origins = [rotations[0]], [joints[0]]
+    for i in range(1, 16):
+        p = PARENTS[i]
+        frames.append(frames[p] @ rotations[i])
+        origins.append(origins[p] + frames[p] @ (joints[i] - joints[p]))
+    return joints, np.array(frames), np.array(origins) + trans
+
+
 def write_arctic_mano_npy(path: str | Path, right: dict, left: dict) -> None:
     """Write ``<seq>.mano.npy`` exactly as ARCTIC does: ``np.save`` of a dict (pickled object array)."""
     np.save(path, {"right": right, "left": left}, allow_pickle=True)
@@ -274,3 +290,29 @@ def write_malicious_npy(path: str | Path, marker: Path) -> None:
     buffer = io.BytesIO()
     np.lib.format.write_array_header_1_0(buffer, {"descr": "|O", "fortran_order": False, "shape": ()})
     Path(path).write_bytes(buffer.getvalue() + malicious_pickle(marker))
+
+
+GRASP_FLEXION = {1: 1.3, 2: 1.5, 3: 0.7}
+"""Flexion (rad) of a finger's MCP (1), PIP (2) and DIP (3) in a closed power grasp (75°, 86°, 40°)."""
+
+
+def grasp_pose(
+    n: int, hands_mean: np.ndarray, side: str, *, closure: float = 1.0, seed: int = 0
+) -> np.ndarray:
+    """Relative MANO poses (n, 45) of a hand closing from flat (0) to ``closure`` × a power grasp and back.
+
+    Built in right-hand terms (finger flexion about +z, small ab/adduction, seeded noise of 0.05 rad) as the
+    full pose, then mirrored for a left hand and made relative to that hand's ``hands_mean``.
+    """
+    rng = np.random.default_rng(seed)
+    c = closure * 0.5 * (1.0 - np.cos(2.0 * np.pi * np.arange(n) / max(n - 1, 1)))
+    full = np.zeros((n, 15, 3))
+    for j in range(12):  # index, middle, pinky, ring × (1, 2, 3)
+        full[:, j, 2] = c * GRASP_FLEXION[j % 3 + 1]
+        full[:, j, 1] = rng.uniform(-0.1, 0.1)
+    right_mean = hands_mean.reshape(15, 3) * (MIRROR_AA if side == "left" else 1.0)
+    full[:, 12:] = right_mean[12:] + c[:, None, None] * np.array([0.3, 0.2, 0.4])  # thumb opposes
+    full += rng.normal(scale=0.05, size=full.shape)
+    if side == "left":
+        full = full * MIRROR_AA
+    return (full.reshape(n, 45) - hands_mean).astype(np.float32)
