@@ -10,7 +10,9 @@ A template folder holds the object in its canonical frame, in millimetres, as ei
 The top part rotates relative to the bottom by the articulation angle θ about the object-frame axis
 [0, 0, −1] through the origin (ARCTIC's loader applies ``R_z(−θ)`` to top vertices before the global
 rotation and translation), so the object becomes two bodies joined by a hinge with axis (0, 0, −1).
-ARCTIC gives no masses; the object is given a uniform density (default :data:`ARCTIC_DENSITY`).
+This reader returns the geometry as stored (unlimited hinge, density :data:`ARCTIC_DENSITY` unless given);
+:func:`handsim.builders.arctic_objects.arctic_object` adds the hinge range, the colliding parts and the
+object's own mass — what handsim builds.
 """
 
 from __future__ import annotations
@@ -30,10 +32,9 @@ ARCTIC_HINGE_AXIS = (0.0, 0.0, -1.0)
 """Articulation axis in the object frame: the top part turns by R_z(−θ)."""
 
 ARCTIC_DENSITY = 300.0
-"""Default density in kg/m³. ARCTIC objects are hollow household items (boxes, a laptop, an espresso
-machine); their templates are closed surfaces, so a solid's density would overstate the mass several
-times. 300 kg/m³ gives, e.g., ~0.4 kg for the ~1.3 l ketchup bottle template. Pass ``density`` or
-``mass`` to override."""
+"""Fallback density in kg/m³ for a template given neither density nor mass (the reader's default).
+:func:`handsim.builders.arctic_objects.arctic_object` gives ARCTIC's 11 objects their own masses instead;
+this density serves templates outside them. 300 kg/m³ is a hollow household item's mean density."""
 
 
 def read_arctic_template(
