@@ -7,6 +7,8 @@ the converted targets and root pose, equal an independent numpy MANO forward kin
 
 from __future__ import annotations
 
+from dataclasses import replace
+
 import mujoco
 import numpy as np
 import pytest
@@ -224,39 +226,82 @@ def both_hands(mano_dir):
 @pytest.mark.parametrize("seed", [0, 1, 2])
 def test_side_check_finds_each_hand_under_its_own_key(mano_dir, both_hands, tmp_path, seed):
     sequence, obj = ball_grasp(tmp_path, mano_dir[1], seed)
-    for side in HANDS:
-        check = hand_side_check(sequence, side, both_hands, obj)
-        assert check.verdict == "as stored"
-        assert check.stored_fraction >= 0.25 and check.mirrored_fraction <= check.stored_fraction / 5
-        assert check.stored_closest < 0.004 < check.mirrored_closest
-        assert check.message.startswith(f"{sequence.mano_path} [{side}]: the data are the {side} hand's")
-
-
-@pytest.mark.parametrize("seed", [0, 1, 2])
-def test_side_check_flags_left_hand_data_stored_under_right(mano_dir, both_hands, tmp_path, seed):
-    sequence, obj = ball_grasp(tmp_path, mano_dir[1], seed, swap=True)
-    check = hand_side_check(sequence, "right", both_hands, obj)
-    assert check.verdict == "mirrored"
-    assert check.mirrored_fraction >= 0.25 and check.stored_fraction <= check.mirrored_fraction / 5
+    check = hand_side_check(sequence, both_hands, obj)
+    assert check.verdict == "as stored"
+    for contact in (check.right, check.left):
+        assert contact.own_fraction >= 0.25 and contact.own_closest < 0.004 < contact.other_closest
+        assert contact.own_inside == 0.0
     assert check.message == (
-        f"{sequence.mano_path} [right]: the data look like the left hand's (heuristic): driving the right "
-        f"model it touches the balls in {check.stored_fraction:.0%} of the frames (closest "
-        f"{check.stored_closest * 1000:.0f} mm), "
-        f"driving the left model in {check.mirrored_fraction:.0%} (closest "
-        f"{check.mirrored_closest * 1000:.0f} mm); check the file's 'right'/'left' entries"
+        f"{sequence.mano_path}: the hands are as stored (heuristic): {check.right.line()}; "
+        f"{check.left.line()}"
     )
-    assert hand_side_check(sequence, "left", both_hands, obj).verdict == "mirrored"
+
+
+@pytest.mark.parametrize("seed", [0, 2, 3])
+def test_side_check_flags_left_hand_data_stored_under_right_and_right_under_left(
+    mano_dir, both_hands, tmp_path, seed
+):
+    sequence, obj = ball_grasp(tmp_path, mano_dir[1], seed, swap=True)
+    check = hand_side_check(sequence, both_hands, obj)
+    assert check.verdict == "swapped"
+    assert (check.right.reading, check.left.reading) == ("other", "other")
+    assert check.right.own_fraction == 0.0 and check.right.other_fraction >= 0.25
+    assert check.message == (
+        f"{sequence.mano_path}: 'right' and 'left' look swapped (heuristic): each hand touches the balls "
+        f"only when driving the other hand's model: {check.right.line()}; {check.left.line()}; check the "
+        "file's 'right'/'left' entries"
+    )
+    r = check.right
+    assert r.line() == (
+        f"'right' driving the right model touches the object in 0% of the frames (closest "
+        f"{r.own_closest * 1000:.0f} mm, inside it in {r.own_inside:.0%}), driving the left model in "
+        f"{r.other_fraction:.0%} (closest {r.other_closest * 1000:.0f} mm, inside it in {r.other_inside:.0%})"
+    )
+
+
+def test_side_check_never_flags_on_one_entry_alone(mano_dir, both_hands, tmp_path):
+    """An idle hand whose mirror image lands on the object is not evidence enough."""
+    sequence, obj = ball_grasp(tmp_path, mano_dir[1], 0, swap=True)
+    idle = replace(sequence.left, trans=sequence.left.trans + np.array([0.0, 0.0, 0.5]))  # 50 cm up
+    check = hand_side_check(replace(sequence, left=idle), both_hands, obj)
+    assert (check.right.reading, check.left.reading) == ("other", None)
+    assert check.verdict == "not judged"
+    assert check.message.startswith(
+        f"{sequence.mano_path}: sides not judged: one entry touches the balls only mirrored, the other does "
+        "not agree (an idle hand's mirror image can land on the object): "
+    )
 
 
 def test_side_check_does_not_judge_hands_that_never_touch_the_object(mano_dir, both_hands, tmp_path):
     sequence, obj = ball_grasp(tmp_path, mano_dir[1], 0, offset=(0.0, 0.6, 0.0))
-    check = hand_side_check(sequence, "right", both_hands, obj)
+    check = hand_side_check(sequence, both_hands, obj)
     assert check.verdict == "not judged"
-    assert check.stored_fraction == 0.0 and check.mirrored_fraction == 0.0
-    assert check.message.endswith("; the hand must touch the object in one reading only")
+    assert check.right.own_fraction == check.right.other_fraction == 0.0
+    assert check.message.startswith(
+        f"{sequence.mano_path}: sides not judged: neither hand touches the balls in one reading only: "
+    )
+
+
+def test_side_check_counts_a_hand_inside_the_object_as_not_touching(mano_dir, both_hands, tmp_path):
+    sequence, obj = ball_grasp(tmp_path, mano_dir[1], 0)
+    touching = hand_side_check(sequence, both_hands, obj).right
+    assert touching.own_inside == 0.0
+    centre = BALLS["right"] - sequence.object.pose[0, :3]  # the right ball, in the object frame
+    grown = replace(
+        obj, parts=(replace(obj.parts[0], mesh=_grown(obj.parts[0].mesh, centre, 0.03)), obj.parts[1])
+    )
+    swallowed = hand_side_check(sequence, both_hands, grown).right
+    assert swallowed.own_inside > 0.25 and swallowed.own_fraction < touching.own_fraction
+
+
+def _grown(mesh, centre, by):
+    """The mesh scaled about ``centre`` so that it grows by ``by`` metres in radius (swallowing fingers)."""
+    radius = np.linalg.norm(mesh.vertices - centre, axis=1).mean()
+    grown = centre + (mesh.vertices - centre) * (radius + by) / radius
+    return validate_mesh(grown, mesh.faces, "grown ball")
 
 
 def test_side_check_needs_both_hands(mano_dir, both_hands, tmp_path):
     sequence, obj = ball_grasp(tmp_path, mano_dir[1], 0)
-    with pytest.raises(TrajectoryError, match=r"^the side check of the right hand needs both hands; 'left'"):
-        hand_side_check(sequence, "right", {"right": both_hands["right"]}, obj)
+    with pytest.raises(TrajectoryError, match=r"^the side check needs both hands; 'left' is missing$"):
+        hand_side_check(sequence, {"right": both_hands["right"]}, obj)

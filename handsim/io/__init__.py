@@ -36,6 +36,12 @@ TRAJECTORY_SUFFIXES = {
 def _suffix_or_error(path: Path, known: dict[str, str], what: str) -> str:
     if not path.exists():
         raise InputFileError(f"{path}: file not found")
+    if what == "trajectory" and path.name.endswith((".mano.npy", ".object.npy")):
+        raise InputFileError(
+            f"{path}: an ARCTIC sequence (two MANO hands in <seq>.mano.npy, the object in <seq>.object.npy), "
+            "not a one-hand trajectory: read it with handsim.io.arctic_motion.read_arctic_sequence "
+            "(`handsim inspect <seq>.mano.npy` summarises it)"
+        )
     suffix = path.suffix.lower()
     if path.name.lower().endswith(".grasp.json"):
         suffix = ".grasp.json"

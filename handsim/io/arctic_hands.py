@@ -4,7 +4,7 @@
   :class:`~handsim.trajectory.Trajectory` for the MuJoCo MANO hand built from the user's model file with the
   subject's betas: hinge targets (Z·Y·X angles of the full pose ``pose + hands_mean``, ARCTIC's
   ``flat_hand_mean=False``), the wrist's root pose ``(J0 + trans, exp(rot))`` and the object track.
-* :func:`hand_side_check` — a heuristic for left-hand data stored under ``right`` (or the reverse).
+* :func:`hand_side_check` — a heuristic for left-hand data stored under ``right`` (entries swapped).
 
 What distinguishes the two hands' data: MANO's left model is the right one mirrored in x, and nothing in a
 hand's parameters says which model they were fitted with — both readings are valid MANO hands. The pose
@@ -13,10 +13,11 @@ which bends a joint backwards only when the fingers close past twice MANO's mean
 grasp the DIP joints reach ~17° of hyperextension, inside a normal hand's range, so a pose-only test judges
 almost nothing). Geometry does: read by the other model, the wrist lands ``J0_other − J0_own`` (≈ 19 cm along
 the world x axis, MANO adds J0 unrotated) away and the fingers point back along the forearm. ARCTIC hands
-hold the object, so the reading that touches the object is the hand's own. :func:`hand_side_check` measures,
-frame by frame, the distance from the hand's joints to the object's surface in both readings and compares
-how often each touches it. It flags, never refuses; a hand that never touches the object, or touches it in
-both readings, is **not judged** (``docs/mano.md`` gives the measured margins).
+hold the object, so the reading that touches the object (without entering it) is the hand's own.
+:func:`hand_contact` measures, frame by frame, how close each reading of an entry comes to the object's
+surface and whether it enters it; :func:`hand_side_check` flags a sequence as swapped only when both entries
+touch the object only mirrored (a hand idle in its own reading may land on the object mirrored, so one entry
+alone never flags). It flags, never refuses; ``docs/mano.md`` gives the measured margins.
 """
 
 from __future__ import annotations
@@ -51,9 +52,14 @@ CONTACT_M = 0.02
 object's surface, metres. MANO's finger joints lie 6–10 mm under the skin, so a touching finger has a joint
 within ~1 cm; 2 cm allows for fitting error."""
 
+PENETRATION_M = 0.01
+"""A hand cannot be inside the object: a frame in which a joint or fingertip lies deeper than this inside
+a (watertight) part does not count as touching, metres (ARCTIC's fits penetrate by millimetres at most)."""
+
 SIDE_CONTACT_FRACTION = 0.05
 """A reading is judged the hand's own when it touches the object in at least this fraction of the frames
-and the other reading in at most a fifth as many."""
+and the other reading in none: a hand that is idle in its own reading may land on the object in the other
+(displaced by ≈ 19 cm), so any contact in both readings leaves the side not judged."""
 
 SURFACE_SPACING_M = 0.005
 """The object's surface is sampled by subdividing its triangles to edges of at most this length, metres (the
@@ -112,27 +118,67 @@ def arctic_hand_trajectory(
 
 
 @dataclass(frozen=True)
-class SideCheck:
-    """Whether one entry of an ARCTIC ``.mano.npy`` holds the hand its key names (a heuristic).
+class HandContact:
+    """How one entry's data meet the object when read by its own model and by the other hand's.
 
     Attributes:
-        side: The entry checked (``"right"`` or ``"left"``).
-        verdict: ``"as stored"`` (the data drive their own model onto the object), ``"mirrored"`` (they
-            touch the object only when driving the other hand's model: flagged) or ``"not judged"``.
-        stored_fraction: Fraction of frames in which the hand, read as stored, touches the object
-            (:data:`CONTACT_M`).
-        mirrored_fraction: The same, the data driving the other hand's model.
-        stored_closest: Closest approach of the hand to the object's surface read as stored, metres.
-        mirrored_closest: The same, read mirrored.
-        message: One line for the user.
+        side: The entry (``"right"`` or ``"left"``).
+        own_fraction: Fraction of frames in which the data, driving the entry's own model, touch the object
+            (within :data:`CONTACT_M` of its surface, no deeper than :data:`PENETRATION_M` inside it).
+        other_fraction: The same, driving the other hand's model.
+        own_closest: Closest approach to the object's surface in the own reading, metres.
+        other_closest: The same in the other reading.
+        own_inside: Fraction of frames in which the own reading is deeper than :data:`PENETRATION_M` inside.
+        other_inside: The same for the other reading.
     """
 
     side: str
+    own_fraction: float
+    other_fraction: float
+    own_closest: float
+    other_closest: float
+    own_inside: float
+    other_inside: float
+
+    @property
+    def reading(self) -> str | None:
+        """``"own"`` or ``"other"``: the only reading that touches the object, or None.
+
+        "Touches": in at least :data:`SIDE_CONTACT_FRACTION` of the frames, the other reading in none.
+        """
+        if self.own_fraction >= SIDE_CONTACT_FRACTION and self.other_fraction == 0.0:
+            return "own"
+        if self.other_fraction >= SIDE_CONTACT_FRACTION and self.own_fraction == 0.0:
+            return "other"
+        return None
+
+    def line(self) -> str:
+        """One line of evidence."""
+        other = HANDS[1 - HANDS.index(self.side)]
+        return (
+            f"'{self.side}' driving the {self.side} model touches the object in {self.own_fraction:.0%} of "
+            f"the frames (closest {self.own_closest * 1000:.0f} mm, inside it in {self.own_inside:.0%}), "
+            f"driving the {other} model in {self.other_fraction:.0%} (closest "
+            f"{self.other_closest * 1000:.0f} mm, inside it in {self.other_inside:.0%})"
+        )
+
+
+@dataclass(frozen=True)
+class SideCheck:
+    """Whether a sequence's ``right`` and ``left`` entries hold the hands their keys name (a heuristic).
+
+    Attributes:
+        verdict: ``"as stored"`` (a hand touches the object only as stored, and none only mirrored),
+            ``"swapped"`` (both hands touch it only when each entry drives the other hand's model: flagged)
+            or ``"not judged"``.
+        right: The evidence of the ``right`` entry.
+        left: The evidence of the ``left`` entry.
+        message: One line for the user.
+    """
+
     verdict: str
-    stored_fraction: float
-    mirrored_fraction: float
-    stored_closest: float
-    mirrored_closest: float
+    right: HandContact
+    left: HandContact
     message: str
 
 
@@ -161,50 +207,60 @@ def hand_points(
     return trajectory.root_pose[:, None, :3] + local @ np.swapaxes(rotation, 1, 2)
 
 
-def surface_distances(obj: ObjectModel, track: ObjectTrack, points: np.ndarray) -> np.ndarray:
-    """Per frame, the smallest distance from ``points`` (N, P, 3) to the object's surface, metres (N,).
+def surface_distances(
+    obj: ObjectModel, track: ObjectTrack, points: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
+    """Per frame, how close ``points`` (N, P, 3) come to the object's surface and how deep they go into it.
 
     The root part follows the track's pose; the second part also turns by the articulation about the
-    object's hinge (ARCTIC: ``R_z(−θ)`` for the hinge axis (0, 0, −1)).
+    object's hinge (ARCTIC: ``R_z(−θ)`` for the hinge axis (0, 0, −1)). The surface is sampled at the centres
+    of its triangles subdivided to :data:`SURFACE_SPACING_M`; a point is inside a watertight part when it
+    lies behind the outward normal of its nearest sample (open parts are never entered).
+
+    Returns:
+        The smallest distance from any point to the surface, metres (N,), and the largest depth of a point
+        inside the object, metres (N,; 0 when none is inside).
     """
     n = len(points)
     pos, quat = track.pose[:, :3], track.pose[:, 3:]
     rotation = Rotation.from_quat(quat, scalar_first=True).as_matrix()
     in_object = np.einsum("nji,npj->npi", rotation, points - pos[:, None])  # Rᵀ (p − t)
-    best = np.full(n, np.inf)
+    closest = np.full(n, np.inf)
+    deepest = np.zeros(n)
     for index, part in enumerate(obj.parts):
-        vertices, _ = trimesh.remesh.subdivide_to_size(part.mesh.vertices, part.mesh.faces, SURFACE_SPACING_M)
-        tree = cKDTree(vertices)
+        vertices, faces = trimesh.remesh.subdivide_to_size(
+            part.mesh.vertices, part.mesh.faces, SURFACE_SPACING_M
+        )
+        surface = trimesh.Trimesh(vertices, faces, process=False)
         local = in_object
         if index > 0 and obj.hinge is not None and track.articulation is not None:
             axis = np.asarray(obj.hinge.axis, dtype=float)
             turn = axis_angle_to_matrix(axis[None, :] * np.asarray(track.articulation)[:, None])
-            local = np.einsum("nji,npj->npi", turn, in_object - np.asarray(obj.hinge.pos)) + np.asarray(
-                obj.hinge.pos
-            )
-        distance, _ = tree.query(local.reshape(-1, 3))
-        best = np.minimum(best, distance.reshape(n, -1).min(axis=1))
-    return best
+            pivot = np.asarray(obj.hinge.pos, dtype=float)
+            local = np.einsum("nji,npj->npi", turn, in_object - pivot) + pivot
+        flat = local.reshape(-1, 3)
+        distance, nearest = cKDTree(surface.triangles_center).query(flat)
+        closest = np.minimum(closest, distance.reshape(n, -1).min(axis=1))
+        if part.mesh.watertight:
+            offset = flat - surface.triangles_center[nearest]
+            behind = -np.einsum("ij,ij->i", offset, surface.face_normals[nearest])
+            deepest = np.maximum(deepest, np.maximum(behind, 0.0).reshape(n, -1).max(axis=1))
+    return closest, deepest
 
 
-def hand_side_check(
-    sequence: ArcticSequence,
-    side: str,
-    hands: Mapping[str, tuple[Skeleton, MANOModel]],
-    obj: ObjectModel,
-) -> SideCheck:
-    """Check, heuristically, that the ``side`` entry of a sequence holds that hand (see the module notes).
+def hand_contact(
+    sequence: ArcticSequence, side: str, hands: Mapping[str, tuple[Skeleton, MANOModel]], obj: ObjectModel
+) -> HandContact:
+    """How the ``side`` entry's data meet the object, read by its own model and by the other hand's.
 
     Args:
         sequence: The sequence.
-        side: The entry to check.
-        hands: Both hands' skeletons and models (``{s: (h.skeleton, h.model)}`` of
-            :func:`handsim.builders.mano_hand.build_mano_hands`); the other hand's skeleton is the mirrored
-            reading (its betas are the other entry's, a difference of millimetres).
-        obj: The sequence's object (:func:`handsim.io.arctic.read_arctic_template`).
+        side: The entry.
+        hands: Both hands' skeletons and models (see :func:`hand_side_check`).
+        obj: The sequence's object.
 
     Returns:
-        The verdict, with how often each reading touches the object and how close it comes.
+        The contact fractions, closest approaches and penetration fractions of both readings.
 
     Raises:
         TrajectoryError: A hand missing from ``hands``, or a skeleton/model of the wrong side.
@@ -214,37 +270,70 @@ def hand_side_check(
     other = HANDS[1 - HANDS.index(side)]
     for s in HANDS:
         if s not in hands:
-            raise TrajectoryError(f"the side check of the {side} hand needs both hands; {s!r} is missing")
+            raise TrajectoryError(f"the side check needs both hands; {s!r} is missing")
         skeleton, model = hands[s]
         if skeleton.name != f"mano_{s}" or model.side != s:
             raise TrajectoryError(
                 f"hands[{s!r}] holds a {skeleton.name} skeleton and a {model.side} model; "
                 f"expected the {s} hand's"
             )
-    closest = {}
-    fraction = {}
+    result = {}
     for reading in (side, other):
         skeleton, model = hands[reading]
-        d = surface_distances(obj, sequence.object, hand_points(seq, skeleton, model, sequence.fps))
-        closest[reading] = float(d.min())
-        fraction[reading] = float(np.mean(d <= CONTACT_M))
-    fs, fm = fraction[side], fraction[other]
-    where = f"{sequence.mano_path} [{side}]"
-    counts = (
-        f"driving the {side} model it touches the {sequence.object_name} in {fs:.0%} of the frames (closest "
-        f"{closest[side] * 1000:.0f} mm), driving the {other} model in {fm:.0%} (closest "
-        f"{closest[other] * 1000:.0f} mm)"
-    )
-    if fm >= SIDE_CONTACT_FRACTION and fs <= fm / 5:
-        verdict = "mirrored"
+        d, depth = surface_distances(obj, sequence.object, hand_points(seq, skeleton, model, sequence.fps))
+        touching = float(np.mean((d <= CONTACT_M) & (depth <= PENETRATION_M)))
+        result[reading] = (touching, float(d.min()), float(np.mean(depth > PENETRATION_M)))
+    (fo, co, io), (ft, ct, it) = result[side], result[other]
+    return HandContact(side, fo, ft, co, ct, io, it)
+
+
+def hand_side_check(
+    sequence: ArcticSequence, hands: Mapping[str, tuple[Skeleton, MANOModel]], obj: ObjectModel
+) -> SideCheck:
+    """Check, heuristically, that the ``right`` and ``left`` entries hold those hands (see the module notes).
+
+    Each entry's data drive its own model and the other hand's (:func:`hand_contact`). A reading that
+    touches the object while the other never does is that entry's plausible one. The sequence is flagged
+    ``"swapped"`` only when both entries are plausible only mirrored: a hand idle in its own reading can land
+    on the object when displaced by the other model, so one entry alone never flags.
+
+    Args:
+        sequence: The sequence.
+        hands: Both hands' skeletons and models (``{s: (h.skeleton, h.model)}`` of
+            :func:`handsim.builders.mano_hand.build_mano_hands`); each entry's mirrored reading uses the
+            other hand's skeleton (its betas are the other entry's, a difference of millimetres).
+        obj: The sequence's object (:func:`handsim.builders.arctic_objects.arctic_object`).
+
+    Returns:
+        The verdict with both entries' evidence.
+
+    Raises:
+        TrajectoryError: A hand missing from ``hands``, or a skeleton/model of the wrong side.
+    """
+    right, left = (hand_contact(sequence, side, hands, obj) for side in HANDS)
+    readings = (right.reading, left.reading)
+    evidence = f"{right.line()}; {left.line()}"
+    where = sequence.mano_path
+    if readings == ("other", "other"):
+        verdict = "swapped"
         message = (
-            f"{where}: the data look like the {other} hand's (heuristic): {counts}; check the file's "
+            f"{where}: 'right' and 'left' look swapped (heuristic): each hand touches the "
+            f"{sequence.object_name} only when driving the other hand's model: {evidence}; check the file's "
             "'right'/'left' entries"
         )
-    elif fs >= SIDE_CONTACT_FRACTION and fm <= fs / 5:
+    elif "other" in readings:
+        verdict = "not judged"
+        message = (
+            f"{where}: sides not judged: one entry touches the {sequence.object_name} only mirrored, the "
+            f"other does not agree (an idle hand's mirror image can land on the object): {evidence}"
+        )
+    elif "own" in readings:
         verdict = "as stored"
-        message = f"{where}: the data are the {side} hand's (heuristic): {counts}"
+        message = f"{where}: the hands are as stored (heuristic): {evidence}"
     else:
         verdict = "not judged"
-        message = f"{where}: side not judged: {counts}; the hand must touch the object in one reading only"
-    return SideCheck(side, verdict, fs, fm, closest[side], closest[other], message)
+        message = (
+            f"{where}: sides not judged: neither hand touches the {sequence.object_name} in one reading "
+            f"only: {evidence}"
+        )
+    return SideCheck(verdict, right, left, message)
