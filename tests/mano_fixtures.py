@@ -34,11 +34,14 @@ import types
 from collections.abc import Iterator
 from pathlib import Path
 
+import mujoco
 import numpy as np
 from scipy.spatial import ConvexHull
 from scipy.spatial.transform import Rotation
 
 from handsim.io.mano import MEAN_JOINTS_FILE
+from handsim.sim import compile_spec
+from handsim.skeleton import mj_name
 
 PARENTS = (-1, 0, 1, 2, 0, 4, 5, 0, 7, 8, 0, 10, 11, 0, 13, 14)
 NAMES = ("wrist", *(f"{f}{k}" for f in ("index", "middle", "pinky", "ring", "thumb") for k in (1, 2, 3)))
@@ -268,6 +271,21 @@ def numpy_mano_fk(arrays, betas, rot, pose, trans):
         frames.append(frames[p] @ rotations[i])
         origins.append(origins[p] + frames[p] @ (joints[i] - joints[p]))
     return joints, np.array(frames), np.array(origins) + trans
+
+
+def mujoco_sites(spec, skeleton, trajectory, frame):
+    """Every skeleton joint's site position in the MuJoCo hand (mocap root) at a trajectory frame.
+
+    The hand's joints are set to the frame's targets and its mocap root to the root pose; ``mj_kinematics``.
+    """
+    model = compile_spec(spec)
+    data = mujoco.MjData(model)
+    for k, name in enumerate(trajectory.dof_names):
+        data.qpos[model.joint(name).qposadr[0]] = trajectory.targets[frame, k]
+    data.mocap_pos[0] = trajectory.root_pose[frame, :3]
+    data.mocap_quat[0] = trajectory.root_pose[frame, 3:]
+    mujoco.mj_kinematics(model, data)
+    return {j.name: data.site(mj_name(j.name)).xpos.copy() for j in skeleton.joints}
 
 
 def write_arctic_mano_npy(path: str | Path, right: dict, left: dict) -> None:

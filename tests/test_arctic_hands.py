@@ -23,11 +23,11 @@ from handsim.io.mano import MANO_JOINT_NAMES, find_mano_files
 from handsim.mesh import validate_mesh
 from handsim.object_model import Hinge, ObjectModel, ObjectPart
 from handsim.sim import compile_spec, warning_counts
-from handsim.skeleton import mj_name
 from tests.mano_fixtures import (
     arctic_object_values,
     grasp_pose,
     mano_hand_params,
+    mujoco_sites,
     numpy_mano_fk,
     write_arctic_mano_npy,
     write_arctic_object_npy,
@@ -53,18 +53,6 @@ def write_sequence(folder, n=6, name="box_grab_01"):
     return path, params
 
 
-def simulated_joints(spec, skeleton, trajectory, frame):
-    """MANO joint positions of the MuJoCo hand (mocap root) at the trajectory's frame, via mj_kinematics."""
-    model = compile_spec(spec)
-    data = mujoco.MjData(model)
-    for k, name in enumerate(trajectory.dof_names):
-        data.qpos[model.joint(name).qposadr[0]] = trajectory.targets[frame, k]
-    data.mocap_pos[0] = trajectory.root_pose[frame, :3]
-    data.mocap_quat[0] = trajectory.root_pose[frame, 3:]
-    mujoco.mj_kinematics(model, data)
-    return np.array([data.site(mj_name(name)).xpos for name in MANO_JOINT_NAMES])
-
-
 # --------------------------------------------------------------------------------------------------
 # Acceptance: MuJoCo hand = numpy MANO of the file
 
@@ -84,7 +72,8 @@ def test_each_arctic_hand_simulated_equals_numpy_mano_kinematics_of_the_file(man
     for frame in range(sequence.nframes):  # frame 0 is the acceptance; every frame is checked
         full = p["pose"][frame] + arrays[side]["hands_mean"]  # ARCTIC: flat_hand_mean=False
         _, _, expected = numpy_mano_fk(arrays[side], p["shape"], p["rot"][frame], full, p["trans"][frame])
-        got = simulated_joints(hand.spec, hand.skeleton, trajectory, frame)
+        sites = mujoco_sites(hand.spec, hand.skeleton, trajectory, frame)
+        got = np.array([sites[name] for name in MANO_JOINT_NAMES])
         worst = max(worst, float(np.abs(got - expected).max()))
         if frame == 0:
             np.testing.assert_allclose(got, expected, rtol=0, atol=1e-9)
