@@ -69,12 +69,22 @@ class Hinge:
         holds_pose: The hinge is stiff enough to hold the child part against gravity in any pose (a laptop
             lid, a bendable pipe): the builder gives it dry friction of 1.5 × the child's largest gravity
             torque. False: a free-swinging hinge (damping only).
+        parts_collide: The two parts collide with each other (a lid rests on its base instead of sinking
+            into it). The builder adds explicit contact pairs between their collision geoms; MuJoCo
+            otherwise never collides a body with its parent.
     """
 
     axis: tuple[float, float, float]
     pos: tuple[float, float, float] = (0.0, 0.0, 0.0)
     range: tuple[float, float] | None = None
     holds_pose: bool = True
+    parts_collide: bool = False
+
+    def __post_init__(self) -> None:
+        if self.range is not None:
+            lo, hi = self.range
+            if not (np.isfinite(lo) and np.isfinite(hi) and lo < hi):
+                raise ModelError(f"hinge range must be two finite angles, lower < upper; got {self.range}")
 
 
 @dataclass(frozen=True)

@@ -1,15 +1,19 @@
 """A readable account of a trajectory: timing, columns, phases, gaps and joint-limit violations.
 
 What ``handsim inspect`` prints; plain data in, lines out (no plotting here, see :mod:`handsim.plotting`).
+An ARCTIC sequence (two MANO hands and an object, no joint angles until the MANO models convert them) has its
+own account, :func:`describe_arctic`.
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass
+from pathlib import Path
 
 import numpy as np
 
 from handsim.glove.gaps import find_gaps
+from handsim.io.arctic_motion import ArcticSequence
 from handsim.skeleton import Skeleton
 from handsim.trajectory import Trajectory
 from handsim.trajectory_ops import LimitReport, limit_violations
@@ -123,3 +127,75 @@ def describe(trajectory: Trajectory, skeleton: Skeleton | None = None) -> Trajec
         gaps=gaps,
         limits=limit_violations(trajectory, skeleton) if skeleton is not None else None,
     )
+
+
+def _travel_and_speed(positions: np.ndarray, fps: float) -> tuple[float, float, int]:
+    """Path length (m), largest speed between frames (m/s) and the frame it ends at."""
+    if len(positions) < 2:
+        return 0.0, 0.0, 0
+    steps = np.linalg.norm(np.diff(positions, axis=0), axis=1)
+    k = int(np.argmax(steps))
+    return float(steps.sum()), float(steps[k] * fps), k + 1
+
+
+@dataclass(frozen=True)
+class ArcticReport:
+    """What ``handsim inspect`` shows of an ARCTIC sequence (see :func:`describe_arctic`).
+
+    Attributes:
+        sequence: The sequence described.
+    """
+
+    sequence: ArcticSequence
+
+    def lines(self) -> list[str]:
+        """Human-readable lines (lengths in mm, speeds in m/s, angles in degrees and radians)."""
+        s = self.sequence
+        out = [
+            f"file       {s.mano_path} (ARCTIC sequence {s.name}, subject {s.subject or '?'})",
+            f"sha256     {s.right.sha256}",
+            f"frames     {s.nframes} over {(s.nframes - 1) / s.fps:.3f} s ({s.fps:g} fps)",
+        ]
+        for hand in (s.right, s.left):
+            travel, speed, frame = _travel_and_speed(hand.trans, s.fps)
+            out.append(
+                f"{hand.side + ' hand':10s} wrist travels {travel * 1000:.0f} mm (fastest {speed:.2f} m/s at "
+                f"frame {frame}); shape β {np.array2string(hand.shape[:3], precision=3)}…"
+            )
+            if hand.fitting_err is None:
+                out.append(f"{'':10s} fitting error: not in the file")
+            else:
+                err = hand.fitting_err
+                k = int(np.argmax(err))
+                out.append(
+                    f"{'':10s} fitting error (as stored, ARCTIC gives no unit): mean {np.mean(err):.4g}, "
+                    f"median {np.median(err):.4g}, max {err[k]:.4g} at frame {k}"
+                )
+        track = s.object
+        travel, speed, frame = _travel_and_speed(track.pose[:, :3], s.fps)
+        lo, hi = s.articulation_range
+        out.append(
+            f"object     {s.object_name} ({Path(s.object_path).name}): travels {travel * 1000:.0f} mm "
+            f"(fastest {speed:.2f} m/s at frame {frame}); at frame 0 its origin is {track.pose[0, 2]:.3f} m "
+            "up (z-up world)"
+        )
+        out.append(
+            f"articul.   {np.degrees(lo):.1f}°..{np.degrees(hi):.1f}° ({lo:.3f}..{hi:.3f} rad) about the "
+            "object's (0, 0, −1) axis"
+        )
+        out.append(f"sha256     {s.object_sha256} (object)")
+        notes = (*s.notes, *s.right.notes, *s.left.notes)
+        out.extend(f"note       {n}" for n in notes)
+        return out
+
+
+def describe_arctic(sequence: ArcticSequence) -> ArcticReport:
+    """Frames, both hands (wrist travel, fitting error), the object and its articulation range.
+
+    Args:
+        sequence: The sequence (:func:`handsim.io.arctic_motion.read_arctic_sequence`).
+
+    Returns:
+        The report.
+    """
+    return ArcticReport(sequence)

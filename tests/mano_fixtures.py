@@ -10,7 +10,17 @@ chumpy is never installed or imported.
 Geometry: the bundled mean-shape joints; around each joint a ring of 6 vertices (the joint regressor row
 of the joint: random convex weights over them); around each bone a blob of vertices skinned mostly to it;
 the five fingertip vertices (MANO ids 744/320/443/554/671) just beyond each finger's last joint, skinned
-fully to it. Shape and pose blend shapes, the PCA basis and the mean pose are random but seeded.
+fully to it. Shape and pose blend shapes and the PCA basis are random but seeded; the mean pose
+``hands_mean`` is a relaxed, slightly curled hand like MANO's (finger flexion about +z on the right hand).
+The left model is the right one of the same seed mirrored in x, as MANO's is: vertices and joints x → −x,
+faces reversed, ``hands_mean`` mirrored (axis-angle (x, y, z) → (x, −y, −z)); its ``shapedirs`` are the
+right's unchanged, like the real ``MANO_LEFT.pkl`` (whose x shape directions are known not to be mirrored,
+smplx issue #48).
+
+ARCTIC sequences (:func:`arctic_hand_params`, :func:`write_arctic_mano_npy`, :func:`arctic_object_values`)
+are written in exactly the real layout (``../shared/data/SOURCES.md``): a pickled ``{'right', 'left'}`` dict,
+float32 arrays, ``shape`` (10,), ``fitting_err`` a plain Python list of N floats; the world is z-up with the
+hands about 1 m up around the object; object rows are float32 [articulation rad, axis-angle, translation mm].
 """
 
 from __future__ import annotations
@@ -24,10 +34,14 @@ import types
 from collections.abc import Iterator
 from pathlib import Path
 
+import mujoco
 import numpy as np
 from scipy.spatial import ConvexHull
+from scipy.spatial.transform import Rotation
 
 from handsim.io.mano import MEAN_JOINTS_FILE
+from handsim.sim import compile_spec
+from handsim.skeleton import mj_name
 
 PARENTS = (-1, 0, 1, 2, 0, 4, 5, 0, 7, 8, 0, 10, 11, 0, 13, 14)
 NAMES = ("wrist", *(f"{f}{k}" for f in ("index", "middle", "pinky", "ring", "thumb") for k in (1, 2, 3)))
@@ -43,8 +57,34 @@ def mean_joints(side: str = "right") -> np.ndarray:
     return joints * np.array([-1.0, 1.0, 1.0]) if side == "left" else joints
 
 
+MIRROR_AA = np.array([1.0, -1.0, -1.0])
+"""An axis-angle rotation mirrored in x: (x, y, z) → (x, −y, −z)."""
+
+
+def plausible_hands_mean(rng: np.random.Generator) -> np.ndarray:
+    """A relaxed right-hand mean pose (45 axis-angle values): fingers curled about +z, the thumb turned."""
+    mean = np.zeros((15, 3))
+    for finger in range(4):  # index, middle, pinky, ring: MCP, PIP, DIP flexion like MANO's mean hand
+        mean[3 * finger : 3 * finger + 3, 2] = [0.45, 0.75, 0.2]
+    mean[12:15] = [[0.6, 0.2, -0.3], [0.1, 0.1, 0.3], [0.0, 0.0, 0.2]]  # thumb
+    return (mean + rng.normal(scale=0.05, size=(15, 3))).reshape(45)
+
+
+def mirror_mano_arrays(arrays: dict[str, np.ndarray]) -> dict[str, np.ndarray]:
+    """The left model of a right one: x → −x, faces reversed, mean pose mirrored, shapedirs as is."""
+    flip = np.array([-1.0, 1.0, 1.0])
+    return {
+        **arrays,
+        "v_template": arrays["v_template"] * flip,
+        "f": arrays["f"][:, ::-1].copy(),
+        "hands_mean": (arrays["hands_mean"].reshape(15, 3) * MIRROR_AA).reshape(45),
+    }
+
+
 def synthetic_mano_arrays(seed: int = 0, nverts: int = 778, side: str = "right") -> dict[str, np.ndarray]:
-    """The arrays of a synthetic MANO model (all plain numpy; J_regressor dense)."""
+    """The arrays of a synthetic MANO model (all plain numpy; J_regressor dense); left = right mirrored."""
+    if side == "left":
+        return mirror_mano_arrays(synthetic_mano_arrays(seed, nverts, "right"))
     rng = np.random.default_rng(seed)
     joints = mean_joints(side)
     index = {n: i for i, n in enumerate(NAMES)}
@@ -103,7 +143,7 @@ def synthetic_mano_arrays(seed: int = 0, nverts: int = 778, side: str = "right")
         "f": np.vstack(faces).astype(np.uint32),
         "posedirs": rng.normal(scale=1e-3, size=(nverts, 3, 135)),
         "hands_components": components,
-        "hands_mean": rng.normal(scale=0.2, size=45),
+        "hands_mean": plausible_hands_mean(rng),
     }
 
 
@@ -172,16 +212,80 @@ def write_synthetic_mano_pkl(
     return arrays
 
 
-def mano_hand_params(n: int, seed: int = 1, *, scale: float = 0.4) -> dict[str, np.ndarray]:
-    """Random MANO parameters of one hand in ARCTIC's layout (trans in metres)."""
+WRIST_AT = {"right": (0.18, -0.12, 1.12), "left": (-0.18, -0.12, 1.12)}
+"""Where the synthetic hands' wrists hover in ARCTIC's z-up world (metres): beside an object ~1 m up."""
+
+
+def mano_hand_params(n: int, seed: int = 1, *, scale: float = 0.4, side: str = "right") -> dict:
+    """MANO parameters of one hand in ARCTIC's real layout.
+
+    float32 arrays ``rot`` (n, 3), ``pose`` (n, 45, relative to the mean pose), ``trans`` (n, 3) metres,
+    ``shape`` (10,), and ``fitting_err`` a plain list of n Python floats. The wrist drifts smoothly (≤ 5 cm,
+    ≈ 0.3 m/s) around :data:`WRIST_AT` of ``side``; rotations and poses are random.
+    """
     rng = np.random.default_rng(seed)
+    t = np.arange(n) / 30.0
+    phase = rng.uniform(0.0, 2.0 * np.pi, size=3)
+    wrist = np.asarray(WRIST_AT[side]) + 0.05 * np.sin(2.0 * np.pi * 1.0 * t[:, None] + phase)
+    joint0 = mean_joints(side)[0]
     return {
         "rot": rng.normal(scale=1.0, size=(n, 3)).astype(np.float32),
         "pose": rng.normal(scale=scale, size=(n, 45)).astype(np.float32),
-        "trans": rng.uniform(-0.5, 0.5, size=(n, 3)).astype(np.float32),
+        "trans": (wrist - joint0).astype(np.float32),
         "shape": rng.normal(scale=0.5, size=10).astype(np.float32),
-        "fitting_err": rng.uniform(0.0, 0.01, size=n).astype(np.float32),
+        "fitting_err": [float(x) for x in rng.uniform(0.002, 0.01, size=n)],
     }
+
+
+def arctic_object_values(
+    n: int, seed: int = 0, *, articulation: tuple[float, float] = (0.0, 1.5)
+) -> np.ndarray:
+    """ARCTIC object rows, float32 (n, 7): articulation rad, axis-angle, translation mm, in a z-up world.
+
+    The object stands about 1 m up and drifts smoothly (≤ 40 mm); its articulation runs between the given
+    bounds and its rotation varies smoothly around a random axis-angle.
+    """
+    rng = np.random.default_rng(seed)
+    t = np.arange(n) / 30.0
+    lo, hi = articulation
+    art = lo + (hi - lo) * 0.5 * (1.0 - np.cos(2.0 * np.pi * 0.5 * t))
+    rotvec = rng.normal(scale=1.0, size=3) + 0.2 * np.sin(
+        2.0 * np.pi * 0.5 * t[:, None] + rng.uniform(0, 6, 3)
+    )
+    trans = np.array([20.0, -30.0, 1050.0]) + 40.0 * np.sin(
+        2.0 * np.pi * 0.5 * t[:, None] + rng.uniform(0, 6, 3)
+    )
+    return np.column_stack([art, rotvec, trans]).astype(np.float32)
+
+
+def numpy_mano_fk(arrays, betas, rot, pose, trans):
+    """Independent MANO kinematics (smplx's batch_rigid_transform) of one frame with the full pose.
+
+    Returns the rest joints (16, 3), the joints' world rotations (16, 3, 3) and world positions (16, 3).
+    """
+    joints = arrays["J_regressor"] @ (arrays["v_template"] + arrays["shapedirs"] @ betas)
+    rotations = Rotation.from_rotvec(np.vstack([rot, np.reshape(pose, (15, 3))])).as_matrix()
+    frames, origins = [rotations[0]], [joints[0]]
+    for i in range(1, 16):
+        p = PARENTS[i]
+        frames.append(frames[p] @ rotations[i])
+        origins.append(origins[p] + frames[p] @ (joints[i] - joints[p]))
+    return joints, np.array(frames), np.array(origins) + trans
+
+
+def mujoco_sites(spec, skeleton, trajectory, frame):
+    """Every skeleton joint's site position in the MuJoCo hand (mocap root) at a trajectory frame.
+
+    The hand's joints are set to the frame's targets and its mocap root to the root pose; ``mj_kinematics``.
+    """
+    model = compile_spec(spec)
+    data = mujoco.MjData(model)
+    for k, name in enumerate(trajectory.dof_names):
+        data.qpos[model.joint(name).qposadr[0]] = trajectory.targets[frame, k]
+    data.mocap_pos[0] = trajectory.root_pose[frame, :3]
+    data.mocap_quat[0] = trajectory.root_pose[frame, 3:]
+    mujoco.mj_kinematics(model, data)
+    return {j.name: data.site(mj_name(j.name)).xpos.copy() for j in skeleton.joints}
 
 
 def write_arctic_mano_npy(path: str | Path, right: dict, left: dict) -> None:
@@ -204,3 +308,29 @@ def write_malicious_npy(path: str | Path, marker: Path) -> None:
     buffer = io.BytesIO()
     np.lib.format.write_array_header_1_0(buffer, {"descr": "|O", "fortran_order": False, "shape": ()})
     Path(path).write_bytes(buffer.getvalue() + malicious_pickle(marker))
+
+
+GRASP_FLEXION = {1: 1.3, 2: 1.5, 3: 0.7}
+"""Flexion (rad) of a finger's MCP (1), PIP (2) and DIP (3) in a closed power grasp (75°, 86°, 40°)."""
+
+
+def grasp_pose(
+    n: int, hands_mean: np.ndarray, side: str, *, closure: float = 1.0, seed: int = 0
+) -> np.ndarray:
+    """Relative MANO poses (n, 45) of a hand closing from flat (0) to ``closure`` × a power grasp and back.
+
+    Built in right-hand terms (finger flexion about +z, small ab/adduction, seeded noise of 0.05 rad) as the
+    full pose, then mirrored for a left hand and made relative to that hand's ``hands_mean``.
+    """
+    rng = np.random.default_rng(seed)
+    c = closure * 0.5 * (1.0 - np.cos(2.0 * np.pi * np.arange(n) / max(n - 1, 1)))
+    full = np.zeros((n, 15, 3))
+    for j in range(12):  # index, middle, pinky, ring × (1, 2, 3)
+        full[:, j, 2] = c * GRASP_FLEXION[j % 3 + 1]
+        full[:, j, 1] = rng.uniform(-0.1, 0.1)
+    right_mean = hands_mean.reshape(15, 3) * (MIRROR_AA if side == "left" else 1.0)
+    full[:, 12:] = right_mean[12:] + c[:, None, None] * np.array([0.3, 0.2, 0.4])  # thumb opposes
+    full += rng.normal(scale=0.05, size=full.shape)
+    if side == "left":
+        full = full * MIRROR_AA
+    return (full.reshape(n, 45) - hands_mean).astype(np.float32)

@@ -5,6 +5,7 @@ from __future__ import annotations
 import json
 
 import mujoco
+import numpy as np
 import pytest
 
 from handsim.cli import main
@@ -150,6 +151,78 @@ def test_inspect_bundled_tzionas_motion_reports_root_and_cube_tracks(capsys):
     assert "frames     186 over 6.167 s (30.0 Hz mean" in out
     assert "root pose  recorded" in out and "object     cube: pose track" in out
     assert "95 of 5766 valid samples outside the limits" in out
+
+
+def _arctic_sequence(tmp_path, n=40):
+    from tests.arctic_fixtures import recording
+    from tests.mano_fixtures import mano_hand_params, write_arctic_mano_npy, write_arctic_object_npy
+
+    raw = tmp_path / "raw_seqs" / "s02"
+    raw.mkdir(parents=True)
+    right, left = mano_hand_params(n, 1), mano_hand_params(n, 2, side="left")
+    write_arctic_mano_npy(raw / "laptop_use_01.mano.npy", right, left)
+    values = recording("laptop", n)
+    write_arctic_object_npy(raw / "laptop_use_01.object.npy", values)
+    return raw / "laptop_use_01.mano.npy", right, left, values
+
+
+def test_inspect_arctic_sequence_shows_frames_both_hands_the_object_and_its_articulation(capsys, tmp_path):
+    path, right, left, values = _arctic_sequence(tmp_path)
+    assert main(["inspect", str(path)]) == 0
+    lines = capsys.readouterr().out.splitlines()
+    assert lines[0] == f"file       {path} (ARCTIC sequence laptop_use_01, subject s02)"
+    assert lines[2] == "frames     40 over 1.300 s (30 fps)"
+    assert lines[3].startswith("right hand wrist travels ") and lines[5].startswith(
+        "left hand  wrist travels "
+    )
+    for line, hand in ((lines[4], right), (lines[6], left)):
+        err = np.asarray(hand["fitting_err"])
+        k = int(np.argmax(err))
+        assert line == (
+            f"           fitting error (as stored, ARCTIC gives no unit): mean {err.mean():.4g}, median "
+            f"{np.median(err):.4g}, max {err[k]:.4g} at frame {k}"
+        )
+    assert lines[7].startswith("object     laptop (laptop_use_01.object.npy): travels ")
+    assert lines[7].endswith(f"at frame 0 its origin is {values[0, 6] / 1000:.3f} m up (z-up world)")
+    lo, hi = float(values[:, 0].min()), float(values[:, 0].max())
+    assert lines[8] == (
+        f"articul.   {np.degrees(lo):.1f}°..{np.degrees(hi):.1f}° ({lo:.3f}..{hi:.3f} rad) about the "
+        "object's (0, 0, −1) axis"
+    )
+
+
+def test_inspect_arctic_sequence_refuses_options_for_one_hand_recordings(capsys, tmp_path):
+    path, *_ = _arctic_sequence(tmp_path)
+    with pytest.raises(SystemExit) as exc:
+        main(["inspect", str(path), "--plot", str(tmp_path / "p.png")])
+    assert str(exc.value) == (
+        "handsim inspect: --plot does not apply to an ARCTIC sequence (its hands are MANO's: their joint "
+        "angles need the MANO models)"
+    )
+
+
+def test_inspect_arctic_sequence_with_a_corrupted_frame_names_it(capsys, tmp_path):
+    from tests.mano_fixtures import write_arctic_object_npy
+
+    path, _, _, values = _arctic_sequence(tmp_path)
+    values[12, 4:] *= 1000.0
+    write_arctic_object_npy(path.with_name("laptop_use_01.object.npy"), values)
+    assert main(["inspect", str(path)]) == 1
+    assert "[translation]: frame 12: the object is " in capsys.readouterr().err
+
+
+def test_one_hand_trajectory_reader_names_an_arctic_sequence(tmp_path):
+    from handsim.errors import InputFileError
+    from handsim.io import read_trajectory
+
+    path, *_ = _arctic_sequence(tmp_path)
+    with pytest.raises(InputFileError) as err:
+        read_trajectory(path)
+    assert str(err.value) == (
+        f"{path}: an ARCTIC sequence (two MANO hands in <seq>.mano.npy, the object in <seq>.object.npy), not "
+        "a one-hand trajectory: read it with handsim.io.arctic_motion.read_arctic_sequence (`handsim inspect "
+        "<seq>.mano.npy` summarises it)"
+    )
 
 
 def test_build_hand_mass_and_scene_object_mass_are_separate_options(capsys):

@@ -30,9 +30,15 @@ from handsim.io.mano import (
 )
 from handsim.io.safe_pickle import load_restricted_pickle
 from handsim.sim import compile_spec, warning_counts
-from handsim.skeleton import mj_name
 from tests.conftest import MANO
-from tests.mano_fixtures import PARENTS, TIP_IDS, malicious_pickle, write_synthetic_mano_pkl
+from tests.mano_fixtures import (
+    PARENTS,
+    TIP_IDS,
+    malicious_pickle,
+    mujoco_sites,
+    numpy_mano_fk,
+    write_synthetic_mano_pkl,
+)
 
 INDEX = {n: i for i, n in enumerate(MANO_JOINT_NAMES)}
 
@@ -47,29 +53,6 @@ def mano_pkl(tmp_path_factory):
 def mano_left_pkl(tmp_path_factory):
     path = tmp_path_factory.mktemp("mano_left") / "MANO_LEFT.pkl"
     return path, write_synthetic_mano_pkl(path, side="left", seed=3)
-
-
-def numpy_mano_fk(arrays, betas, rot, pose, trans):
-    """Independent MANO kinematics (smplx's batch_rigid_transform): joints and the 4x4 joint transforms."""
-    joints = arrays["J_regressor"] @ (arrays["v_template"] + arrays["shapedirs"] @ betas)
-    rotations = Rotation.from_rotvec(np.vstack([rot, pose.reshape(15, 3)])).as_matrix()
-    frames, origins = [rotations[0]], [joints[0]]
-    for i in range(1, 16):
-        p = PARENTS[i]
-        frames.append(frames[p] @ rotations[i])
-        origins.append(origins[p] + frames[p] @ (joints[i] - joints[p]))
-    return joints, np.array(frames), np.array(origins) + trans
-
-
-def mujoco_sites(spec, skeleton, trajectory, frame):
-    model = compile_spec(spec)
-    data = mujoco.MjData(model)
-    for k, name in enumerate(trajectory.dof_names):
-        data.qpos[model.joint(name).qposadr[0]] = trajectory.targets[frame, k]
-    data.mocap_pos[0] = trajectory.root_pose[frame, :3]
-    data.mocap_quat[0] = trajectory.root_pose[frame, 3:]
-    mujoco.mj_kinematics(model, data)
-    return {j.name: data.site(mj_name(j.name)).xpos.copy() for j in skeleton.joints}
 
 
 # --------------------------------------------------------------------------------------------------

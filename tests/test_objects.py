@@ -47,7 +47,7 @@ def arctic_folder(tmp_path_factory) -> Path:
     _write_obj(folder / "bottom.obj", bottom)
     _write_obj(folder / "top.obj", top)
     _write_obj(folder / "mesh.obj", trimesh.util.concatenate([bottom, top]))
-    labels = [0] * len(bottom.vertices) + [1] * len(top.vertices)
+    labels = [1] * len(bottom.vertices) + [0] * len(top.vertices)  # ARCTIC: 0 = top, 1 = bottom
     (folder / "parts.json").write_text(json.dumps(labels))
     return folder
 
@@ -158,7 +158,7 @@ def test_arctic_parts_json_with_a_bad_label_raises_error(arctic_folder, tmp_path
     labels[5] = 2
     (folder / "parts.json").write_text(json.dumps(labels))
     with pytest.raises(
-        FormatError, match=r"^.*parts\.json: part label 5 is 2; expected 0 \(bottom\) or 1 \(top\)$"
+        FormatError, match=r"^.*parts\.json: part label 5 is 2; expected 0 \(top\) or 1 \(bottom\)$"
     ):
         read_arctic_template(folder)
 

@@ -39,7 +39,12 @@ from handsim.trials import discover, select
 from handsim.trials.arctic import UNSUPPORTED as ARCTIC_UNSUPPORTED
 from handsim.trials.graspdb_names import GRASP_TYPES, graspdb_meta
 from tests.conftest import SHARED_DATA
-from tests.mano_fixtures import mano_hand_params, write_arctic_mano_npy, write_arctic_object_npy
+from tests.mano_fixtures import (
+    arctic_object_values,
+    mano_hand_params,
+    write_arctic_mano_npy,
+    write_arctic_object_npy,
+)
 
 CONFIG = ReplayConfig(stability_at="grasp")
 FRAMES = 4
@@ -339,9 +344,10 @@ def _arctic_dataset(root: Path) -> Path:
     raw = root / "raw_seqs" / "s01"
     raw.mkdir(parents=True)
     n = 5
-    write_arctic_mano_npy(raw / "box_grab_01.mano.npy", mano_hand_params(n, 1), mano_hand_params(n, 2))
-    values = np.zeros((n, 7), np.float32)
-    values[:, 4:] = [100.0, 50.0, 700.0]
+    write_arctic_mano_npy(
+        raw / "box_grab_01.mano.npy", mano_hand_params(n, 1), mano_hand_params(n, 2, side="left")
+    )
+    values = arctic_object_values(n)
     write_arctic_object_npy(raw / "box_grab_01.object.npy", values)
     np.save(raw / "box_grab_01.egocam.dist.npy", np.zeros(3))
     np.save(raw / "box_grab_01.smplx.npy", np.zeros(3))

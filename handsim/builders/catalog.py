@@ -23,6 +23,8 @@ from handsim.builders.graspdb_objects import (
     graspdb_object,
 )
 from handsim.errors import InputFileError
+from handsim.io.arctic_motion import ARCTIC_OBJECTS as ARCTIC_NAMES
+from handsim.io.mesh import MESH_SUFFIXES
 from handsim.object_model import ObjectModel, mesh_object
 
 DEFAULT_DENSITY = 1000.0
@@ -120,10 +122,13 @@ def get_graspdb(object_id: int) -> ObjectModel:
 
 
 def arctic(folder: str | Path, *, density: float | None = None, mass: float | None = None) -> ObjectModel:
-    """An ARCTIC object template (``…/meta/object_vtemplates/<name>/``); see :mod:`handsim.io.arctic`."""
-    from handsim.io.arctic import read_arctic_template
+    """An ARCTIC object template (``…/meta/object_vtemplates/<name>/``) as built.
 
-    return read_arctic_template(folder, density=density, mass=mass)
+    With the hinge range, colliding parts and the object's own mass (:mod:`handsim.builders.arctic_objects`).
+    """
+    from handsim.builders.arctic_objects import arctic_object
+
+    return arctic_object(folder, density=density, mass=mass)
 
 
 def resolve(
@@ -146,17 +151,36 @@ def resolve(
         The object model.
 
     Raises:
-        UnknownObjectError: Not a path and not a catalogue name (the message lists the names).
-        InputFileError: A mesh file without ``units``.
+        UnknownObjectError: Not a path and not a catalogue name (the message lists the names), or the name
+            of an ARCTIC object (its template folder is needed).
+        InputFileError: A path that does not exist (a file or folder name, not a catalogue name), or a mesh
+            file without ``units``.
     """
     path = Path(what)
     if path.is_dir():
         return arctic(path, density=density, mass=mass)
+    if not path.exists() and (len(path.parts) > 1 or path.suffix):
+        kind = (
+            "ARCTIC template folder"
+            if path.parent.name == "object_vtemplates"
+            else "mesh file"
+            if path.suffix.lower() in MESH_SUFFIXES
+            else "file or folder"
+        )
+        raise InputFileError(
+            f"{path}: {kind} not found; give a catalogue name (handsim catalog), a mesh file, an ARCTIC "
+            "template folder (top.obj + bottom.obj, or mesh.obj + parts.json) or a Tzionas .SKEL"
+        )
+    if str(what) in ARCTIC_NAMES and str(what) not in names():
+        raise UnknownObjectError(
+            f"{what!r} is an ARCTIC object; ARCTIC's templates are not bundled (their licence forbids it): "
+            f"pass your template folder, e.g. arctic_data/data/meta/object_vtemplates/{what}"
+        )
     if path.suffix.lower() == ".skel" and path.is_file():
         from handsim.io.tzionas_objects import read_tzionas_object
 
         return _with_mass(read_tzionas_object(path), density, mass)
-    if path.suffix.lower() in {".obj", ".off", ".stl", ".ply"}:
+    if path.suffix.lower() in MESH_SUFFIXES:
         from handsim.io.mesh import read_mesh
 
         if units is None:

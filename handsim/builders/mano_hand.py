@@ -27,6 +27,8 @@ set ``data.mocap_pos``/``mocap_quat`` to the trajectory's ``root_pose``).
 from __future__ import annotations
 
 import math
+from collections.abc import Mapping
+from dataclasses import dataclass
 from pathlib import Path
 
 import mujoco
@@ -38,10 +40,12 @@ from handsim.errors import ModelError, SkeletonError
 from handsim.io.mano import (
     FINGERS,
     HINGE_AXES,
+    MANO_FILES,
     MANO_JOINT_NAMES,
     MANO_PARENTS,
     MANOModel,
     check_side,
+    find_mano_files,
     joints_side,
     mano_mean_joints,
     mano_vertices,
@@ -313,14 +317,94 @@ def build_mano_hand(
         ModelError: Unknown ``collision``/``root`` option, ``"mesh"`` without a model file, or non-zero betas
             without one.
     """
-    if root not in ROOT_OPTIONS:
-        raise ModelError(f"unknown root option {root!r}; expected one of {list(ROOT_OPTIONS)}")
+    _check_root(root)
     if collision == "mesh" and pkl_path is None:
         raise ModelError(
             "collision='mesh' needs the MANO mesh: pass pkl_path (MANO_RIGHT.pkl / MANO_LEFT.pkl)"
         )
     skeleton = mano_hand_skeleton(pkl_path, betas, side)
+    return _hand_spec(skeleton, collision, root, mass, timestep, name)
+
+
+def _check_root(root: str) -> None:
+    if root not in ROOT_OPTIONS:
+        raise ModelError(f"unknown root option {root!r}; expected one of {list(ROOT_OPTIONS)}")
+
+
+def _hand_spec(
+    skeleton: Skeleton, collision: str, root: str, mass: float | None, timestep: float, name: str | None
+) -> mujoco.MjSpec:
     spec = build_hand(skeleton, mass=mass, collision=collision, name=name, timestep=timestep)
     if root == "mocap":
         spec.body(skeleton.joints[0].name).mocap = True
     return spec
+
+
+@dataclass(frozen=True)
+class MANOHand:
+    """A MANO hand built from a user's model file, with what converting its motion needs.
+
+    Attributes:
+        side: ``"right"`` or ``"left"``.
+        spec: The uncompiled hand (:func:`build_mano_hand`'s layout; model name ``mano_<side>``).
+        skeleton: Its hinge skeleton at ``betas`` (the wrist J0 is where the root pose puts the wrist body).
+        model: The MANO model read from the file (``hands_mean`` for ``flat_hand_mean=False``).
+        betas: The shape coefficients the hand was built with, shape (S,).
+    """
+
+    side: str
+    spec: mujoco.MjSpec
+    skeleton: Skeleton
+    model: MANOModel
+    betas: np.ndarray
+
+
+def build_mano_hands(
+    mano_dir: str | Path | None,
+    betas: Mapping[str, npt.ArrayLike],
+    *,
+    collision: str = "capsules",
+    root: str = "fixed",
+    mass: float | None = None,
+    timestep: float = 0.002,
+) -> dict[str, MANOHand]:
+    """Build MANO hands from the user's ``MANO_RIGHT.pkl`` / ``MANO_LEFT.pkl``, each with its own betas.
+
+    Each model file is read once; its side must match its name (``MANO_LEFT.pkl`` must be a left hand).
+
+    Args:
+        mano_dir: The folder with the model files; None: ``$HANDSIM_MANO_DIR``
+            (:func:`handsim.io.mano.find_mano_files`).
+        betas: Side → shape coefficients (e.g. an ARCTIC subject's ``shape`` per hand); the sides given are
+            the hands built.
+        collision: ``"capsules"`` or ``"mesh"`` (see :func:`build_mano_hand`).
+        root: ``"fixed"`` (the wrist body without joints: what ``build_scene(hand_root="weld")`` frees and
+            welds to a mocap target) or ``"mocap"``.
+        mass: Whole-hand mass in kg per hand; anthropometric by default.
+        timestep: Simulation timestep in seconds.
+
+    Returns:
+        Side → the built hand, in the order of ``betas``.
+
+    Raises:
+        InputFileError: The folder or a model file is missing (the message says which files are needed and
+            where to put them).
+        FormatError: A model file is malformed.
+        ModelError: A file holds the other hand, bad betas, or an unknown ``collision``/``root``.
+    """
+    _check_root(root)
+    files = find_mano_files(mano_dir, tuple(betas))
+    hands = {}
+    for side, path in files.items():
+        model = read_mano_model(path)
+        if model.side != side:
+            raise ModelError(
+                f"{path}: the model is a {model.side} hand (fingers towards "
+                f"{'−x' if model.side == 'right' else '+x'} from the wrist), but the file is the {side} "
+                f"hand's {MANO_FILES[side]}"
+            )
+        b = padded_betas(model, betas[side])
+        skeleton = mano_model_skeleton(model, b)
+        spec = _hand_spec(skeleton, collision, root, mass, timestep, None)
+        hands[side] = MANOHand(side=side, spec=spec, skeleton=skeleton, model=model, betas=b)
+    return hands

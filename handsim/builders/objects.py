@@ -10,8 +10,11 @@ An object is described by plain data (:class:`ObjectModel`: one or two :class:`O
 :func:`build_object` does both. The spec has one body per part, named after the part (``body`` for a
 rigid object); the root part carries a free joint ``free``, the second part a hinge ``hinge``. Body frames
 are the object frame: a recorded object pose is the root body's pose, and the child part's frame coincides
-with the root's at articulation 0. Collision geoms are ``hull_<i>`` (``<part>_hull_<i>`` for parts of an
-articulated object) or exact primitives ``prim_<i>``; the visual mesh is ``visual`` (``<part>_visual``).
+with the root's at articulation 0. A hinge with ``parts_collide`` gets explicit contact pairs
+``pair_<i>_<j>`` between the two parts' collision geoms (MuJoCo never collides a body with its parent, and
+a global flag would change every parent–child pair of the hand too). Collision geoms are ``hull_<i>``
+(``<part>_hull_<i>`` for parts of an articulated object) or exact primitives ``prim_<i>``; the visual mesh is
+``visual`` (``<part>_visual``).
 
 Mass and inertia are set explicitly on each body (``explicitinertial``) from the repaired watertight mesh
 and the density — summing overlapping hulls would over-count the mass — and every geom has density 0.
@@ -27,7 +30,7 @@ import numpy as np
 import trimesh
 
 from handsim.builders.decompose import Decomposition, DecompositionParams, decompose
-from handsim.builders.geom_classes import add_geom_classes
+from handsim.builders.geom_classes import CONTACT_CONDIM, add_geom_classes
 from handsim.builders.hand import SKIN_FRICTION
 from handsim.errors import ModelError
 from handsim.mesh import Mesh
@@ -36,6 +39,15 @@ from handsim.object_model import Hinge, ObjectModel, Primitive
 OBJECT_RGBA = (0.55, 0.60, 0.68, 1.0)
 HULL_RGBA = (0.9, 0.5, 0.2, 0.4)
 HINGE_DAMPING = 1e-3  # N·m·s/rad: a little viscous loss so a free hinge settles
+HOLD_SOLREF_FRICTION = (0.004, 1.0)
+HOLD_SOLIMP_FRICTION = (0.99, 0.999, 0.001, 0.5, 2.0)
+"""A hinge that holds its pose: its dry friction is made nearly hard (time constant 2 steps, impedance
+0.99–0.999). MuJoCo's friction constraint is soft, so with its defaults (0.02 s; 0.9–0.95) a lid held by
+friction creeps shut at 6–17°/s; with these, ≤ 0.3°/s (measured on the synthetic ARCTIC templates,
+``docs/objects.md``)."""
+HINGE_STOP_SOLREF = (0.005, 1.0)
+"""Time constant and damping ratio of a hinge's range limit and of the contact pairs between the parts: a lid
+dropped shut sinks ≤ 0.2° past its closed pose at impact (0.6–2.9° with MuJoCo's default 0.02 s)."""
 
 
 @dataclass(frozen=True)
@@ -200,9 +212,13 @@ def object_spec(
                 damping=HINGE_DAMPING,
                 frictionloss=hinge_friction(hinge, prepared.mass_properties[part.name]),
             )
+            if hinge.holds_pose:
+                joint.solref_friction = list(HOLD_SOLREF_FRICTION)
+                joint.solimp_friction = list(HOLD_SOLIMP_FRICTION)
             if hinge.range is not None:
                 joint.limited = mujoco.mjtLimited.mjLIMITED_TRUE
                 joint.range = list(hinge.range)
+                joint.solref_limit = list(HINGE_STOP_SOLREF)
         props = prepared.mass_properties[part.name]
         body.explicitinertial = True
         body.mass = props.mass
@@ -231,7 +247,29 @@ def object_spec(
         parent = body
     if not single:
         spec.add_exclude(bodyname1=model.parts[0].name, bodyname2=model.parts[1].name)
+        if model.hinge is not None and model.hinge.parts_collide:
+            _add_part_pairs(spec, model.parts[0].name, model.parts[1].name, friction)
     return spec
+
+
+def _add_part_pairs(spec: mujoco.MjSpec, parent: str, child: str, friction: Sequence[float]) -> None:
+    """Explicit contact pairs between every collision geom of two parts (``pair_<i>_<j>``).
+
+    A pair takes no parameters from its geoms: condim and friction are set to the geoms' own (sliding,
+    sliding, torsional, rolling, rolling), solref to :data:`HINGE_STOP_SOLREF`, solimp stays MuJoCo's default.
+    """
+    geoms = {parent: [], child: []}
+    for geom in spec.geoms:
+        body = geom.parent.name
+        if body in geoms and not (geom.contype == 0 and geom.conaffinity == 0):
+            geoms[body].append(geom.name)
+    slide, torsion, roll = (float(f) for f in friction)
+    for i, a in enumerate(geoms[parent]):
+        for j, b in enumerate(geoms[child]):
+            spec.add_pair(
+                name=f"pair_{i}_{j}", geomname1=a, geomname2=b, condim=CONTACT_CONDIM,
+                friction=[slide, slide, torsion, roll, roll], solref=list(HINGE_STOP_SOLREF),
+            )  # fmt: skip
 
 
 _PRIMITIVE_TYPES = {

@@ -15,7 +15,7 @@ import mujoco
 import numpy as np
 import numpy.typing as npt
 
-from handsim.builders.objects import object_bounds
+from handsim.builders.objects import object_points
 from handsim.errors import ModelError
 
 HAND_PREFIX = "hand/"
@@ -66,19 +66,27 @@ def object_prefixes(count: int) -> list[str]:
     return [OBJECT_PREFIX] if count == 1 else [f"obj{i}/" for i in range(count)]
 
 
-def resting_position(obj: mujoco.MjSpec, xy: Sequence[float] = (0.0, 0.0), gap: float = 0.0) -> np.ndarray:
-    """Position of an object's frame that rests it (identity orientation) on the table top at ``xy``.
+def resting_position(
+    obj: mujoco.MjSpec,
+    xy: Sequence[float] = (0.0, 0.0),
+    gap: float = 0.0,
+    quat: npt.ArrayLike = (1.0, 0.0, 0.0, 0.0),
+) -> np.ndarray:
+    """Position of an object's frame that rests it, turned by ``quat``, on the table top at ``xy``.
 
     Args:
         obj: An object spec from :func:`handsim.builders.build_object`.
         xy: Table-top position, metres.
         gap: Height of the object's lowest point above the table, metres.
+        quat: The object's orientation (w, x, y, z); identity by default.
 
     Returns:
         Position (x, y, z), metres.
     """
-    lower, _ = object_bounds(obj)
-    return np.array([xy[0], xy[1], gap - lower[2]], dtype=float)
+    rot = np.empty(9)
+    mujoco.mju_quat2Mat(rot, np.asarray(_vector(quat, 4, "quat")))
+    lowest = float((object_points(obj) @ rot.reshape(3, 3).T)[:, 2].min())
+    return np.array([xy[0], xy[1], gap - lowest], dtype=float)
 
 
 def build_scene(

@@ -22,9 +22,27 @@ def load_trajectory(path: str, skeleton_path: str | None, calibration_path: str 
     return trajectory, skeleton
 
 
+def _inspect_arctic(args: argparse.Namespace) -> int:
+    from handsim.io.arctic_motion import read_arctic_sequence
+    from handsim.trajectory_report import describe_arctic
+
+    given = [flag for flag, value in (("--skeleton", args.skeleton), ("--calibration", args.calibration),
+                                      ("--plot", args.plot)) if value]  # fmt: skip
+    if given:
+        raise SystemExit(
+            f"handsim inspect: {' and '.join(given)} {'does' if len(given) == 1 else 'do'} not apply to an "
+            "ARCTIC sequence (its hands are MANO's: their joint angles need the MANO models)"
+        )
+    for line in describe_arctic(read_arctic_sequence(args.trajectory)).lines():
+        print(line)
+    return 0
+
+
 def _inspect(args: argparse.Namespace) -> int:
     from handsim.trajectory_report import describe
 
+    if args.trajectory.endswith(".mano.npy"):
+        return _inspect_arctic(args)
     trajectory, skeleton = load_trajectory(args.trajectory, args.skeleton, args.calibration)
     for line in describe(trajectory, skeleton).lines():
         print(line)
@@ -59,7 +77,9 @@ def register(commands: argparse._SubParsersAction) -> None:
         description="Read a recording (GraspDB14 CyberGlove rad file, or raw with --calibration; a "
         "Tzionas Model_Hand_*.MOTION with its sequence's objects) and print its duration and rate, the "
         "largest interval between samples, channels, phases (from the _annot- file beside it), gaps, and "
-        "with --skeleton (a .MOTION's own .SKEL by default) the samples outside the joint limits.",
+        "with --skeleton (a .MOTION's own .SKEL by default) the samples outside the joint limits. An ARCTIC "
+        "raw_seqs/sXX/<seq>.mano.npy: frames, both hands (wrist travel, fitting error) and the object of "
+        "the <seq>.object.npy beside it with its articulation range.",
     )
     inspect.add_argument("trajectory", metavar="TRAJECTORY")
     inspect.add_argument("--skeleton", metavar="SKELETON_FILE", help="hand skeleton: columns and limits")

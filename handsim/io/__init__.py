@@ -7,8 +7,9 @@ Entry points:
   calibration), Tzionas/Ballan hand ``.MOTION`` files (with the sequence's object tracks) and handsim's
   synthetic scripted grasps (``.grasp.json``, :mod:`handsim.io.scripted`).
 
-Other sources, with their own readers: ARCTIC (:mod:`handsim.io.arctic_motion`: ``read_arctic_mano``,
-``read_arctic_object``; templates in :mod:`handsim.io.arctic`), MANO models and poses
+Other sources, with their own readers: ARCTIC (:mod:`handsim.io.arctic_motion`: ``read_arctic_sequence``
+— both hands and the object —, ``read_arctic_mano``, ``read_arctic_object``; templates in
+:mod:`handsim.io.arctic`), MANO models and poses
 (:mod:`handsim.io.mano`: ``read_mano_model``, ``mano_pose_to_trajectory``), meshes (:mod:`handsim.io.mesh`).
 """
 
@@ -35,6 +36,12 @@ TRAJECTORY_SUFFIXES = {
 def _suffix_or_error(path: Path, known: dict[str, str], what: str) -> str:
     if not path.exists():
         raise InputFileError(f"{path}: file not found")
+    if what == "trajectory" and path.name.endswith((".mano.npy", ".object.npy")):
+        raise InputFileError(
+            f"{path}: an ARCTIC sequence (two MANO hands in <seq>.mano.npy, the object in <seq>.object.npy), "
+            "not a one-hand trajectory: read it with handsim.io.arctic_motion.read_arctic_sequence "
+            "(`handsim inspect <seq>.mano.npy` summarises it)"
+        )
     suffix = path.suffix.lower()
     if path.name.lower().endswith(".grasp.json"):
         suffix = ".grasp.json"

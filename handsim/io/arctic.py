@@ -4,12 +4,15 @@ A template folder holds the object in its canonical frame, in millimetres, as ei
 
 * ``top.obj`` + ``bottom.obj`` — the two parts as separate meshes (preferred when present: each part is
   a closed surface, so its volume and mass are defined), or
-* ``mesh.obj`` + ``parts.json`` — one mesh and one 0/1 per vertex (1 = top, 0 = bottom).
+* ``mesh.obj`` + ``parts.json`` — one mesh and one 0/1 per vertex: **0 = top, 1 = bottom** (ARCTIC's loader
+  adds 1 to the labels and takes part id 1 as the top; its data README says the opposite, and is wrong).
 
 The top part rotates relative to the bottom by the articulation angle θ about the object-frame axis
 [0, 0, −1] through the origin (ARCTIC's loader applies ``R_z(−θ)`` to top vertices before the global
 rotation and translation), so the object becomes two bodies joined by a hinge with axis (0, 0, −1).
-ARCTIC gives no masses; the object is given a uniform density (default :data:`ARCTIC_DENSITY`).
+This reader returns the geometry as stored (unlimited hinge, density :data:`ARCTIC_DENSITY` unless given);
+:func:`handsim.builders.arctic_objects.arctic_object` adds the hinge range, the colliding parts and the
+object's own mass — what handsim builds.
 """
 
 from __future__ import annotations
@@ -29,10 +32,9 @@ ARCTIC_HINGE_AXIS = (0.0, 0.0, -1.0)
 """Articulation axis in the object frame: the top part turns by R_z(−θ)."""
 
 ARCTIC_DENSITY = 300.0
-"""Default density in kg/m³. ARCTIC objects are hollow household items (boxes, a laptop, an espresso
-machine); their templates are closed surfaces, so a solid's density would overstate the mass several
-times. 300 kg/m³ gives, e.g., ~0.4 kg for the ~1.3 l ketchup bottle template. Pass ``density`` or
-``mass`` to override."""
+"""Fallback density in kg/m³ for a template given neither density nor mass (the reader's default).
+:func:`handsim.builders.arctic_objects.arctic_object` gives ARCTIC's 11 objects their own masses instead;
+this density serves templates outside them. 300 kg/m³ is a hollow household item's mean density."""
 
 
 def read_arctic_template(
@@ -89,7 +91,7 @@ def read_arctic_template(
 
 
 def read_parts_json(path: Path, nvertices: int) -> np.ndarray:
-    """Read ``parts.json``: one 0 (bottom) or 1 (top) per vertex of ``mesh.obj``.
+    """Read ``parts.json``: one 0 (top) or 1 (bottom) per vertex of ``mesh.obj``.
 
     Accepts a JSON list (what ARCTIC ships) or one integer per line.
 
@@ -118,14 +120,14 @@ def read_parts_json(path: Path, nvertices: int) -> np.ndarray:
     labels = np.empty(len(values), dtype=np.int64)
     for i, value in enumerate(values):
         if str(value).strip() not in ("0", "1"):
-            raise FormatError(path, f"part label {i} is {value!r}; expected 0 (bottom) or 1 (top)")
+            raise FormatError(path, f"part label {i} is {value!r}; expected 0 (top) or 1 (bottom)")
         labels[i] = int(str(value).strip())
     if len(labels) != nvertices:
         raise FormatError(
             path,
             f"{len(labels)} part labels for the {nvertices} vertices of mesh.obj; expected one per vertex",
         )
-    return labels == 1
+    return labels == 0
 
 
 def _split_by_parts(mesh_path: Path, parts_path: Path, watertight: bool) -> dict[str, Mesh]:

@@ -30,6 +30,7 @@ from __future__ import annotations
 
 import json
 import math
+import os
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -38,7 +39,7 @@ import numpy as np
 import numpy.typing as npt
 
 from handsim.assets import ASSETS_DIR
-from handsim.errors import FormatError, ModelError, SkeletonError, TrajectoryError
+from handsim.errors import FormatError, InputFileError, ModelError, SkeletonError, TrajectoryError
 from handsim.io.safe_pickle import load_restricted_pickle
 from handsim.skeleton import Skeleton
 from handsim.trajectory import ObjectTrack, Trajectory
@@ -434,6 +435,53 @@ def read_mano_model(pkl_path: str | Path) -> MANOModel:
         side=joints_side(regressor @ v_template),
         source=str(path),
     )
+
+
+MANO_FILES: dict[str, str] = {"right": "MANO_RIGHT.pkl", "left": "MANO_LEFT.pkl"}
+"""The model file of each hand, as MPI distributes them."""
+
+MANO_DIR_ENV = "HANDSIM_MANO_DIR"
+"""Environment variable naming the folder with the user's MANO model files."""
+
+MANO_DOWNLOAD = "https://mano.is.tue.mpg.de/"
+
+
+def find_mano_files(
+    mano_dir: str | Path | None = None, sides: tuple[str, ...] = ("right", "left")
+) -> dict[str, Path]:
+    """The user's MANO model files: ``MANO_RIGHT.pkl`` and ``MANO_LEFT.pkl`` in one folder.
+
+    Args:
+        mano_dir: The folder; when None, the folder named by ``$HANDSIM_MANO_DIR``.
+        sides: The hands needed.
+
+    Returns:
+        Side → path of its model file.
+
+    Raises:
+        InputFileError: No folder given and ``$HANDSIM_MANO_DIR`` unset, the folder missing, or a file
+            missing. The message names the files needed, where they come from and where to put them.
+    """
+    for side in sides:
+        check_side(side)
+    needed = " and ".join(MANO_FILES[s] for s in sides)
+    advice = (
+        f"handsim needs the MANO hand model{'s' if len(sides) > 1 else ''} {needed} (MPI's MANO licence: "
+        f"register and download them from {MANO_DOWNLOAD}); put them in one folder and pass it with "
+        f"--mano-dir DIR (Python: mano_dir=DIR) or set {MANO_DIR_ENV}=DIR"
+    )
+    if mano_dir is None:
+        env = os.environ.get(MANO_DIR_ENV, "")
+        if not env:
+            raise InputFileError(f"no MANO folder given and {MANO_DIR_ENV} is not set: {advice}")
+        mano_dir = env
+    folder = Path(mano_dir)
+    if not folder.is_dir():
+        raise InputFileError(f"{folder}: MANO folder not found: {advice}")
+    missing = [MANO_FILES[s] for s in sides if not (folder / MANO_FILES[s]).is_file()]
+    if missing:
+        raise InputFileError(f"{folder}: {' and '.join(missing)} not found there: {advice}")
+    return {side: folder / MANO_FILES[side] for side in sides}
 
 
 # --------------------------------------------------------------------------------------------------
