@@ -104,7 +104,8 @@ def test_enclosed_ball_is_stable_in_all_six_directions(grasp) -> None:
         assert d.success, d.failure
         assert d.failure == ""
         assert d.in_contact_at_end
-        assert {"root", "th_ip", "mf_mcp", "rf_pip"} <= set(d.links_in_contact)  # palm, thumb, fingers
+        assert {"root", "th_ip"} <= set(d.links_in_contact)  # palm and thumb …
+        assert len({link[:2] for link in d.links_in_contact} & {"if", "mf", "rf", "lf"}) >= 2  # … and fingers
         assert d.displacement < 0.005
         assert d.simulated_time == pytest.approx(1.0)
         assert d.warnings == ()

@@ -6,13 +6,13 @@ from collections.abc import Sequence
 
 import mujoco
 
-CONTACT_CONDIM = 4  # sliding + torsional friction: a pinched object resists spinning about the contact normal
+from handsim.builders.surfaces import CONTACT_CONDIM, Surface
 
 
 def add_geom_classes(
     spec: mujoco.MjSpec,
     *,
-    friction: Sequence[float],
+    surface: Surface,
     visual_rgba: Sequence[float],
     collision_rgba: Sequence[float],
     density: float | None = None,
@@ -21,7 +21,7 @@ def add_geom_classes(
 
     Args:
         spec: The model being built.
-        friction: Sliding, torsional (m) and rolling (m) friction of every geom.
+        surface: The contact parameters of the collision geoms (:mod:`handsim.builders.surfaces`).
         visual_rgba: Colour of visual geoms.
         collision_rgba: Colour of collision geoms (group 3, hidden by default in viewers).
         density: Density of every geom in kg/m³ (0: mass comes from explicit inertials), or None to keep
@@ -31,7 +31,7 @@ def add_geom_classes(
         The ``visual`` and ``collision`` default classes. Visual geoms never collide and weigh nothing.
     """
     main = spec.default
-    main.geom.friction = list(friction)
+    main.geom.friction = surface.friction
     main.geom.condim = CONTACT_CONDIM
     if density is not None:
         main.geom.density = density
@@ -44,4 +44,9 @@ def add_geom_classes(
     collision = spec.add_default("collision", main)
     collision.geom.group = 3
     collision.geom.rgba = list(collision_rgba)
+    collision.geom.priority = surface.priority
+    if surface.solref is not None:
+        collision.geom.solref = list(surface.solref)
+    if surface.solimp is not None:
+        collision.geom.solimp = list(surface.solimp)
     return visual, collision

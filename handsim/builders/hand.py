@@ -26,38 +26,41 @@ from scipy.spatial import ConvexHull, QhullError
 
 from handsim.builders.geom_classes import add_geom_classes
 from handsim.builders.hand_geometry import Capsule, default_hand_mass, finger_chains, hand_geometry
+from handsim.builders.surfaces import SKIN
 from handsim.errors import ModelError
 from handsim.skeleton import Skeleton, mj_name
 
 SKIN_RGBA = (0.87, 0.70, 0.60, 1.0)
 COLLISION_RGBA = (0.3, 0.5, 0.9, 0.4)
-SKIN_FRICTION = (1.0, 0.005, 0.0001)
 
 
 @dataclass(frozen=True)
 class JointClass:
-    """Dynamics shared by the DoFs of one kind.
+    """Dynamics shared by the DoFs of one kind (sources: ``docs/physics.md``).
 
     Attributes:
-        armature: Rotor inertia added to the DoF, kg·m² (stabilises light finger links).
         damping: Joint damping, N·m·s/rad.
         kp: Position-actuator stiffness, N·m/rad.
         force: Actuator torque limit, N·m.
     """
 
-    armature: float
     damping: float
     kp: float
     force: float
 
 
+ARMATURE = 2e-4
+"""Inertia added to every DoF, kg·m²: about a proximal phalanx's own about its joint. Without it the
+lightest links (distal phalanges, 1.2–3.5e-6 kg·m² about the DIP) ring at the 2 ms step under random
+targets (joint speeds of 976 rad/s); from 1e-6 on they do not (``docs/physics.md``)."""
+
 # Finger flexion: a 1 rad error gives 2 N·m (index MCP flexion strength is a few N·m); ~10 Hz bandwidth.
 JOINT_CLASSES: dict[str, JointClass] = {
-    "flex": JointClass(armature=2e-4, damping=0.05, kp=2.0, force=3.0),
-    "abd": JointClass(armature=2e-4, damping=0.05, kp=1.5, force=2.0),
-    "pron": JointClass(armature=2e-4, damping=0.05, kp=1.5, force=2.0),
-    "rot": JointClass(armature=2e-4, damping=0.05, kp=1.5, force=2.0),
-    "wrist": JointClass(armature=5e-3, damping=0.5, kp=20.0, force=15.0),
+    "flex": JointClass(damping=0.05, kp=2.0, force=3.0),
+    "abd": JointClass(damping=0.05, kp=1.5, force=2.0),
+    "pron": JointClass(damping=0.05, kp=1.5, force=2.0),
+    "rot": JointClass(damping=0.05, kp=1.5, force=2.0),
+    "wrist": JointClass(damping=0.5, kp=20.0, force=15.0),
 }
 
 
@@ -70,14 +73,14 @@ def _quat(rotation: np.ndarray) -> np.ndarray:
 def _add_defaults(spec: mujoco.MjSpec, root_has_dofs: bool) -> dict[str, mujoco.MjsDefault]:
     main = spec.default
     visual, collision = add_geom_classes(
-        spec, friction=SKIN_FRICTION, visual_rgba=SKIN_RGBA, collision_rgba=COLLISION_RGBA
+        spec, surface=SKIN, visual_rgba=SKIN_RGBA, collision_rgba=COLLISION_RGBA
     )
     classes = {"visual": visual, "collision": collision}
     kinds = [k for k in JOINT_CLASSES if k != "wrist" or root_has_dofs]
     for kind in kinds:
         params = JOINT_CLASSES[kind]
         d = spec.add_default(kind, main)
-        d.joint.armature = params.armature
+        d.joint.armature = ARMATURE
         d.joint.damping = [params.damping, 0.0, 0.0]
         d.actuator.set_to_position(kp=params.kp)
         d.actuator.forcelimited = mujoco.mjtLimited.mjLIMITED_TRUE

@@ -30,8 +30,8 @@ import numpy as np
 import trimesh
 
 from handsim.builders.decompose import Decomposition, DecompositionParams, decompose
-from handsim.builders.geom_classes import CONTACT_CONDIM, add_geom_classes
-from handsim.builders.hand import SKIN_FRICTION
+from handsim.builders.geom_classes import add_geom_classes
+from handsim.builders.surfaces import CONTACT_CONDIM, OBJECT, Surface
 from handsim.errors import ModelError
 from handsim.mesh import Mesh
 from handsim.object_model import Hinge, ObjectModel, Primitive
@@ -171,7 +171,7 @@ def object_spec(
     prepared: PreparedObject,
     *,
     free: bool = True,
-    friction: Sequence[float] = SKIN_FRICTION,
+    surface: Surface = OBJECT,
     rgba: Sequence[float] = OBJECT_RGBA,
 ) -> mujoco.MjSpec:
     """The MuJoCo spec of a prepared object.
@@ -179,8 +179,8 @@ def object_spec(
     Args:
         prepared: The object from :func:`prepare_object`.
         free: Give the root body a free joint (False: the object is fixed to its parent frame).
-        friction: Sliding, torsional (m) and rolling (m) friction of the collision geoms; the default is
-            that of skin (MuJoCo uses the larger of two touching geoms' coefficients).
+        surface: Contact parameters of the collision geoms (:mod:`handsim.builders.surfaces`; skin and the
+            table have priority over them, so they act between objects, and between two parts).
         rgba: Colour of the visual mesh.
 
     Returns:
@@ -191,7 +191,7 @@ def object_spec(
     spec.compiler.degree = False
     spec.modelname = model.name
     visual, collision = add_geom_classes(
-        spec, friction=friction, visual_rgba=rgba, collision_rgba=HULL_RGBA, density=0.0
+        spec, surface=surface, visual_rgba=rgba, collision_rgba=HULL_RGBA, density=0.0
     )
 
     single = len(model.parts) == 1
@@ -248,11 +248,11 @@ def object_spec(
     if not single:
         spec.add_exclude(bodyname1=model.parts[0].name, bodyname2=model.parts[1].name)
         if model.hinge is not None and model.hinge.parts_collide:
-            _add_part_pairs(spec, model.parts[0].name, model.parts[1].name, friction)
+            _add_part_pairs(spec, model.parts[0].name, model.parts[1].name, surface)
     return spec
 
 
-def _add_part_pairs(spec: mujoco.MjSpec, parent: str, child: str, friction: Sequence[float]) -> None:
+def _add_part_pairs(spec: mujoco.MjSpec, parent: str, child: str, surface: Surface) -> None:
     """Explicit contact pairs between every collision geom of two parts (``pair_<i>_<j>``).
 
     A pair takes no parameters from its geoms: condim and friction are set to the geoms' own (sliding,
@@ -263,12 +263,12 @@ def _add_part_pairs(spec: mujoco.MjSpec, parent: str, child: str, friction: Sequ
         body = geom.parent.name
         if body in geoms and not (geom.contype == 0 and geom.conaffinity == 0):
             geoms[body].append(geom.name)
-    slide, torsion, roll = (float(f) for f in friction)
+    slide, torsion = surface.sliding, surface.torsional
     for i, a in enumerate(geoms[parent]):
         for j, b in enumerate(geoms[child]):
             spec.add_pair(
                 name=f"pair_{i}_{j}", geomname1=a, geomname2=b, condim=CONTACT_CONDIM,
-                friction=[slide, slide, torsion, roll, roll], solref=list(HINGE_STOP_SOLREF),
+                friction=[slide, slide, torsion, 0.0, 0.0], solref=list(HINGE_STOP_SOLREF),
             )  # fmt: skip
 
 
@@ -304,7 +304,7 @@ def build_object(
     use_cache: bool = True,
     progress: bool = False,
     free: bool = True,
-    friction: Sequence[float] = SKIN_FRICTION,
+    surface: Surface = OBJECT,
 ) -> mujoco.MjSpec:
     """Build an object's MuJoCo spec: :func:`prepare_object` then :func:`object_spec`.
 
@@ -315,13 +315,13 @@ def build_object(
         use_cache: Read and write the decomposition cache.
         progress: Show a progress bar while CoACD runs.
         free: Give the root body a free joint.
-        friction: Friction of the collision geoms (default: skin).
+        surface: Contact parameters of the collision geoms (:mod:`handsim.builders.surfaces`).
 
     Returns:
         The spec; it is not compiled.
     """
     prepared = prepare_object(model, params, cache_dir=cache_dir, use_cache=use_cache, progress=progress)
-    return object_spec(prepared, free=free, friction=friction)
+    return object_spec(prepared, free=free, surface=surface)
 
 
 def object_bounds(spec: mujoco.MjSpec) -> tuple[np.ndarray, np.ndarray]:

@@ -16,6 +16,7 @@ import numpy as np
 import numpy.typing as npt
 
 from handsim.builders.objects import object_points
+from handsim.builders.surfaces import CONTACT_CONDIM, ENVIRONMENT
 from handsim.errors import ModelError
 
 HAND_PREFIX = "hand/"
@@ -34,11 +35,6 @@ HAND_WELD_SOLREF = (0.01, 1.0)
 """Weld time constant (s) and damping ratio: the root follows its target within ~10 ms; contacts push back."""
 TABLE_RGBA = (0.62, 0.52, 0.42, 1.0)
 FLOOR_RGBA = (0.35, 0.37, 0.40, 1.0)
-TABLE_FRICTION = (
-    0.6,
-    0.005,
-    0.0001,
-)  # wood/laminate against the object materials; skin friction dominates grasps
 
 
 @dataclass(frozen=True)
@@ -152,11 +148,13 @@ def build_scene(
         half = [table_size[0] / 2, table_size[1] / 2, 0.02]
         world.add_geom(
             name="table", type=mujoco.mjtGeom.mjGEOM_BOX, size=half, pos=[0, 0, -half[2]],
-            rgba=list(TABLE_RGBA), friction=list(TABLE_FRICTION),
+            rgba=list(TABLE_RGBA), friction=ENVIRONMENT.friction, priority=ENVIRONMENT.priority,
+            condim=CONTACT_CONDIM,
         )  # fmt: skip
         world.add_geom(
             name="floor", type=mujoco.mjtGeom.mjGEOM_PLANE, size=[0, 0, 0.05], pos=[0, 0, -table_height],
-            rgba=list(FLOOR_RGBA),
+            rgba=list(FLOOR_RGBA), friction=ENVIRONMENT.friction, priority=ENVIRONMENT.priority,
+            condim=CONTACT_CONDIM,
         )  # fmt: skip
     world.add_light(name="key", pos=[0.4, -0.4, 1.2], dir=[-0.35, 0.35, -1.0], castshadow=True)
     world.add_light(name="fill", pos=[-0.5, 0.3, 1.0], dir=[0.5, -0.3, -1.0], castshadow=False)

@@ -102,22 +102,3 @@ class HandObjectCollider:
         Call after a query (or :func:`mujoco.mj_kinematics`) at that posture.
         """
         return self.data.geom_xpos[self._hand_geoms].copy(), self.model.geom_rbound[self._hand_geoms].copy()
-
-    def lowest_point(self) -> float:
-        """World z of the object's lowest collision point at its current pose.
-
-        Mesh geoms count with their vertices, primitives with their bounding sphere.
-        """
-        model, data = self.model, self.data
-        mujoco.mj_kinematics(model, data)
-        lowest = np.inf
-        for g in np.flatnonzero(self.is_obj):
-            mesh = int(model.geom_dataid[g])
-            if int(model.geom_type[g]) == int(mujoco.mjtGeom.mjGEOM_MESH) and mesh >= 0:
-                start, count = model.mesh_vertadr[mesh], model.mesh_vertnum[mesh]
-                verts = model.mesh_vert[start : start + count]
-                world = verts @ data.geom_xmat[g].reshape(3, 3).T + data.geom_xpos[g]
-                lowest = min(lowest, float(world[:, 2].min()))
-            else:
-                lowest = min(lowest, float(data.geom_xpos[g, 2] - model.geom_rbound[g]))
-        return lowest

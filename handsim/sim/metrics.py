@@ -24,6 +24,8 @@ from handsim.sim.placement import PlacementSpec
 from handsim.sim.stability import StabilitySpec
 
 METRIC_SPEC_VERSION = "2"
+HOLD_ORIENTATIONS = ("grip", "palm down")
+"""How the glove scenario orients the hand for the hold (:attr:`MetricSpec.hold_orientation`)."""
 
 
 @dataclass(frozen=True)
@@ -45,6 +47,10 @@ class MetricSpec:
         robustness_shift: Glove scenario: the hold-robustness ensemble moves the placed object by this much
             along each axis of the scene, m.
         robustness_turn_deg: … and turns it by this much about each axis, degrees.
+        hold_orientation: Glove scenario: ``"grip"`` — the hand is palm down (GraspDB14's objects are picked
+            up from a table) when its grip resists gravity that way, else turned so that gravity pulls along
+            the axis direction its grip resists best (a hand on its side, fingers down), never into the palm
+            (an object lying on an open hand is no grasp); ``"palm down"`` — always palm down.
         placement: The glove placement search's parameters
             (:class:`~handsim.sim.placement.PlacementSpec`).
         stability: The grasp stability tests' parameters (:class:`~handsim.sim.stability.StabilitySpec`).
@@ -58,6 +64,7 @@ class MetricSpec:
     min_hold_window: float = 0.3
     robustness_shift: float = 0.002
     robustness_turn_deg: float = 5.0
+    hold_orientation: str = "grip"
     placement: PlacementSpec = field(default_factory=PlacementSpec)
     stability: StabilitySpec = field(default_factory=StabilitySpec)
 
@@ -70,6 +77,11 @@ class MetricSpec:
             value = getattr(self, name)
             if not (math.isfinite(value) and value > 0):
                 raise ValueError(f"{name} must be a positive finite number, got {value}")
+        if self.hold_orientation not in HOLD_ORIENTATIONS:
+            raise ValueError(
+                f"unknown hold_orientation {self.hold_orientation!r}; "
+                f"expected one of {list(HOLD_ORIENTATIONS)}"
+            )
         for name in ("release_delay", "robustness_shift", "robustness_turn_deg"):
             value = getattr(self, name)
             if not (math.isfinite(value) and value >= 0):

@@ -36,6 +36,7 @@ from dataclasses import asdict, dataclass, field, replace
 
 import mujoco
 import numpy as np
+from scipy.spatial import cKDTree
 
 from handsim.fingers import finger_of
 from handsim.poses import quat_multiply
@@ -44,7 +45,8 @@ from handsim.sim.compiled import SimScene
 from handsim.sim.grasp_frame import GraspFrame, closing_frames, flexion_fraction
 from handsim.sim.grip import GripBench, GripResult
 from handsim.sim.hand_pose import targets_qpos
-from handsim.sim.stability import StabilitySpec
+from handsim.sim.self_contact import SelfCollider, SelfPenetration
+from handsim.sim.stability import DIRECTIONS, StabilitySpec
 from handsim.trajectory import Trajectory
 
 PLACEMENT_SPEC_VERSION = "2"
@@ -75,9 +77,9 @@ class PlacementSpec:
     version: str = PLACEMENT_SPEC_VERSION
     penetration: float = 0.002
     touch: float = 0.002
-    search_fractions: tuple[float, ...] = (0.8, 0.6)
+    search_fractions: tuple[float, ...] = (0.8, 0.7, 0.6, 0.5)
     coarse_step: float = 0.01
-    coarse_points: int = 3000
+    coarse_points: int = 700
     fine_step: float = 0.0025
     seeds: int = 4
     grip: StabilitySpec = field(default_factory=StabilitySpec)
@@ -172,7 +174,9 @@ class Placement:
 
     Attributes:
         best: The winning candidate (its pose in the search scene's world).
-        alternatives: The next-best grip-tested candidates, best first (for the robustness ensemble).
+        alternatives: The next-best grip-tested candidates whose grip resists as many directions as the
+            winner's, best first (for the robustness ensemble: placements the search could as well have
+            chosen).
         perturbations: The winner moved and turned by fixed amounts (for the robustness ensemble), each with
             its label (``"+x 2 mm"``, ``"-z 5°"`` …) and its own fit and contact frames.
         feasible: Some pose was within the penetration tolerance; False: ``best`` is the least penetrating
@@ -180,7 +184,10 @@ class Placement:
         queries: Collision queries run (poses and frames tried).
         grip_tests: Candidates whose grip was tested.
         feasible_poses: Poses within the tolerance seen on the grids.
-        lowest_z: World height of the object's lowest collision point at ``best.pose``, m.
+        object_points: The object's collision points in its own frame (mesh vertices; primitives' extreme
+            points), m: where its lowest point is in any pose.
+        self_penetration: The hand through itself at the closed frame (at its targets): a recording-quality
+            number (a thumb through the index: glove calibration, or a thumb the skeleton cannot place).
         spec: The :class:`PlacementSpec` used (JSON-ready).
         note: For people.
     """
@@ -192,7 +199,8 @@ class Placement:
     queries: int
     grip_tests: int
     feasible_poses: int
-    lowest_z: float
+    object_points: np.ndarray
+    self_penetration: SelfPenetration
     spec: dict
     note: str
 
@@ -211,39 +219,77 @@ class Placement:
             "feasible_poses": self.feasible_poses,
             "alternatives": [c.to_dict() for c in self.alternatives],
             "perturbations": [{"label": label, **c.to_dict()} for label, c in self.perturbations],
+            "self_penetration_at_closure": self.self_penetration.to_dict(),
             "spec": self.spec,
         }
 
 
-def _orientations(model: mujoco.MjModel, collider: HandObjectCollider) -> np.ndarray:
-    geoms = np.flatnonzero(collider.is_obj)
-    sphere = int(mujoco.mjtGeom.mjGEOM_SPHERE)
-    if len(collider.obj.part_bodies) == 1 and all(int(model.geom_type[g]) == sphere for g in geoms):
-        return np.array([[1.0, 0.0, 0.0, 0.0]])
+def _axis_aligned() -> np.ndarray:
+    """The 24 orientations that put one of the object's six face directions up, each at four spins."""
     h = np.sqrt(0.5)
     faces = [[1, 0, 0, 0], [h, h, 0, 0], [0, 1, 0, 0], [h, -h, 0, 0], [h, 0, h, 0], [h, 0, -h, 0]]
     spins = [[np.cos(a / 2), 0, 0, np.sin(a / 2)] for a in (0, np.pi / 2, np.pi, 3 * np.pi / 2)]
     return np.array([quat_multiply(s, f) for f, s in itertools.product(faces, spins)])
 
 
+def _distinct(quats: np.ndarray, points: np.ndarray) -> np.ndarray:
+    """The orientations that give the object's collision points different shapes, the first of each kept.
+
+    A box keeps one, a cylinder three (its axis along x, y or z), an asymmetric object all 24.
+    """
+    tolerance = 1e-6 + 1e-5 * float(np.abs(points).max())
+    kept: list[tuple[np.ndarray, cKDTree]] = []
+    for quat in quats:
+        rot = np.empty(9)
+        mujoco.mju_quat2Mat(rot, quat)
+        turned = points @ rot.reshape(3, 3).T
+        if any(tree.query(turned)[0].max() <= tolerance for _, tree in kept):
+            continue
+        kept.append((quat, cKDTree(turned)))
+    return np.array([q for q, _ in kept])
+
+
+_RING = np.linspace(0.0, 2.0 * np.pi, 8, endpoint=False)
+
+
+def _geom_points(model: mujoco.MjModel, geom: int) -> np.ndarray:
+    """Points on a collision geom's surface in its own frame.
+
+    A mesh's vertices; a primitive's extreme points, so that a symmetric primitive gives a symmetric set.
+    """
+    kind, size = mujoco.mjtGeom(int(model.geom_type[geom])), model.geom_size[geom]
+    axes = np.vstack([np.eye(3), -np.eye(3)])
+    if kind == mujoco.mjtGeom.mjGEOM_MESH and model.geom_dataid[geom] >= 0:
+        mesh = int(model.geom_dataid[geom])
+        return model.mesh_vert[model.mesh_vertadr[mesh] : model.mesh_vertadr[mesh] + model.mesh_vertnum[mesh]]
+    if kind == mujoco.mjtGeom.mjGEOM_SPHERE:
+        return axes * size[0]
+    if kind == mujoco.mjtGeom.mjGEOM_ELLIPSOID:
+        return axes * np.tile(size, 2)
+    if kind == mujoco.mjtGeom.mjGEOM_BOX:
+        return np.array(list(itertools.product(*((-s, s) for s in size))))
+    if kind in (mujoco.mjtGeom.mjGEOM_CYLINDER, mujoco.mjtGeom.mjGEOM_CAPSULE):
+        rim = np.column_stack([np.cos(_RING), np.sin(_RING), np.zeros(_RING.size)]) * size[0]
+        rims = [rim + np.array([0.0, 0.0, z]) for z in (-size[1], size[1])]
+        if kind == mujoco.mjtGeom.mjGEOM_CAPSULE:
+            rims.append(np.array([[0.0, 0.0, -size[1] - size[0]], [0.0, 0.0, size[1] + size[0]]]))
+        return np.vstack(rims)
+    r = model.geom_rbound[geom]
+    return np.array(list(itertools.product((-r, r), repeat=3)))
+
+
 def _object_points(collider: HandObjectCollider) -> np.ndarray:
-    """The object's collision points in its root body's frame (mesh vertices; primitive bounding boxes)."""
+    """The object's collision points in its root body's frame (:func:`_geom_points` of every geom)."""
     model, data = collider.model, collider.data
     a = collider.obj.free_qpos
     data.qpos[a : a + 7] = [0, 0, 0, 1, 0, 0, 0]
     mujoco.mj_kinematics(model, data)
-    points = []
-    for g in np.flatnonzero(collider.is_obj):
-        rot, pos = data.geom_xmat[g].reshape(3, 3), data.geom_xpos[g]
-        mesh = int(model.geom_dataid[g])
-        if int(model.geom_type[g]) == int(mujoco.mjtGeom.mjGEOM_MESH) and mesh >= 0:
-            start, count = model.mesh_vertadr[mesh], model.mesh_vertnum[mesh]
-            points.append(model.mesh_vert[start : start + count] @ rot.T + pos)
-        else:
-            r = model.geom_rbound[g]
-            corners = np.array(list(itertools.product((-r, r), repeat=3)))
-            points.append(corners + pos)
-    return np.vstack(points)
+    return np.vstack(
+        [
+            _geom_points(model, g) @ data.geom_xmat[g].reshape(3, 3).T + data.geom_xpos[g]
+            for g in np.flatnonzero(collider.is_obj)
+        ]
+    )
 
 
 def _grid(lo: np.ndarray, hi: np.ndarray, step: float) -> np.ndarray:
@@ -268,8 +314,14 @@ class _Search:
     ) -> None:
         self.scene, self.trajectory, self.grasp, self.spec = scene, trajectory, grasp, spec
         self.collider = HandObjectCollider(scene, spec.touch)
-        self.quats = _orientations(self.collider.model, self.collider)
         self.points = _object_points(self.collider)
+        self.quats = _distinct(_axis_aligned(), self.points)
+        model, geoms = self.collider.model, np.flatnonzero(self.collider.is_obj)
+        self.round = (  # one sphere about the object's origin: no turn changes it
+            len(geoms) == 1
+            and int(model.geom_type[geoms[0]]) == int(mujoco.mjtGeom.mjGEOM_SPHERE)
+            and np.allclose(model.geom_pos[geoms[0]], 0.0)
+        )
         self.radius = float(np.linalg.norm(self.points, axis=1).max())
         layout = scene.layout
         collider = self.collider
@@ -335,8 +387,8 @@ class _Search:
         ranked.sort(key=lambda item: item[0], reverse=True)
         return ranked
 
-    def level(self, frame: int) -> list[np.ndarray]:
-        """The seeds of one closing frame, each refined on the fine grid around it: poses, best first."""
+    def level(self, frame: int) -> list[tuple[tuple, np.ndarray]]:
+        """The seeds of one closing frame, each refined on finer grids around it: (key, pose), best first."""
         spec, collider = self.spec, self.collider
         collider.set_hand(targets_qpos(self.scene, self.trajectory, frame))
         lo, hi, centres, radii = self._reach()
@@ -364,7 +416,7 @@ class _Search:
                 best = self._ranked(self._fits(frame, around))
                 if best and best[0][0] > key:
                     key, pose = best[0]
-            refined.append(pose)
+            refined.append((key, pose))
         return refined
 
     def _diverse(self, ranked: list, steps: dict) -> list:
@@ -423,10 +475,13 @@ class _Search:
         return replace(candidate, contact_frame=opened, depth_before_contact=0.0)
 
 
-def _perturbed(pose: np.ndarray, shift: float, turn_deg: float, sphere: bool) -> list[tuple[str, np.ndarray]]:
+def _perturbed(
+    pose: np.ndarray, shift: float, turn_deg: float, points: np.ndarray | None
+) -> list[tuple[str, np.ndarray]]:
     """The pose moved by ±``shift`` along each world axis and turned by ±``turn_deg`` about each axis.
 
-    Turns are about axes through the object's origin, and left out for a sphere, which they do not change.
+    Turns are about axes through the object's origin; a turn that leaves the object's collision points as
+    they were is left out, and every turn when ``points`` is None (a sphere about its centre).
     """
     variants = []
     for axis, name in enumerate("xyz" if shift > 0 else ""):
@@ -434,7 +489,7 @@ def _perturbed(pose: np.ndarray, shift: float, turn_deg: float, sphere: bool) ->
             moved = pose.copy()
             moved[axis] += sign * shift
             variants.append((f"{mark}{name} {shift * 1000:g} mm", moved))
-    if sphere or turn_deg == 0:
+    if turn_deg == 0 or points is None:
         return variants
     for axis, name in enumerate("xyz"):
         for sign, mark in ((1.0, "+"), (-1.0, "-")):
@@ -443,7 +498,8 @@ def _perturbed(pose: np.ndarray, shift: float, turn_deg: float, sphere: bool) ->
             turn[0], turn[1 + axis] = math.cos(half), math.sin(half)
             turned = pose.copy()
             turned[3:] = quat_multiply(turn, pose[3:])
-            variants.append((f"{mark}{name} {turn_deg:g}°", turned))
+            if len(_distinct(np.array([pose[3:], turned[3:]]), points)) == 2:
+                variants.append((f"{mark}{name} {turn_deg:g}°", turned))
     return variants
 
 
@@ -475,11 +531,12 @@ def place_object(
         placement says so (``feasible`` False, with the least penetration seen in the note).
     """
     search = _Search(scene, trajectory, grasp, spec)
-    seeds: list[np.ndarray] = []
-    for frame in closing_frames(trajectory, grasp, spec.search_fractions):
-        for pose in search.level(frame):
-            if all(not np.allclose(pose, other, atol=1e-9) for other in seeds):
-                seeds.append(pose)
+    ranked: list[tuple[tuple, int, np.ndarray]] = []
+    for level, frame in enumerate(closing_frames(trajectory, grasp, spec.search_fractions)):
+        for key, pose in search.level(frame):
+            if all(not np.allclose(pose, other, atol=1e-9) for _, _, other in ranked):
+                ranked.append((key, -level, pose))
+    ranked.sort(key=lambda item: item[:2], reverse=True)  # by what the closing presses; ties: the later fit
     times = np.asarray(trajectory.times, dtype=float)
     bench = GripBench(scene, trajectory, control_rate, float(times[grasp.closed]) + release_delay)
 
@@ -487,7 +544,11 @@ def place_object(
         grip = bench.grip(candidate.pose, float(times[candidate.contact_frame]), spec.grip)
         return replace(candidate, grip=grip)
 
-    tested = [gripped(search.with_contact(search.candidate(pose))) for pose in seeds]
+    tested = []
+    for _, _, pose in ranked:  # in rank order, until enough grips resist every direction
+        tested.append(gripped(search.with_contact(search.candidate(pose))))
+        if sum(c.grip.directions_held == len(DIRECTIONS) for c in tested) > spec.alternatives:
+            break
     tested.sort(key=Candidate.score, reverse=True)
     queries = search.collider.queries
     if tested:
@@ -521,21 +582,23 @@ def place_object(
         feasible = False
     perturbations = []
     if feasible and (shift > 0 or turn_deg > 0):
-        sphere = len(search.quats) == 1
-        for label, pose in _perturbed(best.pose, shift, turn_deg, sphere):
+        points = None if search.round else search.points
+        for label, pose in _perturbed(best.pose, shift, turn_deg, points):
             perturbations.append((label, search.with_contact(search.candidate(pose))))
-    collider = search.collider
-    a = collider.obj.free_qpos
-    collider.data.qpos[a : a + 7] = best.pose
     return Placement(
         best=best,
-        alternatives=tuple(tested[1 : 1 + spec.alternatives]),
+        alternatives=tuple(c for c in tested[1:] if c.grip.directions_held == best.grip.directions_held)[
+            : spec.alternatives
+        ]
+        if tested
+        else (),
         perturbations=tuple(perturbations),
         feasible=feasible,
         queries=queries,
         grip_tests=len(tested) + (1 if not tested and feasible else 0),
         feasible_poses=search.feasible_poses,
-        lowest_z=collider.lowest_point(),
+        object_points=search.points,
+        self_penetration=SelfCollider(scene)(targets_qpos(scene, trajectory, grasp.closed)),
         spec=spec.to_dict(),
         note=note,
     )

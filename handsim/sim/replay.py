@@ -199,6 +199,7 @@ def replay(scene: SimScene, trajectory: Trajectory, config: ReplayConfig | None 
             quiet = replace(config, ensemble=False, keep_states=False, stability_at=None)
             robustness = hold_robustness(scene, hold, lambda variant: replay(variant, trajectory, quiet).hold)
             release_stability = _release_stability(scene, schedule, qpos, release, spec)
+        summary.update(_closure(setup.placement))
         summary.update(
             hold_robustness=None if robustness is None else robustness.fraction,
             release_directions_held=None
@@ -245,6 +246,24 @@ def replay(scene: SimScene, trajectory: Trajectory, config: ReplayConfig | None 
         },
         notes=notes,
     )
+
+
+def _closure(placement: dict) -> dict:
+    """A glove placement's recording-quality numbers for the summary.
+
+    How far the recorded closing passes the object (the flexion fraction at which it fits), the grip it then
+    makes, and the hand through itself at the closed frame.
+    """
+    grip = placement.get("grip") or {}
+    self_penetration = placement.get("self_penetration_at_closure") or {}
+    depth = self_penetration.get("depth_m")
+    return {
+        "fit_fraction": placement.get("fit_fraction"),
+        "grip_normal_force_n": grip.get("normal_force_n"),
+        "grip_servo_torque_nm": grip.get("servo_torque_nm"),
+        "grip_directions_held": grip.get("directions_held"),
+        "self_penetration_at_closure_mm": None if depth is None else depth * 1000.0,
+    }
 
 
 def _hold(

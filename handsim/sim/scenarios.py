@@ -23,13 +23,13 @@ import numpy.typing as npt
 from handsim.builders.objects import object_points
 from handsim.builders.scene import build_scene
 from handsim.errors import TrajectoryError
-from handsim.poses import compose, quat_rotate, transform_points
+from handsim.poses import compose, quat_multiply, quat_rotate, transform_points
 from handsim.sim.compiled import SceneSetup, SimScene, compile_scene
 from handsim.sim.control import DEFAULT_CONTROL_RATE
 from handsim.sim.grasp_frame import GraspFrame, grasp_frame
 from handsim.sim.hand_pose import hand_frame
 from handsim.sim.metrics import MetricSpec
-from handsim.sim.placement import place_object
+from handsim.sim.placement import Candidate, place_object
 from handsim.trajectory import Trajectory
 
 CAMERA_DOWN = (0.0, 1.0, 0.0)
@@ -148,6 +148,56 @@ def _end_rest_note(points: np.ndarray, end_pose: np.ndarray, world: np.ndarray) 
     return f"at the last frame the object's lowest point is {lowest * 1000:+.1f} mm from the support plane"
 
 
+AXES = {
+    "+x": np.array([1.0, 0.0, 0.0]),
+    "-x": np.array([-1.0, 0.0, 0.0]),
+    "+y": np.array([0.0, 1.0, 0.0]),
+    "-y": np.array([0.0, -1.0, 0.0]),
+    "+z": np.array([0.0, 0.0, 1.0]),
+    "-z": np.array([0.0, 0.0, -1.0]),
+}
+"""The grip test's gravity directions in the placement search's world (the hand fingers +x, palm −z)."""
+PALM_DOWN = "-z"
+PALM_UP = "+z"
+"""Gravity into the palm: an object lying on an open hand is no grasp (Feix et al. 2016, "The GRASP taxonomy
+of human grasp types", IEEE Trans Hum-Mach Syst 46(1): "gravity-dependent grasps such as an object lying in
+equilibrium on a flat hand" are ruled out; GraspDB14's report §3.6 adopts that definition), so the hold is
+never judged palm up."""
+
+
+def hold_down(placed: Candidate, orientation: str) -> tuple[str, str]:
+    """Which of the grip test's gravity directions becomes "down" for the hold, and a note saying why.
+
+    Args:
+        placed: The placement's winner (with its grip test).
+        orientation: :attr:`MetricSpec.hold_orientation`.
+
+    Returns:
+        A key of :data:`AXES` and the note.
+    """
+    why = "GraspDB14's objects are picked up from a table; the hand's orientation is not recorded"
+    if orientation == "palm down" or placed.grip is None:
+        return PALM_DOWN, f"hand palm down ({why})"
+    results = {d.direction: d for d in placed.grip.stability.directions}
+    if results[PALM_DOWN].success:
+        return PALM_DOWN, f"hand palm down ({why}; its grip resists gravity that way)"
+    held = sorted(
+        (d.displacement, d.direction) for d in results.values() if d.success and d.direction != PALM_UP
+    )
+    if not held:
+        return PALM_DOWN, (
+            f"hand palm down ({why}; its grip resists gravity in no direction but into the palm, and an "
+            "object lying on an open hand is no grasp)"
+            if results[PALM_UP].success
+            else f"hand palm down ({why}; its grip resists gravity in no direction)"
+        )
+    down = held[0][1]
+    return down, (
+        f"hand turned so that gravity pulls along the grip's {down} (the direction it resists best: "
+        f"{held[0][0] * 1000:.1f} mm in the grip test), not palm down, which it does not resist ({why})"
+    )
+
+
 def glove_scene(
     hand: mujoco.MjSpec,
     trajectory: Trajectory,
@@ -189,22 +239,29 @@ def glove_scene(
         shift=spec.robustness_shift,
         turn_deg=spec.robustness_turn_deg,
     )
-    lift = np.array([0.0, 0.0, HOLD_HEIGHT - placement.lowest_z])
     best = placement.best
-    pose = best.pose.copy()
-    pose[:3] += lift
-    scene = build_scene(
-        hand, obj, hand_pos=tuple(lift), hand_quat=quat, object_poses=[pose], object_support=True
+    down, down_note = hold_down(best, spec.hold_orientation)
+    turn = _rotation_onto(AXES[down], np.array([0.0, 0.0, -1.0]))
+    lowest = transform_points(
+        compose(np.concatenate([[0.0, 0.0, 0.0], turn]), best.pose), placement.object_points
     )
+    world = np.concatenate([[0.0, 0.0, HOLD_HEIGHT - lowest[:, 2].min()], turn])  # search world → scene world
+    scene = build_scene(
+        hand, obj, hand_pos=tuple(world[:3]), hand_quat=quat_multiply(turn, quat),
+        object_poses=[compose(world, best.pose)], object_support=True,
+    )  # fmt: skip
     times = trajectory.times
     ensemble = [
-        {"label": label, "pose": (c.pose + np.concatenate([lift, np.zeros(4)])).tolist(),
-         "contact_time": float(times[c.contact_frame])}
+        {
+            "label": label,
+            "pose": compose(world, c.pose).tolist(),
+            "contact_time": float(times[c.contact_frame]),
+        }
         for label, c in (
             *((f"alternative {i + 1}", c) for i, c in enumerate(placement.alternatives)),
             *placement.perturbations,
         )
-    ]  # fmt: skip
+    ]
     contact_note = (
         f"hand–object contacts act from frame {best.contact_frame} ({times[best.contact_frame]:.3f} s); at "
         f"frame {best.contact_frame - 1} the hand at its targets is "
@@ -223,13 +280,13 @@ def glove_scene(
             "grasp": grasp.to_dict(),
             "contact_trajectory_frame": best.contact_frame,
             "ensemble": ensemble,
+            "gravity_along": down,
         },
         notes=(
             grasp.note,
             placement.note,
             contact_note,
-            f"hand palm down (GraspDB14's objects are picked up from a table; the wrist's orientation is not "
-            f"recorded), the object's lowest point {HOLD_HEIGHT} m up",
+            f"{down_note}; the object's lowest point {HOLD_HEIGHT} m up",
         ),
     )
     return compile_scene(scene, setup)

@@ -1,0 +1,60 @@
+"""How each kind of surface touches another: skin, objects, the environment (MuJoCo contact parameters).
+
+MuJoCo takes a contact's friction, ``condim``, ``solref`` and ``solimp`` from the geom of higher
+``priority``, and combines them (friction by maximum, the solver parameters by average) when the priorities
+are equal. handsim gives skin and the environment (table, floor) priority 1 and objects priority 0, so:
+
+* a hand–object contact is skin against the object: skin's friction and skin's soft pad;
+* an object–table contact uses the table's friction;
+* an object–object contact (two parts of an articulated object, or two objects) uses the objects' own.
+
+Every value and its source is in ``docs/physics.md``; :func:`handsim.sim.pad.pad_force_curve` measures the
+pad's force–penetration relation the way the literature measures a fingertip's: pressed on a rigid surface.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+CONTACT_CONDIM = 4
+"""Sliding and torsional friction (no rolling friction): a pinched object resists spinning about the contact
+normal, as a soft fingertip does."""
+
+
+@dataclass(frozen=True)
+class Surface:
+    """The contact parameters a kind of surface brings (MuJoCo geom attributes).
+
+    Attributes:
+        sliding: Sliding friction coefficient.
+        torsional: Torsional friction, m (torque per unit normal force about the contact normal).
+        priority: MuJoCo geom priority: the higher one's parameters are used for a contact.
+        solref: (time constant s, damping ratio), or None for MuJoCo's default.
+        solimp: (dmin, dmax, width m, midpoint, power), or None for MuJoCo's default.
+    """
+
+    sliding: float
+    torsional: float
+    priority: int = 0
+    solref: tuple[float, float] | None = None
+    solimp: tuple[float, float, float, float, float] | None = None
+
+    @property
+    def friction(self) -> list[float]:
+        """MuJoCo's geom ``friction`` (sliding, torsional, rolling); rolling is unused with ``condim`` 4."""
+        return [self.sliding, self.torsional, 0.0]
+
+
+PAD_SOLIMP = (0.65, 0.95, 0.003, 0.5, 2.0)
+"""Skin: impedance rises from 0.65 to 0.95 over 3 mm of penetration, so that the pad stiffens with depth
+like a fingertip's pulp (exponential force–displacement: Pawluk & Howe 1999)."""
+PAD_SOLREF = (0.0172, 1.0)
+"""Skin: time constant (s) calibrated so that the default hand's index pad pressed on a rigid surface carries
+1 N at 1.5 mm of penetration (``docs/physics.md``), critically damped."""
+
+SKIN = Surface(sliding=1.0, torsional=0.0025, priority=1, solref=PAD_SOLREF, solimp=PAD_SOLIMP)
+"""The hand's collision geoms: skin against household materials, soft finger pads."""
+OBJECT = Surface(sliding=0.5, torsional=0.001)
+"""Objects against each other (hard materials; skin and the environment bring their own)."""
+ENVIRONMENT = Surface(sliding=0.4, torsional=0.001, priority=1)
+"""The table and the floor: a laminate or wood table top against the objects set on it."""
