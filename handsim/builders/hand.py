@@ -50,9 +50,10 @@ class JointClass:
 
 
 ARMATURE = 2e-4
-"""Inertia added to every DoF, kg·m²: about a proximal phalanx's own about its joint. Without it the
-lightest links (distal phalanges, 1.2–3.5e-6 kg·m² about the DIP) ring at the 2 ms step under random
-targets (joint speeds of 976 rad/s); from 1e-6 on they do not (``docs/physics.md``)."""
+"""Inertia added to every DoF, kg·m² (the links' own about their joints: 1.2e-6 at a DIP to 1.8e-4 at an
+MCP). Measured need (``docs/physics.md``): without any, the lightest links ring at the 2 ms step under
+random targets (976 rad/s); below 1e-4, fingers closing on a ball resting on the table squeeze it out
+(Grasp-v0's scripted grasp launches it at 0.5 m/s); 2e-4 is twice that threshold."""
 
 # Finger flexion: a 1 rad error gives 2 N·m (index MCP flexion strength is a few N·m); ~10 Hz bandwidth.
 JOINT_CLASSES: dict[str, JointClass] = {
