@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import argparse
 
-from handsim.cli._common import add_hand_size, write_text
+from handsim.cli._common import add_hand_size, output_file, usage_error, write_text
 
 
 def _hand_spec(skeleton_path: str | None, args: argparse.Namespace):
@@ -26,9 +26,9 @@ def _print_model(spec) -> None:
 
 def _build_hand(args: argparse.Namespace) -> int:
     if args.skeleton is not None and args.default:
-        raise SystemExit("handsim build hand: give a SKELETON file or --default, not both")
+        return usage_error("build hand", "give a SKELETON file or --default, not both")
     if args.skeleton is None and not args.default:
-        raise SystemExit("handsim build hand: give a SKELETON file, or --default for the parametric hand")
+        return usage_error("build hand", "give a SKELETON file, or --default for the parametric hand")
     spec, skeleton = _hand_spec(args.skeleton, args)
     if skeleton is not None:
         print(f"skeleton   {skeleton.source} ({skeleton.njoints} joints, {skeleton.ndof} DoFs)")
@@ -160,7 +160,9 @@ def register(commands: argparse._SubParsersAction) -> None:
     hand.add_argument("skeleton", nargs="?", metavar="SKELETON_FILE", help=".xmlskel or .SKEL file")
     hand.add_argument("--default", action="store_true", help="use the parametric default hand")
     _add_hand_options(hand, "--mass")
-    hand.add_argument("-o", "--output", metavar="XML", help="write the model as MJCF to this file")
+    hand.add_argument(
+        "-o", "--output", type=output_file, metavar="XML", help="write the model as MJCF to this file"
+    )
     hand.set_defaults(func=_build_hand)
 
     obj = kinds.add_parser(
@@ -173,7 +175,9 @@ def register(commands: argparse._SubParsersAction) -> None:
     )
     obj.add_argument("object", metavar="MESH_OR_CATALOG_NAME")
     _add_object_options(obj)
-    obj.add_argument("-o", "--output", metavar="XML", help="write the model as MJCF to this file")
+    obj.add_argument(
+        "-o", "--output", type=output_file, metavar="XML", help="write the model as MJCF to this file"
+    )
     obj.set_defaults(func=_build_object)
 
     scene = kinds.add_parser(
@@ -196,7 +200,9 @@ def register(commands: argparse._SubParsersAction) -> None:
     )
     _add_object_options(scene)
     scene.add_argument("--no-table", action="store_true", help="no table and floor")
-    scene.add_argument("-o", "--output", metavar="XML", help="write the model as MJCF to this file")
+    scene.add_argument(
+        "-o", "--output", type=output_file, metavar="XML", help="write the model as MJCF to this file"
+    )
     scene.set_defaults(func=_build_scene)
 
 

@@ -9,9 +9,8 @@ from __future__ import annotations
 
 import argparse
 import json
-import sys
 
-from handsim.cli._common import write_text
+from handsim.cli._common import add_control_rate, output_file, usage_error, write_text
 from handsim.headless import prefer_headless_gl
 
 EXIT_DIVERGED = 3
@@ -199,14 +198,10 @@ def _replay(args: argparse.Namespace) -> int:
             collision=args.collision,
         )
     except TrialError as exc:
-        print(f"handsim replay: error: {exc}", file=sys.stderr)
-        return 2
+        return usage_error("replay", str(exc))
     _print_trial(loaded)
     if args.stability == "grasp" and loaded.scene.setup.hold_window is None:
-        print(
-            "handsim replay: error: --stability grasp is for glove trials; give a time in s", file=sys.stderr
-        )
-        return 2
+        return usage_error("replay", "--stability grasp is for glove trials; give a time in s")
     result = replay(loaded.scene, loaded.trajectory, config)
     _print_summary(result)
     notes = [*loaded.notes, *loaded.scene.setup.notes, *result.notes]
@@ -279,16 +274,23 @@ def register(commands: argparse._SubParsersAction) -> None:
         "--collision", choices=("capsules", "mesh"), default=None,
         help="hand collision shapes (default capsules; mesh: per-bone hulls of a skinned .SKEL hand)",
     )  # fmt: skip
-    replay.add_argument("--rate", type=float, default=100.0, metavar="HZ", help="control rate (default 100)")
+    add_control_rate(replay)
     replay.add_argument(
         "--stability", type=_stability_at, metavar="grasp|SECONDS",
         help="also run the grasp stability tests on the state at this time (grasp: the hold window's end)",
     )  # fmt: skip
-    replay.add_argument("--json", metavar="JSON", help="write the result and per-frame curves as JSON")
     replay.add_argument(
-        "--plot", metavar="PNG", help="plot penetration, contacts, errors, drift/slip over time"
+        "--json", type=output_file, metavar="JSON", help="write the result and per-frame curves as JSON"
     )
-    replay.add_argument("--video", metavar="MP4|GIF", help="render the replay (mp4 needs handsim[video])")
+    replay.add_argument(
+        "--plot",
+        type=output_file,
+        metavar="PNG",
+        help="plot penetration, contacts, errors, drift/slip over time",
+    )
+    replay.add_argument(
+        "--video", type=output_file, metavar="MP4|GIF", help="render the replay (mp4 needs handsim[video])"
+    )
     replay.add_argument(
         "--camera", default="track", choices=("track", "hand_cam", "overview"),
         help="video camera: track (follows the hand; default), hand_cam or overview (the scene's)",

@@ -53,6 +53,7 @@ __all__ = [
     "RunSummary",
     "RunnerError",
     "default_workers",
+    "failure_counts",
     "records_line",
     "run_dataset",
     "run_trial",
@@ -82,6 +83,8 @@ class RunSummary:
         hold_trials: Glove trials with a hold outcome.
         notes: What was repaired or skipped (a truncated records line …).
         wall_s: Wall-clock time of this call, s.
+        failures: The failed trials' errors (:func:`failure_counts`): (error type, trials, first message),
+            most frequent first.
     """
 
     out: str
@@ -95,11 +98,39 @@ class RunSummary:
     hold_trials: int
     notes: tuple[str, ...]
     wall_s: float
+    failures: tuple[tuple[str, int, str], ...] = ()
+
+    @property
+    def all_failed(self) -> bool:
+        """Every selected trial (one at least) has an ``error`` record: the run produced no result."""
+        return self.trials > 0 and self.failed == self.trials
 
     def line(self) -> str:
         """One line for people: trial counts by status and the hold rate."""
         counts = {k: getattr(self, k) for k in ("ok", "diverged", "failed", "held", "hold_trials")}
         return _line(self.trials, counts)
+
+
+def failure_counts(records: Sequence[dict]) -> tuple[tuple[str, int, str], ...]:
+    """The errors of the failed trials among ``records``, counted by exception type.
+
+    Args:
+        records: Records (any status).
+
+    Returns:
+        One (error type, trials, first line of the first such trial's message) per type, most frequent
+        first (ties by type name).
+    """
+    found: dict[str, list] = {}
+    for record in records:
+        if record["status"] != "error":
+            continue
+        error = record.get("error") or {}
+        lines = str(error.get("message") or "").strip().splitlines()
+        entry = found.setdefault(str(error.get("type") or "unknown error"), [0, lines[0] if lines else ""])
+        entry[0] += 1
+    ordered = sorted(found.items(), key=lambda item: (-item[1][0], item[0]))
+    return tuple((kind, n, first) for kind, (n, first) in ordered)
 
 
 def _line(trials: int, counts: dict) -> str:
@@ -382,8 +413,8 @@ def run_dataset(
         What the run did, with counts over every selected trial's record (resumed ones included).
 
     Raises:
-        RunnerError: An unknown backend, ``workers`` or ``frames`` out of range, Ray missing, or ``OUT``
-            holding records made with other parameters.
+        RunnerError: An unknown backend, ``workers`` or ``frames`` out of range, Ray missing, ``OUT`` a
+            file, or ``OUT`` holding records made with other parameters.
         RecordsError: ``OUT/records.jsonl`` has a malformed line other than a truncated last one.
         KeyboardInterrupt: Ctrl-C; the records written so far are complete lines (run again to resume).
     """
@@ -404,6 +435,8 @@ def run_dataset(
     config = config or ReplayConfig(stability_at="grasp")
     entries, overview = _entries(source)
     out = Path(out)
+    if out.exists() and not out.is_dir():
+        raise RunnerError(f"{out} exists and is not a folder; expected an output folder")
     out.mkdir(parents=True, exist_ok=True)
     notes = list(repair_records(out))
     parameters = run_parameters(config, frames)
@@ -447,8 +480,11 @@ def run_dataset(
             bar.update(1)
             if on_record is not None:
                 on_record(outcome.record)
-    counts = _counts(load_records(out).records, {e.id for e in entries})
+    ids = {e.id for e in entries}
+    mine = [r for r in load_records(out).records if r["id"] in ids]
+    counts = _counts(mine, ids)
     return RunSummary(
+        failures=failure_counts(mine),
         out=str(out),
         trials=len(entries),
         skipped=len(entries) - len(todo),

@@ -15,6 +15,7 @@ from handsim.sim.compiled import SimScene
 from handsim.sim.control import DEFAULT_CONTROL_RATE, ControlSchedule, control_schedule
 from handsim.sim.drive import ScheduleDriver, scenario_switches
 from handsim.sim.metrics import FrameMetrics, MetricSpec, frame_metrics
+from handsim.sim.plausibility import check_control_rate
 from handsim.sim.robustness import HoldRobustness, hold_robustness
 from handsim.sim.stability import StabilityResult, stability_test
 from handsim.sim.stepper import Stepper, WarningEvent
@@ -27,7 +28,8 @@ class ReplayConfig:
     """How to replay.
 
     Attributes:
-        control_rate: Control frames per second (rounded to a whole number of steps per frame).
+        control_rate: Control frames per second (rounded to a whole number of steps per frame); at least
+            :func:`~handsim.sim.plausibility.min_control_rate` (20 Hz at the default metrics).
         metrics: Thresholds and scenario parameters (versioned, written into each result).
         keep_states: Keep ``qpos`` of every frame in the result (for rendering videos); off by default to
             keep results small.
@@ -36,6 +38,10 @@ class ReplayConfig:
             scenario); None: no test.
         ensemble: Glove scenario: judge the hold over the scene's robustness ensemble too
             (:mod:`handsim.sim.robustness`) and test the grip at the release in six gravity directions.
+
+    Raises:
+        ValueError: ``control_rate`` is not a number or below the minimum, or ``stability_at`` is a
+            string other than ``"grasp"``.
     """
 
     control_rate: float = DEFAULT_CONTROL_RATE
@@ -45,6 +51,7 @@ class ReplayConfig:
     ensemble: bool = True
 
     def __post_init__(self) -> None:
+        object.__setattr__(self, "control_rate", check_control_rate(self.control_rate, self.metrics))
         if isinstance(self.stability_at, str) and self.stability_at != "grasp":
             raise ValueError(
                 f"stability_at must be a time in seconds, 'grasp' or None, got {self.stability_at!r}"

@@ -1,0 +1,241 @@
+"""The bad-input catalogue of issue 14 as tests: one case per row, each asserting the exit code and the
+exact first line of stderr (or, for a flagged result, the flag), as a new user would meet them."""
+
+from __future__ import annotations
+
+import os
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import pytest
+
+from handsim.assets import ASSETS_DIR, TZIONAS_DIR
+from handsim.cli import main
+
+ROOT = Path(__file__).resolve().parents[1]
+MOTION = TZIONAS_DIR / "Models" / "20" / "Model_Hand_R.MOTION"
+SCRIPTED = ASSETS_DIR / "demo" / "tennis_ball.grasp.json"
+RATE_LINE = (
+    "argument --rate: expected a control rate of at least 20 Hz (two control frames within the 0.1 s "
+    "contact gap and release delay the metrics judge), got {}"
+)
+
+
+def cli(argv: list[str], capsys: pytest.CaptureFixture[str]) -> tuple[int, str, str]:
+    """Run ``handsim ARGV`` in this process: the exit code, the first line of stderr, and stdout."""
+    try:
+        code = main(argv)
+    except SystemExit as exc:  # argparse's usage errors
+        code = exc.code
+    captured = capsys.readouterr()
+    lines = captured.err.splitlines()
+    return code, lines[0] if lines else "", captured.out
+
+
+def child_env() -> dict[str, str]:
+    """The environment of a ``python -m handsim.cli`` child that imports this checkout's handsim."""
+    return {**os.environ, "PYTHONPATH": os.pathsep.join([str(ROOT), os.environ.get("PYTHONPATH", "")])}
+
+
+def descendants(pid: int) -> set[int]:
+    """Every live process below ``pid`` (Linux: from /proc)."""
+    children: dict[int, list[int]] = {}
+    for entry in Path("/proc").iterdir():
+        if not entry.name.isdigit():
+            continue
+        try:
+            stat = (entry / "stat").read_text()
+        except OSError:
+            continue
+        ppid = int(stat.rsplit(")", 1)[1].split()[1])
+        children.setdefault(ppid, []).append(int(entry.name))
+    found, todo = set(), [pid]
+    while todo:
+        for child in children.get(todo.pop(), []):
+            found.add(child)
+            todo.append(child)
+    return found
+
+
+def alive(pid: int) -> bool:
+    """The process exists and is not a zombie."""
+    try:
+        state = Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()[0]
+    except OSError:
+        return False
+    return state != "Z"
+
+
+def wait_for(condition, timeout: float, what: str) -> None:
+    """Poll ``condition`` until it holds; fail naming ``what`` after ``timeout`` seconds (a bound, not a
+    speed assertion)."""
+    deadline = time.monotonic() + timeout
+    while not condition():
+        if time.monotonic() > deadline:
+            pytest.fail(f"{what} within {timeout:g} s")
+        time.sleep(0.05)
+
+
+linux_only = pytest.mark.skipif(not Path("/proc/self/stat").exists(), reason="reads processes from /proc")
+
+
+# --------------------------------------------------------------------------------------------------------
+# runs and CLI
+
+
+@pytest.mark.parametrize("rate", ["0", "-5", "nan", "1"])
+def test_replay_refuses_a_control_rate_below_20_hz_before_any_work(capsys, rate):
+    code, first, out = cli(["replay", str(SCRIPTED), f"--rate={rate}"], capsys)
+    assert code == 2
+    assert first == "handsim replay: error: " + RATE_LINE.format(rate)
+    assert out == ""  # nothing loaded, nothing replayed
+
+
+def test_replay_refuses_a_rate_that_is_not_a_number(capsys):
+    code, first, _ = cli(["replay", str(SCRIPTED), "--rate", "fast"], capsys)
+    assert (code, first) == (2, "handsim replay: error: argument --rate: expected a number of Hz, got 'fast'")
+
+
+def test_report_refuses_a_control_rate_of_0_instead_of_failing_every_trial(capsys, tmp_path):
+    code, first, _ = cli(["report", str(TZIONAS_DIR), "-o", str(tmp_path / "out"), "--rate", "0"], capsys)
+    assert (code, first) == (2, "handsim report: error: " + RATE_LINE.format("0"))
+    assert not (tmp_path / "out").exists()
+
+
+def test_replay_config_refuses_a_control_rate_below_the_minimum():
+    from handsim.sim.replay import ReplayConfig
+
+    with pytest.raises(ValueError, match=r"^expected a control rate of at least 20 Hz .*got 1$"):
+        ReplayConfig(control_rate=1.0)
+    with pytest.raises(ValueError, match=r"got nan$"):
+        ReplayConfig(control_rate=float("nan"))
+
+
+def test_a_glove_replay_at_the_minimum_control_rate_judges_the_hold(capsys):
+    code, first, out = cli(["replay", str(SCRIPTED), "--rate", "20"], capsys)
+    assert (code, first) == (0, "")
+    assert "frames      66 at 20 Hz (25 steps of 2 ms)" in out
+    assert "held        yes" in out
+
+
+def test_replay_refuses_a_folder_as_json_output(capsys, tmp_path):
+    code, first, _ = cli(["replay", str(MOTION), "--json", str(tmp_path)], capsys)
+    assert (code, first) == (
+        2,
+        f"handsim replay: error: argument --json: {tmp_path} is a folder; expected a file name to write",
+    )
+
+
+def test_replay_refuses_an_output_below_a_file(capsys, tmp_path):
+    (tmp_path / "a").write_text("")
+    target = tmp_path / "a" / "plot.png"
+    code, first, _ = cli(["replay", str(MOTION), "--plot", str(target)], capsys)
+    assert (code, first) == (
+        2,
+        f"handsim replay: error: argument --plot: cannot create {target}: {tmp_path / 'a'} is a file, "
+        "not a folder",
+    )
+
+
+def test_build_refuses_a_folder_as_model_output(capsys, tmp_path):
+    code, first, _ = cli(["build", "hand", "--default", "-o", str(tmp_path)], capsys)
+    assert (code, first) == (
+        2,
+        f"handsim build hand: error: argument -o/--output: {tmp_path} is a folder; expected a file name to "
+        "write",
+    )
+
+
+@pytest.mark.parametrize("command", ["report", "demo"])
+def test_a_dataset_run_refuses_an_existing_file_as_output_folder(capsys, tmp_path, command):
+    out = tmp_path / "out.txt"
+    out.write_text("keep me")
+    argv = ["report", str(TZIONAS_DIR)] if command == "report" else ["demo"]
+    code, first, _ = cli([*argv, "-o", str(out)], capsys)
+    assert (code, first) == (
+        2,
+        f"handsim {command}: error: argument -o/--output: {out} exists and is not a folder; expected an "
+        "output folder",
+    )
+    assert out.read_text() == "keep me"
+
+
+def test_run_dataset_refuses_an_existing_file_as_output_folder(tmp_path):
+    from handsim.runner.execute import RunnerError, run_dataset
+    from handsim.trials import discover
+
+    out = tmp_path / "out.txt"
+    out.write_text("")
+    with pytest.raises(RunnerError, match=r"out\.txt exists and is not a folder; expected an output folder$"):
+        run_dataset(discover(TZIONAS_DIR), out, workers=1)
+
+
+def test_build_hand_without_a_skeleton_is_a_usage_error(capsys):
+    code, first, _ = cli(["build", "hand"], capsys)
+    assert (code, first) == (
+        2,
+        "handsim build hand: error: give a SKELETON file, or --default for the parametric hand",
+    )
+
+
+def test_an_os_error_writing_an_output_is_one_line_and_exit_1(capsys, tmp_path):
+    target = tmp_path / ("x" * 300 + ".xml")  # longer than a file name may be
+    code, first, _ = cli(["build", "hand", "--default", "-o", str(target)], capsys)
+    assert (code, first) == (1, f"handsim: error: {target}: File name too long")
+    assert list(tmp_path.iterdir()) == []  # no temporary file left
+
+
+def test_write_atomic_leaves_no_partial_file_when_interrupted(tmp_path, monkeypatch):
+    from handsim.runner import records
+
+    def interrupted(*args: object) -> None:
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(records.os, "replace", interrupted)
+    with pytest.raises(KeyboardInterrupt):
+        records.write_atomic(tmp_path / "out.json", b"{}")
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_every_trial_failing_exits_1_with_the_errors_counted(capsys, tmp_path):
+    data = tmp_path / "data"
+    data.mkdir()
+    for name in ("01_ex01-rad-002-grasp-su01.txt", "04_ex01-rad-045-grasp-su03.txt"):
+        (data / name).write_text("not a recording\n")
+    code, first, out = cli(["report", str(data), "-o", str(tmp_path / "out"), "--workers", "1"], capsys)
+    assert (code, first) == (1, "handsim report: error: every trial failed (2 of 2): 2 FormatError")
+    assert "2 trials: 0 ok, 0 diverged, 2 failed" in out
+    assert (tmp_path / "out" / "report.html").is_file()  # the report still shows the errors
+
+
+@linux_only
+def test_ctrl_c_during_a_coacd_decomposition_exits_130_leaving_no_cache_entry_or_process(tmp_path):
+    import trimesh
+
+    mesh = tmp_path / "ring.stl"
+    trimesh.creation.annulus(r_min=0.03, r_max=0.05, height=0.02, sections=64).export(mesh)
+    cache = tmp_path / "cache"
+    argv = [sys.executable, "-m", "handsim.cli", "build", "object", str(mesh), "--units", "m"]
+    process = subprocess.Popen(
+        [*argv, "--cache-dir", str(cache)],
+        stdout=subprocess.DEVNULL,
+        stderr=subprocess.PIPE,
+        env=child_env(),
+        start_new_session=True,  # its own process group, as a terminal's foreground job
+    )
+    try:
+        wait_for(lambda: descendants(process.pid), 120, "the CoACD worker did not start")
+        workers = descendants(process.pid)
+        os.killpg(process.pid, signal.SIGINT)  # Ctrl-C: the terminal signals the whole group
+        _, err = process.communicate(timeout=60)
+    finally:
+        if process.poll() is None:
+            process.kill()
+    assert process.returncode == 130
+    assert err.decode().splitlines()[-1] == "handsim: interrupted"
+    assert "Traceback" not in err.decode()
+    assert not any(alive(pid) for pid in workers)
+    assert [p for p in cache.rglob("*") if p.is_file()] == []
