@@ -7,13 +7,13 @@ import os
 import signal
 import subprocess
 import sys
-import time
 from pathlib import Path
 
 import pytest
 
 from handsim.assets import ASSETS_DIR, TZIONAS_DIR
 from handsim.cli import main
+from tests.processes import child_env, descendants, linux_only, reaped, wait_for
 
 ROOT = Path(__file__).resolve().parents[1]
 MOTION = TZIONAS_DIR / "Models" / "20" / "Model_Hand_R.MOTION"
@@ -35,51 +35,26 @@ def cli(argv: list[str], capsys: pytest.CaptureFixture[str]) -> tuple[int, str, 
     return code, lines[0] if lines else "", captured.out
 
 
-def child_env() -> dict[str, str]:
-    """The environment of a ``python -m handsim.cli`` child that imports this checkout's handsim."""
-    return {**os.environ, "PYTHONPATH": os.pathsep.join([str(ROOT), os.environ.get("PYTHONPATH", "")])}
+def stalling_coacd(tmp_path: Path) -> Path:
+    """A folder with a ``coacd`` module whose decomposition never ends (the CoACD worker imports it)."""
+    folder = tmp_path / "stalling"
+    folder.mkdir()
+    (folder / "coacd.py").write_text(
+        "import time\n\n"
+        "def set_log_level(level):\n    pass\n\n"
+        "def Mesh(vertices, faces):\n    return vertices, faces\n\n"
+        "def run_coacd(mesh, **kwargs):\n    time.sleep(3600)\n"
+    )
+    return folder
 
 
-def descendants(pid: int) -> set[int]:
-    """Every live process below ``pid`` (Linux: from /proc)."""
-    children: dict[int, list[int]] = {}
-    for entry in Path("/proc").iterdir():
-        if not entry.name.isdigit():
-            continue
-        try:
-            stat = (entry / "stat").read_text()
-        except OSError:
-            continue
-        ppid = int(stat.rsplit(")", 1)[1].split()[1])
-        children.setdefault(ppid, []).append(int(entry.name))
-    found, todo = set(), [pid]
-    while todo:
-        for child in children.get(todo.pop(), []):
-            found.add(child)
-            todo.append(child)
-    return found
+def build_ring(tmp_path: Path) -> list[str]:
+    """The command line building a concave ring mesh (CoACD runs for it)."""
+    import trimesh
 
-
-def alive(pid: int) -> bool:
-    """The process exists and is not a zombie."""
-    try:
-        state = Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()[0]
-    except OSError:
-        return False
-    return state != "Z"
-
-
-def wait_for(condition, timeout: float, what: str) -> None:
-    """Poll ``condition`` until it holds; fail naming ``what`` after ``timeout`` seconds (a bound, not a
-    speed assertion)."""
-    deadline = time.monotonic() + timeout
-    while not condition():
-        if time.monotonic() > deadline:
-            pytest.fail(f"{what} within {timeout:g} s")
-        time.sleep(0.05)
-
-
-linux_only = pytest.mark.skipif(not Path("/proc/self/stat").exists(), reason="reads processes from /proc")
+    mesh = tmp_path / "ring.stl"
+    trimesh.creation.annulus(r_min=0.03, r_max=0.05, height=0.02, sections=16).export(mesh)
+    return [sys.executable, "-m", "handsim.cli", "build", "object", str(mesh), "--units", "m"]
 
 
 # --------------------------------------------------------------------------------------------------------
@@ -213,29 +188,74 @@ def test_every_trial_failing_exits_1_with_the_errors_counted(capsys, tmp_path):
 
 @linux_only
 def test_ctrl_c_during_a_coacd_decomposition_exits_130_leaving_no_cache_entry_or_process(tmp_path):
-    import trimesh
-
-    mesh = tmp_path / "ring.stl"
-    trimesh.creation.annulus(r_min=0.03, r_max=0.05, height=0.02, sections=64).export(mesh)
     cache = tmp_path / "cache"
-    argv = [sys.executable, "-m", "handsim.cli", "build", "object", str(mesh), "--units", "m"]
     process = subprocess.Popen(
-        [*argv, "--cache-dir", str(cache)],
+        [*build_ring(tmp_path), "--cache-dir", str(cache)],
         stdout=subprocess.DEVNULL,
         stderr=subprocess.PIPE,
-        env=child_env(),
+        env=child_env(stalling_coacd(tmp_path)),
         start_new_session=True,  # its own process group, as a terminal's foreground job
     )
-    try:
-        wait_for(lambda: descendants(process.pid), 120, "the CoACD worker did not start")
-        workers = descendants(process.pid)
+    with reaped(process) as children:
+        wait_for(lambda: children.add(descendants(process.pid)), 120, "no CoACD worker")
         os.killpg(process.pid, signal.SIGINT)  # Ctrl-C: the terminal signals the whole group
         _, err = process.communicate(timeout=60)
-    finally:
-        if process.poll() is None:
-            process.kill()
-    assert process.returncode == 130
-    assert err.decode().splitlines()[-1] == "handsim: interrupted"
-    assert "Traceback" not in err.decode()
-    assert not any(alive(pid) for pid in workers)
+        assert process.returncode == 130
+        assert err.decode().splitlines()[-1] == "handsim: interrupted"
+        assert "Traceback" not in err.decode()
+        wait_for(lambda: not children.alive(), 60, "the CoACD worker stayed alive")
     assert [p for p in cache.rglob("*") if p.is_file()] == []
+
+
+def _spawn_workers(pid: int) -> set[int]:
+    """The multiprocessing processes below ``pid`` (pool workers and the resource tracker)."""
+    found = set()
+    for child in descendants(pid):
+        try:
+            cmdline = Path(f"/proc/{child}/cmdline").read_bytes()
+        except OSError:
+            continue
+        if b"multiprocessing" in cmdline:
+            found.add(child)
+    return found
+
+
+@linux_only
+def test_kill_9_of_a_dataset_run_leaves_no_worker_process(tmp_path):
+    argv = [
+        sys.executable,
+        "-m",
+        "handsim.cli",
+        "report",
+        str(ASSETS_DIR / "demo"),
+        "-o",
+        str(tmp_path / "o"),
+    ]
+    process = subprocess.Popen(
+        [*argv, "--workers", "2", "--frames", "0"],
+        stdout=subprocess.DEVNULL,
+        stderr=subprocess.DEVNULL,
+        env=child_env(),
+    )
+    with reaped(process) as children:
+        # two pool workers and the resource tracker
+        wait_for(lambda: len(_spawn_workers(process.pid)) >= 3, 120, "the pool's workers did not start")
+        children.add(descendants(process.pid))
+        process.kill()  # SIGKILL: the run cannot stop its workers itself
+        process.wait(timeout=30)
+        wait_for(lambda: not children.alive(), 60, "orphaned processes stayed alive")
+
+
+@linux_only
+def test_kill_9_during_a_coacd_decomposition_leaves_no_worker_process(tmp_path):
+    process = subprocess.Popen(
+        [*build_ring(tmp_path), "--no-cache"],
+        stdout=subprocess.DEVNULL,
+        stderr=subprocess.DEVNULL,
+        env=child_env(stalling_coacd(tmp_path)),
+    )
+    with reaped(process) as children:
+        wait_for(lambda: children.add(descendants(process.pid)), 120, "no CoACD worker")
+        process.kill()
+        process.wait(timeout=30)
+        wait_for(lambda: not children.alive(), 60, "the CoACD worker stayed alive")

@@ -39,6 +39,7 @@ from handsim.runner.records import RecordWriter, load_records, repair_records, w
 from handsim.runner.worker import (
     TrialOutcome,
     base_record,
+    prepare_pool_worker,
     prepare_worker_process,
     run_parameters,
     run_trial,
@@ -230,34 +231,52 @@ class _TrackingContext:
         return process
 
 
-def _stop_pool(pool: cf.ProcessPoolExecutor) -> None:
-    """End a pool now: cancel queued trials, terminate its workers (running trials are lost), reap them."""
-    thread = getattr(pool, "_executor_manager_thread", None)
-    pool.shutdown(wait=False, cancel_futures=True)
-    context = pool._mp_context
-    processes = context.processes if isinstance(context, _TrackingContext) else []
-    for process in processes:
-        if process.is_alive():
-            process.terminate()
-    if thread is not None:
-        thread.join(timeout=10)  # it may start no process after this
-    for process in processes:
-        process.join(timeout=5)
-        if process.is_alive():  # SIGTERM not acted on in time (e.g. inside native code): SIGKILL
-            process.kill()
+class _Pool:
+    """A process pool of spawned workers and the context that started (and remembers) its processes.
+
+    Each worker ends with this process, also under ``kill -9``
+    (:func:`~handsim.runner.worker.prepare_pool_worker`).
+    """
+
+    def __init__(self, workers: int) -> None:
+        self.context = _TrackingContext()
+        self.executor = cf.ProcessPoolExecutor(
+            workers, mp_context=self.context, initializer=prepare_pool_worker
+        )
+
+    def submit(self, fn: Callable[..., object], /, *args: object) -> cf.Future:
+        """Schedule ``fn(*args)`` on a worker."""
+        return self.executor.submit(fn, *args)
+
+    def stop(self) -> None:
+        """End the pool now: terminate its workers (running trials are lost), reap them, then shut it down.
+
+        The workers go first, so that the executor's own thread finds them dead and ends: shutting down
+        then waits for that thread without a private attribute and without the risk of waiting forever on
+        a worker busy in native code.
+        """
+        processes = list(self.context.processes)
+        for process in processes:
+            if process.is_alive():
+                process.terminate()
+        for process in processes:
             process.join(timeout=5)
+            if process.is_alive():  # SIGTERM not acted on in time: SIGKILL
+                process.kill()
+                process.join(timeout=5)
+        self.executor.shutdown(wait=True, cancel_futures=True)
 
 
 POOL_START_TIMEOUT_S = 300.0
 """Longest wait for a new worker process to start and import handsim, s."""
 
 
-def _new_pool(workers: int) -> cf.ProcessPoolExecutor:
+def _new_pool(workers: int) -> _Pool:
     """A started pool of spawned workers; RunnerError when a worker cannot even start.
 
     A pool whose workers die at start would otherwise look like every trial crashing its worker.
     """
-    pool = cf.ProcessPoolExecutor(workers, mp_context=_TrackingContext(), initializer=prepare_worker_process)
+    pool = _Pool(workers)
     try:
         # one task per worker at once: the pool starts a worker per submit while none is idle, so all of
         # them start and import handsim in parallel before the first trial
@@ -265,7 +284,7 @@ def _new_pool(workers: int) -> cf.ProcessPoolExecutor:
         for future in started:
             future.result(timeout=POOL_START_TIMEOUT_S)
     except Exception as exc:
-        _stop_pool(pool)
+        pool.stop()
         raise RunnerError(
             f"the local pool's worker processes do not start ({type(exc).__name__}: {exc}); the spawn start "
             "method re-imports the main script, so run_dataset must be called from an importable script "
@@ -314,10 +333,10 @@ def _pool(
                         else:
                             suspects.append(entry)
                     inflight.clear()
-                    _stop_pool(pool)
+                    pool.stop()
                     pool = _new_pool(workers)
         finally:
-            _stop_pool(pool)
+            pool.stop()
 
 
 def _ray(

@@ -14,6 +14,8 @@ from __future__ import annotations
 
 import dataclasses
 import hashlib
+import multiprocessing
+import multiprocessing.connection
 import os
 import signal
 import sys
@@ -22,6 +24,7 @@ import traceback
 from dataclasses import dataclass, field
 from pathlib import Path
 
+from handsim import lifeline
 from handsim.runner.records import SCHEMA, json_ready, write_atomic
 from handsim.sim.replay import ReplayConfig
 from handsim.trials import TrialEntry
@@ -59,6 +62,21 @@ def prepare_worker_process() -> None:
     prefer_headless_gl()
     if sys.platform != "win32":
         signal.signal(signal.SIGINT, signal.SIG_IGN)
+
+
+def prepare_pool_worker() -> None:
+    """Initializer of a local process-pool worker: :func:`prepare_worker_process`, and no orphan.
+
+    The worker ends when the process that started it dies, even under ``kill -9`` (which leaves the pool
+    no chance to stop it): see :mod:`handsim.lifeline` (the kernel's parent-death signal on Linux, a thread
+    waiting on the parent's sentinel everywhere). Not for Ray workers, whose lifetime Ray manages.
+    """
+    prepare_worker_process()
+    parent = multiprocessing.parent_process()
+    if parent is None:  # not a multiprocessing child: nothing to watch
+        return
+    lifeline.die_with_parent(parent.pid)
+    lifeline.watch(lambda: multiprocessing.connection.wait([parent.sentinel]))
 
 
 def base_record(entry: TrialEntry, config: ReplayConfig, frames: int) -> dict:
