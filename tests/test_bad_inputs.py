@@ -4,11 +4,13 @@ exact first line of stderr (or, for a flagged result, the flag), as a new user w
 from __future__ import annotations
 
 import os
+import shutil
 import signal
 import subprocess
 import sys
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 from handsim.assets import ASSETS_DIR, TZIONAS_DIR
@@ -259,3 +261,121 @@ def test_kill_9_during_a_coacd_decomposition_leaves_no_worker_process(tmp_path):
         process.kill()
         process.wait(timeout=30)
         wait_for(lambda: not children.alive(), 60, "the CoACD worker stayed alive")
+
+
+def glove_recording(folder: Path, rows: np.ndarray, times: np.ndarray) -> Path:
+    """A GraspDB14 radian recording of the tennis ball (object id 1 in its name) with these rows."""
+    folder.mkdir(parents=True, exist_ok=True)
+    path = folder / "r_01_11_ex03-rad-004-grasp-su04.txt"
+    lines = [
+        f"2014 09 15 08 02 {9.024 + t:08.5f} 1 " + " ".join(f"{x:.5f}" for x in row) + " "
+        for t, row in zip(times, rows, strict=True)
+    ]
+    path.write_text("\n".join(lines) + "\n")
+    return path
+
+
+def tzionas_copy(folder: Path, edit_cube) -> Path:
+    """The bundled Tzionas sequence 20 with its cube's MOTION rows (after the rigging row) edited.
+
+    ``edit_cube(k, values)`` gets the sample index and the row's 12 numbers (R row-major, T in mm).
+    """
+    shutil.copytree(TZIONAS_DIR / "Models" / "20", folder / "Models" / "20")
+    shutil.copytree(TZIONAS_DIR / "Configs" / "20", folder / "Configs" / "20")
+    motion = folder / "Models" / "20" / "Model_Object_Cube.MOTION"
+    lines = motion.read_text().splitlines()
+    for k in range(2, len(lines)):
+        values = np.array(lines[k].split(), dtype=float)
+        edit_cube(k - 2, values)
+        lines[k] = " ".join(f"{v:.9g}" for v in values) + " "
+    motion.write_text("\n".join(lines) + "\n")
+    return folder / "Models" / "20" / "Model_Hand_R.MOTION"
+
+
+FLEXED = np.array(
+    [-1.85, 0.6, -0.6, 0.07, -0.73, -1.27, -0.3, -0.15, -0.47, -1.37, -0.37, -0.05, -0.12, -1.47, -0.44, 0.26,
+     -0.45, -1.47, -0.44, 0.33, -0.85, -0.32, 0.18]
+)  # fmt: skip
+"""A power grasp in GraspDB14's 23 channels (radians)."""
+
+
+def test_a_two_row_recording_is_not_judged_held(capsys, tmp_path):
+    path = glove_recording(tmp_path, np.zeros((2, 23)), np.array([0.0, 1 / 60]))
+    code, first, out = cli(["replay", str(path)], capsys)
+    assert (code, first) == (0, "")
+    assert "\nheld        not judged: the hold window after release lasts 0.007 s" in out  # was "held yes"
+
+
+def test_samples_10_us_apart_are_flagged_too_few_frames(capsys, tmp_path):
+    path = glove_recording(tmp_path, np.zeros((2, 23)), np.array([0.0, 1e-5]))
+    code, first, out = cli(["replay", str(path)], capsys)
+    assert (code, first) == (
+        4,
+        "handsim replay: not valid: 1 control frame from 2 samples over 0.01 ms: nothing was simulated (a "
+        "replay needs 2 frames, 10 ms apart at this rate)",
+    )
+    assert "valid       no (too_few_frames): the numbers below judge nothing" in out
+
+
+def test_targets_beyond_the_joint_limits_are_noted_on_the_glove_path(capsys, tmp_path):
+    ramp = np.clip(np.linspace(-0.3, 1.3, 180), 0.0, 1.0)[:, None] * FLEXED
+    ramp[:, 4] = 3.0  # I-MCPJ, far beyond the index MCP's range
+    path = glove_recording(tmp_path, ramp, np.arange(180) / 60)
+    code, first, out = cli(["replay", str(path)], capsys)
+    assert (code, first) == (0, "")
+    assert "valid       yes" in out
+    assert (
+        "flag        joint_limits (a note): 293 target samples beyond the joint limits in 2 of 27 DoFs (the "
+        "actuators clamp them to the limits): if_mcp_flex 180 (up to 171.9°), th_mcp_flex 113 (up to 24.4°)"
+    ) in out
+
+
+def test_a_hand_starting_inside_the_object_is_flagged_with_its_depth(capsys, tmp_path):
+    def into_the_index_finger(k: int, values: np.ndarray) -> None:
+        values[9:12] += (-47.4, -54.4, -26.0)  # mm: the cube's centre onto the index fingertip at frame 0
+
+    motion = tzionas_copy(tmp_path / "data", into_the_index_finger)
+    code, first, out = cli(["replay", str(motion)], capsys)
+    assert (code, first) == (
+        4,
+        "handsim replay: not valid: the hand is 37.7 mm inside the object at the start, more than 5 mm: the "
+        "solver pushes them apart, and what follows is not the recording's",
+    )
+    assert "valid       no (initial_penetration): the numbers below judge nothing" in out
+    assert "warnings    none" in out  # MuJoCo itself sees nothing wrong
+
+
+def test_an_object_track_jumping_10_km_in_one_frame_is_flagged_with_its_samples(capsys, tmp_path):
+    def jump(k: int, values: np.ndarray) -> None:
+        if k == 50:
+            values[9] += 1e7  # 10 km, in mm
+
+    motion = tzionas_copy(tmp_path / "data", jump)
+    code, first, out = cli(["replay", str(motion)], capsys)
+    assert "valid       no (track_jump): the numbers below judge nothing" in out
+    assert (code, first) == (
+        4,
+        "handsim replay: not valid: the recorded object 'cube' track jumps faster than 10 m/s into 2 of 186 "
+        "samples (up to 3e+05 m/s; samples 50, 51)",
+    )
+
+
+def test_a_dataset_record_of_a_flagged_trial_says_not_valid_and_the_report_leaves_it_out(capsys, tmp_path):
+    from handsim.runner.records import read_records
+
+    def into_the_index_finger(k: int, values: np.ndarray) -> None:
+        values[9:12] += (-47.4, -54.4, -26.0)
+
+    tzionas_copy(tmp_path / "data", into_the_index_finger)
+    out_dir = tmp_path / "out"
+    code, first, out = cli(["report", str(tmp_path / "data"), "-o", str(out_dir), "--workers", "1"], capsys)
+    assert (code, first) == (0, "")
+    assert "1 trials: 1 ok, 0 diverged, 0 failed (1 flagged not valid, left out of the rates)" in out
+    (record,) = read_records(out_dir)
+    assert (record["status"], record["summary"]["valid"]) == ("ok", False)
+    assert [(f["code"], f["invalid"]) for f in record["flags"]] == [
+        ("initial_penetration", True),
+        ("joint_limits", False),
+    ]
+    assert record["flags"][0]["values"]["depth_mm"] == pytest.approx(37.7, abs=0.05)
+    assert "flagged" in (out_dir / "report.md").read_text()

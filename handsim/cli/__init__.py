@@ -10,6 +10,7 @@ are written atomically, so none is left half-written). One module per command gr
 from __future__ import annotations
 
 import argparse
+import os
 import signal
 import sys
 import threading
@@ -55,6 +56,9 @@ def main(argv: Sequence[str] | None = None) -> int:
         return args.func(args)
     except HandsimError as exc:
         print(f"handsim: error: {exc}", file=sys.stderr)
+        return 1
+    except BrokenPipeError:  # stdout closed early (`handsim … | head`): stop quietly, as other tools do
+        os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())  # no second error at exit
         return 1
     except OSError as exc:
         print(f"handsim: error: {os_error_line(exc)}", file=sys.stderr)

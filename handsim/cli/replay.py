@@ -2,18 +2,21 @@
 
 Exit codes: 0 replayed; 1 a handsim error (bad file, trajectory that does not fit the hand …);
 2 a usage error, including a file that is no kind of trial and options that do not apply to it;
-3 the simulation diverged (the summary covers the frames before the divergence, which is named).
+3 the simulation diverged (the summary covers the frames before the divergence, which is named);
+4 replayed but not valid: a plausibility flag says the numbers mean nothing (one line per flag on stderr).
 """
 
 from __future__ import annotations
 
 import argparse
 import json
+import sys
 
 from handsim.cli._common import add_control_rate, output_file, usage_error, write_text
 from handsim.headless import prefer_headless_gl
 
 EXIT_DIVERGED = 3
+EXIT_NOT_VALID = 4
 LABEL = 12  # width of the label column
 
 
@@ -61,6 +64,10 @@ def _print_summary(result) -> None:
         _line("", "the numbers below cover the frames before the divergence")
     else:
         _line("diverged", "no")
+    invalid = [f.code for f in result.flags if f.invalid]
+    _line("valid", f"no ({', '.join(invalid)}): the numbers below judge nothing" if invalid else "yes")
+    for flag in result.flags:
+        _line("flag", f"{flag.code}{'' if flag.invalid else ' (a note)'}: {flag.reason}")
     _line(
         "penetration",
         f"max {s['max_penetration_mm']:.2f} mm, p95 {s['p95_penetration_mm']:.2f} mm, "
@@ -236,7 +243,12 @@ def _replay(args: argparse.Namespace) -> int:
             f"{video.path} ({video.frames} frames at {video.fps:.1f} fps, {video.codec}, "
             f"camera {video.camera})",
         )
-    return EXIT_DIVERGED if result.diverged is not None else 0
+    if result.diverged is not None:
+        return EXIT_DIVERGED
+    invalid = [f for f in result.flags if f.invalid]
+    for flag in invalid:
+        print(f"handsim replay: not valid: {flag.reason}", file=sys.stderr)
+    return EXIT_NOT_VALID if invalid else 0
 
 
 def register(commands: argparse._SubParsersAction) -> None:
@@ -250,7 +262,8 @@ def register(commands: argparse._SubParsersAction) -> None:
         "gives their drift. A GraspDB14 glove recording drives the parametric default hand (or --skeleton), "
         "fixed palm down, holding the object (--object, else the one whose id the file name carries) placed "
         "where the grasp closes and released after it: the summary says whether it was held. "
-        f"Exit codes: 0 done, 1 handsim error, 2 usage error or not a trial, {EXIT_DIVERGED} diverged.",
+        f"Exit codes: 0 done, 1 handsim error, 2 usage error or not a trial, {EXIT_DIVERGED} diverged, "
+        f"{EXIT_NOT_VALID} not valid (a plausibility flag).",
     )
     replay.add_argument(
         "trajectory", metavar="TRAJECTORY", help="GraspDB14 .txt or Tzionas Model_Hand_*.MOTION"

@@ -35,7 +35,13 @@ from pathlib import Path
 from types import ModuleType
 
 from handsim.errors import HandsimError
-from handsim.runner.records import RecordWriter, load_records, repair_records, write_run_info
+from handsim.runner.records import (
+    RecordWriter,
+    load_records,
+    record_valid,
+    repair_records,
+    write_run_info,
+)
 from handsim.runner.worker import (
     TrialOutcome,
     base_record,
@@ -80,8 +86,9 @@ class RunSummary:
         ok: Selected trials whose record says ``ok``.
         diverged: … ``diverged``.
         failed: … ``error``.
-        held: Glove trials whose object was held through the hold window.
-        hold_trials: Glove trials with a hold outcome.
+        flagged: Of the ``ok`` and ``diverged`` ones, those flagged not valid (``summary["valid"]`` false).
+        held: Valid glove trials whose object was held through the hold window.
+        hold_trials: Valid glove trials with a hold outcome.
         notes: What was repaired or skipped (a truncated records line …).
         wall_s: Wall-clock time of this call, s.
         failures: The failed trials' errors (:func:`failure_counts`): (error type, trials, first message),
@@ -95,6 +102,7 @@ class RunSummary:
     ok: int
     diverged: int
     failed: int
+    flagged: int
     held: int
     hold_trials: int
     notes: tuple[str, ...]
@@ -108,7 +116,7 @@ class RunSummary:
 
     def line(self) -> str:
         """One line for people: trial counts by status and the hold rate."""
-        counts = {k: getattr(self, k) for k in ("ok", "diverged", "failed", "held", "hold_trials")}
+        counts = {k: getattr(self, k) for k in ("ok", "diverged", "failed", "flagged", "held", "hold_trials")}
         return _line(self.trials, counts)
 
 
@@ -136,6 +144,8 @@ def failure_counts(records: Sequence[dict]) -> tuple[tuple[str, int, str], ...]:
 
 def _line(trials: int, counts: dict) -> str:
     text = f"{trials} trials: {counts['ok']} ok, {counts['diverged']} diverged, {counts['failed']} failed"
+    if counts["flagged"]:
+        text += f" ({counts['flagged']} flagged not valid, left out of the rates)"
     if counts["hold_trials"]:
         rate = 100.0 * counts["held"] / counts["hold_trials"]
         text += f"; held {counts['held']} of {counts['hold_trials']} glove trials ({rate:.0f} %)"
@@ -389,11 +399,13 @@ def _gl_env() -> dict[str, str]:
 
 def _counts(records: Sequence[dict], ids: set[str]) -> dict:
     mine = [r for r in records if r["id"] in ids]
-    held = [r["summary"]["held"] for r in mine if r.get("summary") and "held" in r["summary"]]
+    valid = [r for r in mine if record_valid(r)]
+    held = [r["summary"]["held"] for r in valid if r.get("summary") and "held" in r["summary"]]
     return {
         "ok": sum(r["status"] == "ok" for r in mine),
         "diverged": sum(r["status"] == "diverged" for r in mine),
         "failed": sum(r["status"] == "error" for r in mine),
+        "flagged": len(mine) - len(valid),
         "held": sum(bool(h) for h in held),
         "hold_trials": len(held),
     }

@@ -31,6 +31,15 @@ STATUSES = ("ok", "diverged", "error")
 """Version of the record schema (``docs/records.md``); changes when a key changes meaning or goes away."""
 
 
+def record_valid(record: dict) -> bool:
+    """False when the record's replay was flagged not valid (``summary["valid"]`` false), else True.
+
+    Records without the key (failed trials, records written before the flags existed) count as valid; a
+    not-valid trial is its own outcome in counts and reports and is left out of every rate and statistic.
+    """
+    return (record.get("summary") or {}).get("valid") is not False
+
+
 class RecordsError(HandsimError):
     """A records file that is not a run's records (a malformed line other than a truncated last one)."""
 

@@ -103,6 +103,7 @@ def base_record(entry: TrialEntry, config: ReplayConfig, frames: int) -> dict:
         "stability": None,
         "warnings": [],
         "diverged": None,
+        "flags": [],
         "notes": [],
         "trajectory_quality": None,
         "curves": None,
@@ -189,6 +190,7 @@ def trial_outcome(entry: TrialEntry, config: ReplayConfig, frames: int = 4) -> T
             stability=None if result.stability is None else result.stability.to_dict(),
             warnings=[dataclasses.asdict(w) for w in result.warnings],
             diverged=None if result.diverged is None else dataclasses.asdict(result.diverged),
+            flags=[f.to_dict() for f in result.flags],
             notes=[*notes, *result.notes],
             curves=curves(result),
         )
