@@ -379,3 +379,38 @@ def test_a_dataset_record_of_a_flagged_trial_says_not_valid_and_the_report_leave
     ]
     assert record["flags"][0]["values"]["depth_mm"] == pytest.approx(37.7, abs=0.05)
     assert "flagged" in (out_dir / "report.md").read_text()
+
+
+@pytest.mark.parametrize("env_id", ["handsim/Replay-v0", "handsim/Grasp-v0"])
+def test_an_absurd_action_is_clipped_to_the_action_space_and_noted(env_id):
+    import gymnasium as gym
+
+    import handsim  # noqa: F401  (registers the environments)
+
+    env, same = gym.make(env_id).unwrapped, gym.make(env_id).unwrapped
+    env.reset(seed=0)
+    same.reset(seed=0)
+    huge = np.full(env.action_space.shape, 1e30)
+    huge[0] = 0.5
+    obs, reward, _, _, info = env.step(huge)
+    clipped = np.ones(env.action_space.shape)
+    clipped[0] = 0.5
+    obs_same, reward_same, _, _, info_same = same.step(clipped)
+    assert info["action_clipped"] == env.action_space.shape[0] - 1 and info_same["action_clipped"] == 0
+    assert reward == reward_same and np.array_equal(obs, obs_same)  # exactly the action at its bound
+    assert huge[1] == 1e30  # the caller's array is left alone
+
+
+@pytest.mark.parametrize("env_id", ["handsim/Replay-v0", "handsim/Grasp-v0"])
+def test_a_non_finite_action_raises_a_clear_value_error(env_id):
+    import gymnasium as gym
+
+    import handsim  # noqa: F401
+
+    env = gym.make(env_id).unwrapped
+    env.reset(seed=0)
+    action = np.zeros(env.action_space.shape)
+    action[2] = np.nan
+    name = type(env).__name__
+    with pytest.raises(ValueError, match=rf"^{name}: action has NaN or infinite values: \[0\.0, 0\.0, nan, "):
+        env.step(action)
