@@ -414,3 +414,31 @@ def test_a_non_finite_action_raises_a_clear_value_error(env_id):
     name = type(env).__name__
     with pytest.raises(ValueError, match=rf"^{name}: action has NaN or infinite values: \[0\.0, 0\.0, nan, "):
         env.step(action)
+
+
+@linux_only
+def test_ctrl_c_during_a_dataset_run_exits_130_with_complete_records_and_no_worker_left(tmp_path):
+    from handsim.runner.records import load_records
+
+    out_dir = tmp_path / "out"
+    argv = [sys.executable, "-m", "handsim.cli", "report", str(ASSETS_DIR / "demo"), "-o", str(out_dir)]
+    process = subprocess.Popen(
+        [*argv, "--workers", "2", "--frames", "0"],
+        stdout=subprocess.DEVNULL,
+        stderr=subprocess.PIPE,
+        env=child_env(),
+        start_new_session=True,
+    )
+    with reaped(process) as children:
+        wait_for(lambda: len(_spawn_workers(process.pid)) >= 3, 120, "the pool's workers did not start")
+        children.add(descendants(process.pid))
+        os.killpg(process.pid, signal.SIGINT)
+        _, err = process.communicate(timeout=120)
+        assert process.returncode == 130
+        assert err.decode().splitlines()[0] == (
+            f"handsim report: interrupted; the finished trials are recorded in {out_dir / 'records.jsonl'}: "
+            "run the same command to resume"
+        )
+        wait_for(lambda: not children.alive(), 60, "a worker outlived the interrupted run")
+    read = load_records(out_dir)
+    assert read.valid_bytes == read.size and read.notes == ()  # complete lines only
