@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+from collections.abc import Callable
 
 from handsim.cli._common import add_hand_size, output_file, usage_error, write_text
 
@@ -38,6 +39,27 @@ def _build_hand(args: argparse.Namespace) -> int:
     if args.output is not None:
         print(f"wrote      {write_text(args.output, spec.to_xml())}")
     return 0
+
+
+def _decomposition_param(name: str, convert: type) -> Callable[[str], float | int]:
+    """An argparse type for a field of :class:`~handsim.builders.decompose.DecompositionParams`."""
+
+    def parse(text: str) -> float | int:
+        # imported here: the builders (trimesh, SciPy) are slow to import, and --help must not wait
+        from handsim.builders.decompose import DecompositionParams
+
+        try:
+            value = convert(text)
+        except ValueError:
+            kind = "a whole number" if convert is int else "a number"
+            raise argparse.ArgumentTypeError(f"expected {kind}, got {text!r}") from None
+        try:
+            DecompositionParams(**{name: value})
+        except ValueError as exc:
+            raise argparse.ArgumentTypeError(str(exc)) from None
+        return value
+
+    return parse
 
 
 def _decomposition_params(args: argparse.Namespace):
@@ -127,12 +149,23 @@ def _add_object_options(parser: argparse.ArgumentParser) -> None:
     mass.add_argument("--mass", type=float, metavar="KG", help="total object mass instead of a density")
     parser.add_argument(
         "--threshold",
-        type=float,
+        type=_decomposition_param("threshold", float),
         default=0.05,
         help="CoACD concavity threshold (default 0.05; lower = more hulls)",
     )
-    parser.add_argument("--max-hulls", type=int, default=16, help="most convex hulls per part (default 16)")
-    parser.add_argument("--timeout", type=float, default=600.0, metavar="S", help="CoACD time limit per part")
+    parser.add_argument(
+        "--max-hulls",
+        type=_decomposition_param("max_convex_hull", int),
+        default=16,
+        help="most convex hulls per part (default 16; -1: no limit)",
+    )
+    parser.add_argument(
+        "--timeout",
+        type=_decomposition_param("timeout_s", float),
+        default=600.0,
+        metavar="S",
+        help="CoACD time limit per part",
+    )
     parser.add_argument(
         "--cache-dir", metavar="DIR", help="decomposition cache (default: the user cache dir)"
     )

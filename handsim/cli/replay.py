@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import math
 import sys
 
 from handsim.cli._common import add_control_rate, output_file, usage_error, write_text
@@ -174,9 +175,12 @@ def _stability_at(text: str) -> float | str:
     if text == "grasp":
         return text
     try:
-        return float(text)
+        value = float(text)
     except ValueError:
         raise argparse.ArgumentTypeError(f"expected 'grasp' or a time in seconds, got {text!r}") from None
+    if not (math.isfinite(value) and value >= 0.0):
+        raise argparse.ArgumentTypeError(f"expected 'grasp' or a time ≥ 0 s, got {text}")
+    return value
 
 
 def _replay(args: argparse.Namespace) -> int:
@@ -209,6 +213,11 @@ def _replay(args: argparse.Namespace) -> int:
     _print_trial(loaded)
     if args.stability == "grasp" and loaded.scene.setup.hold_window is None:
         return usage_error("replay", "--stability grasp is for glove trials; give a time in s")
+    end = float(loaded.trajectory.times[-1])
+    if isinstance(args.stability, float) and args.stability > end:
+        return usage_error(
+            "replay", f"--stability {args.stability:g} s is after the recording's end ({end:.3f} s)"
+        )
     result = replay(loaded.scene, loaded.trajectory, config)
     _print_summary(result)
     notes = [*loaded.notes, *loaded.scene.setup.notes, *result.notes]
