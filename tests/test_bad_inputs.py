@@ -194,6 +194,20 @@ def test_replay_refuses_a_stability_time_after_the_recording(capsys):
     )
 
 
+@pytest.mark.parametrize(
+    ("argv", "message"),
+    [
+        (["build", "hand", "--default", "--mass", "nan"], "handsim build hand: error: argument --mass: "),
+        (["build", "object", "mug", "--density", "-1"], "handsim build object: error: argument --density: "),
+        (["replay", str(SCRIPTED), "--mass", "inf"], "handsim replay: error: argument --mass: "),
+        (["demo", "--hand-length", "0"], "handsim demo: error: argument --hand-length: "),
+    ],
+)
+def test_a_mass_density_or_length_that_is_no_positive_number_is_a_usage_error(capsys, argv, message):
+    code, first, out = cli(argv, capsys)
+    assert (code, first, out) == (2, f"{message}expected a finite number > 0, got {argv[-1]}", "")
+
+
 def test_an_os_error_writing_an_output_is_one_line_and_exit_1(capsys, tmp_path):
     target = tmp_path / ("x" * 300 + ".xml")  # longer than a file name may be
     code, first, _ = cli(["build", "hand", "--default", "-o", str(target)], capsys)

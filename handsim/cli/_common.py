@@ -7,6 +7,7 @@ line is ``handsim COMMAND: error: argument --OPTION: …`` (:class:`Parser` puts
 from __future__ import annotations
 
 import argparse
+import math
 import sys
 from pathlib import Path
 from typing import NoReturn
@@ -39,11 +40,26 @@ def add_hand_size(parser: argparse.ArgumentParser) -> None:
     """Add ``--hand-length`` (parametric default hand)."""
     parser.add_argument(
         "--hand-length",
-        type=float,
+        type=positive_number,
         default=0.19,
         metavar="M",
         help="parametric hand: wrist crease to middle fingertip in metres (default 0.19)",
     )
+
+
+def positive_number(text: str) -> float:
+    """An argparse type: a finite number > 0 (lengths, masses, densities; a usage error otherwise).
+
+    Whether the value is plausible (a hand length in metres, a household object's mass) is the builder's to
+    say; this refuses only what is no quantity at all.
+    """
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a number, got {text!r}") from None
+    if not (math.isfinite(value) and value > 0.0):
+        raise argparse.ArgumentTypeError(f"expected a finite number > 0, got {text}")
+    return value
 
 
 def non_negative_int(text: str) -> int:

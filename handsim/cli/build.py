@@ -5,7 +5,7 @@ from __future__ import annotations
 import argparse
 from collections.abc import Callable
 
-from handsim.cli._common import add_hand_size, output_file, usage_error, write_text
+from handsim.cli._common import add_hand_size, output_file, positive_number, usage_error, write_text
 
 
 def _hand_spec(skeleton_path: str | None, args: argparse.Namespace):
@@ -145,8 +145,12 @@ def _build_scene(args: argparse.Namespace) -> int:
 def _add_object_options(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--units", choices=("m", "mm"), help="units of a mesh file (required for mesh files)")
     mass = parser.add_mutually_exclusive_group()
-    mass.add_argument("--density", type=float, metavar="KG_M3", help="density (default: the object's own)")
-    mass.add_argument("--mass", type=float, metavar="KG", help="total object mass instead of a density")
+    mass.add_argument(
+        "--density", type=positive_number, metavar="KG_M3", help="density (default: the object's own)"
+    )
+    mass.add_argument(
+        "--mass", type=positive_number, metavar="KG", help="total object mass instead of a density"
+    )
     parser.add_argument(
         "--threshold",
         type=_decomposition_param("threshold", float),
@@ -243,7 +247,7 @@ def _add_hand_options(parser: argparse.ArgumentParser, mass_flag: str) -> None:
     add_hand_size(parser)
     parser.add_argument(
         "--hand-breadth",
-        type=float,
+        type=positive_number,
         default=None,
         metavar="M",
         help="parametric hand: breadth across the metacarpals in metres (default 0.45 × length)",
@@ -251,7 +255,7 @@ def _add_hand_options(parser: argparse.ArgumentParser, mass_flag: str) -> None:
     parser.add_argument(
         mass_flag,
         dest="hand_mass",
-        type=float,
+        type=positive_number,
         default=None,
         metavar="KG",
         help="whole-hand mass in kg (default: 0.45 kg scaled with the cube of hand length)",

@@ -13,7 +13,7 @@ import json
 import math
 import sys
 
-from handsim.cli._common import add_control_rate, output_file, usage_error, write_text
+from handsim.cli._common import add_control_rate, output_file, positive_number, usage_error, write_text
 from handsim.headless import prefer_headless_gl
 
 EXIT_DIVERGED = 3
@@ -286,10 +286,12 @@ def register(commands: argparse._SubParsersAction) -> None:
     )
     replay.add_argument("--units", choices=("m", "mm"), help="units of a mesh file given as --object")
     mass = replay.add_mutually_exclusive_group()
-    mass.add_argument("--density", type=float, metavar="KG_M3", help="object density instead of its own")
-    mass.add_argument("--mass", type=float, metavar="KG", help="object mass instead of its own")
+    mass.add_argument(
+        "--density", type=positive_number, metavar="KG_M3", help="object density instead of its own"
+    )
+    mass.add_argument("--mass", type=positive_number, metavar="KG", help="object mass instead of its own")
     replay.add_argument(
-        "--hand-length", type=float, default=None, metavar="M",
+        "--hand-length", type=positive_number, default=None, metavar="M",
         help="GraspDB14 without --skeleton: parametric hand length, wrist crease to middle fingertip (0.19)",
     )  # fmt: skip
     replay.add_argument(
