@@ -58,9 +58,10 @@ def test_build_hand_reports_a_missing_file_and_exits_1(capsys, tmp_path):
     assert "missing.xmlskel: file not found" in capsys.readouterr().err
 
 
-def test_build_hand_refuses_both_a_file_and_default(tmp_path):
-    with pytest.raises(SystemExit, match="not both"):
-        main(["build", "hand", str(tmp_path / "a.xmlskel"), "--default"])
+def test_build_hand_refuses_both_a_file_and_default(tmp_path, capsys):
+    assert main(["build", "hand", str(tmp_path / "a.xmlskel"), "--default"]) == 2
+    err = capsys.readouterr().err
+    assert err == "handsim build hand: error: give a SKELETON file or --default, not both\n"
 
 
 def test_catalog_lists_every_object_with_size_and_mass(capsys):

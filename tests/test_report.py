@@ -708,7 +708,7 @@ def test_html_shows_curves_frames_traceback_and_reproducibility(run_dir):
 def test_missing_values_show_as_a_dash(run_dir):
     md = render_report(run_dir).markdown.read_text()
     cube = next(line for line in md.splitlines() if line.startswith("| cube |"))
-    assert cube.split(" | ")[5] == "—"  # hold rate of a recorded-only group
+    assert cube.split(" | ")[6] == "—"  # hold rate of a recorded-only group
 
 
 def test_changed_or_missing_frames_are_reported_not_raised(run_dir):
@@ -1117,3 +1117,35 @@ def test_real_dataset_run_reports_every_trial_and_opens_in_chromium(dataset, tmp
     assert _console_problems(events) == []
     pixels = _png_pixels((out / SCREENSHOT).read_bytes())
     assert pixels.std() > 20
+
+
+def test_a_trial_flagged_not_valid_is_its_own_outcome_and_left_out_of_every_rate(tmp_path):
+    from handsim.report.aggregate import distributions, outcome
+
+    records = _records(tmp_path)
+    flagged = records[0]  # a glove trial that "held", 1.8 mm deep
+    reason = "the hand is 37.6 mm inside the object at the start, more than 5 mm"
+    flagged["summary"]["valid"] = False
+    flagged["flags"] = [
+        {"code": "initial_penetration", "invalid": True, "reason": reason, "values": {"depth_mm": 37.6}},
+        {"code": "joint_limits", "invalid": False, "reason": "4 target samples beyond", "values": {}},
+    ]
+    for record in records[1:]:
+        if record["summary"] is not None:
+            record["summary"]["valid"] = True
+    (tmp_path / "records.jsonl").write_text("".join(json.dumps(r) + "\n" for r in records))
+    run = read_run(tmp_path)
+    assert [outcome(r) for r in run.records if r["id"] == flagged["id"]] == ["flagged"]
+    stats = group_stats(run.records)
+    assert (stats["flagged"], stats["held"], stats["hold_judged"]) == (1, 1, 2)
+    penetration = [r["summary"]["max_penetration_mm"] for r in records[1:] if r["summary"]]
+    assert stats["penetration_p50_mm"] == pytest.approx(_linear_percentile(penetration, 50))
+    assert 1.8 not in distributions(run.records)["max_penetration_mm"]
+    ranking = rank(run.records)
+    assert [(r["id"], r["tier"], r["reason"]) for r in ranking[2:3]] == [
+        (flagged["id"], "flagged", f"not valid: {reason}")
+    ]
+    files = render_report(tmp_path)
+    html = files.html.read_text()
+    assert "Plausibility flags" in html and "37.6 mm inside the object" in html
+    assert "1 flagged not valid (left out of every rate and statistic)" in files.markdown.read_text()

@@ -51,7 +51,7 @@ FRAMES = 4
 RECORD_KEYS = [
     "schema", "id", "kind", "status", "meta", "trial", "inputs", "parameters", "metric_spec_version",
     "versions", "model_sha256", "scenario", "summary", "hold", "robustness", "release_stability", "stability",
-    "warnings", "diverged", "notes",
+    "warnings", "diverged", "flags", "notes",
     "trajectory_quality", "curves", "renders", "error", "timing",
 ]  # fmt: skip
 GRASPDB_IDS = [

@@ -10,9 +10,13 @@ The parent starts this file by path, not with ``-m handsim.builders._coacd_worke
 decomposition. So this module imports nothing from handsim; only the standard library, NumPy and CoACD.
 
 A crash here (CoACD aborts on some inputs) takes down only this process; the parent reports the exit
-status and the last lines of the output. For tests, the environment variable
-``HANDSIM_COACD_WORKER_FAULT`` makes the worker fail on purpose: ``abort`` calls :func:`os.abort`,
-``empty`` writes a result without hulls, ``garbage`` writes bytes that are not an ``.npz`` file.
+status and the last lines of the output. This process ends with its parent, also under ``kill -9`` of it
+(:mod:`handsim.lifeline`, loaded by path: the kernel's parent-death signal on Linux, and everywhere a
+thread reading stdin, a pipe whose writing end only the parent holds, until its end).
+
+For tests, the environment variable ``HANDSIM_COACD_WORKER_FAULT`` makes the worker fail on purpose:
+``abort`` calls :func:`os.abort`, ``empty`` writes a result without hulls, ``garbage`` writes bytes that
+are not an ``.npz`` file.
 """
 
 from __future__ import annotations
@@ -25,12 +29,33 @@ import sys
 if sys.path and os.path.abspath(sys.path[0] or os.curdir) == os.path.dirname(os.path.abspath(__file__)):
     del sys.path[0]
 
+import importlib.util
 import json
 import time
 
 import numpy as np
 
 FAULT_ENV = "HANDSIM_COACD_WORKER_FAULT"
+
+
+def _exit_with_parent() -> None:
+    """End this process when the parent dies (see :mod:`handsim.lifeline`, loaded without handsim)."""
+    path = os.path.join(os.path.dirname(os.path.dirname(os.path.abspath(__file__))), "lifeline.py")
+    spec = importlib.util.spec_from_file_location("_handsim_lifeline", path)
+    lifeline = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(lifeline)
+    lifeline.die_with_parent()
+    lifeline.watch(_read_to_end)
+
+
+def _read_to_end(fd: int = 0) -> None:
+    """Read the file descriptor (stdin) until its end: the parent, the only writer, is gone.
+
+    Raw reads, not ``sys.stdin``: a daemon thread holding the buffered reader's lock would abort the
+    interpreter at its shutdown.
+    """
+    while os.read(fd, 4096):
+        pass
 
 
 def _no_core_dumps() -> None:
@@ -75,6 +100,7 @@ def main(argv: list[str]) -> int:
         print("usage: _coacd_worker.py IN.npz OUT.npz", file=sys.stderr)
         return 2
     in_path, out_path = argv
+    _exit_with_parent()
     _no_core_dumps()
     fault = os.environ.get(FAULT_ENV, "")
     if fault == "abort":

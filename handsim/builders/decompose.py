@@ -6,7 +6,8 @@ split into convex pieces. :func:`decompose` does that:
 - A convex mesh (volume equal to its hull's) skips CoACD; its convex hull is the single piece.
 - Otherwise CoACD runs in a child process started with :mod:`subprocess` (not :mod:`multiprocessing`,
   which daemonic pool workers and Ray tasks cannot use). The child is killed after
-  :attr:`DecompositionParams.timeout_s`, and a CoACD crash (it aborts the process on some inputs)
+  :attr:`DecompositionParams.timeout_s` or when the caller is interrupted (Ctrl-C), and ends by itself
+  when the caller dies (:mod:`handsim.lifeline`); a CoACD crash (it aborts the process on some inputs)
   becomes a :class:`DecompositionError` naming the mesh instead of the death of the caller.
 - Results are cached in ``cache_dir/coacd/<key[:2]>/<key>.npz``, keyed by :func:`cache_key`, with the
   catalogue's objects pre-decomposed in a read-only bundled cache (:func:`bundled_entry`). Entries
@@ -468,7 +469,7 @@ def _run_worker(
             # cwd=tmp: a core file, should the system still write one, goes away with the folder.
             proc = subprocess.Popen(
                 [sys.executable, str(_WORKER), str(in_path), str(out_path)],
-                stdin=subprocess.DEVNULL,
+                stdin=subprocess.PIPE,  # never written; the child ends when it closes (our death)
                 stdout=log,
                 stderr=subprocess.STDOUT,
                 cwd=tmp,
@@ -479,6 +480,7 @@ def _run_worker(
                 if proc.poll() is None:
                     proc.kill()
                     proc.wait()
+                proc.stdin.close()  # only now: the child reads its closing as our death
             seconds = time.perf_counter() - start
         if status is None:
             limit = "no hull limit" if params.max_convex_hull == -1 else f"max {params.max_convex_hull} hulls"

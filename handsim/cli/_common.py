@@ -1,20 +1,65 @@
-"""Arguments and output helpers shared by the ``handsim`` commands."""
+"""Arguments and output helpers shared by the ``handsim`` commands.
+
+Argument types here validate before any work starts: a bad value is a usage error (exit 2) whose first
+line is ``handsim COMMAND: error: argument --OPTION: …`` (:class:`Parser` puts the message before the usage).
+"""
 
 from __future__ import annotations
 
 import argparse
+import math
+import sys
 from pathlib import Path
+from typing import NoReturn
+
+from handsim.runner.records import write_atomic
+
+EXIT_INTERRUPTED = 130
+"""Exit code after Ctrl-C or SIGTERM (128 + SIGINT, as a shell reports it)."""
+
+
+class Parser(argparse.ArgumentParser):
+    """An argument parser whose usage errors print the error line first, then the usage (exit 2).
+
+    Subcommand parsers are made of the same class, so every ``handsim`` command reports
+    ``handsim COMMAND: error: MESSAGE`` as the first line of stderr.
+    """
+
+    def error(self, message: str) -> NoReturn:
+        """Print ``PROG: error: MESSAGE`` and the usage to stderr and exit with status 2."""
+        self.exit(2, f"{self.prog}: error: {message}\n{self.format_usage()}")
+
+
+def usage_error(command: str, message: str) -> int:
+    """Print a usage error found after parsing (``handsim COMMAND: error: …``) and return exit code 2."""
+    print(f"handsim {command}: error: {message}", file=sys.stderr)
+    return 2
 
 
 def add_hand_size(parser: argparse.ArgumentParser) -> None:
     """Add ``--hand-length`` (parametric default hand)."""
     parser.add_argument(
         "--hand-length",
-        type=float,
+        type=positive_number,
         default=0.19,
         metavar="M",
         help="parametric hand: wrist crease to middle fingertip in metres (default 0.19)",
     )
+
+
+def positive_number(text: str) -> float:
+    """An argparse type: a finite number > 0 (lengths, masses, densities; a usage error otherwise).
+
+    Whether the value is plausible (a hand length in metres, a household object's mass) is the builder's to
+    say; this refuses only what is no quantity at all.
+    """
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a number, got {text!r}") from None
+    if not (math.isfinite(value) and value > 0.0):
+        raise argparse.ArgumentTypeError(f"expected a finite number > 0, got {text}")
+    return value
 
 
 def non_negative_int(text: str) -> int:
@@ -36,9 +81,70 @@ def positive_int(text: str) -> int:
     return value
 
 
+def control_rate(text: str) -> float:
+    """An argparse type: a control rate in Hz, at least the replay's minimum at the default metrics.
+
+    See :func:`handsim.sim.plausibility.min_control_rate` (20 Hz).
+    """
+    # imported here: the simulation stack (MuJoCo) is slow to import, and --help must not wait for it
+    from handsim.sim.metrics import MetricSpec
+    from handsim.sim.plausibility import check_control_rate
+
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a number of Hz, got {text!r}") from None
+    try:
+        return check_control_rate(value, MetricSpec())
+    except ValueError as exc:
+        raise argparse.ArgumentTypeError(str(exc)) from None
+
+
+def add_control_rate(parser: argparse.ArgumentParser) -> None:
+    """Add ``--rate HZ`` (the replay's control rate, checked by :func:`control_rate`)."""
+    parser.add_argument(
+        "--rate",
+        type=control_rate,
+        default=100.0,
+        metavar="HZ",
+        help="control rate (default 100; at least 20: two frames within the metrics' 0.1 s contact gap)",
+    )
+
+
+def _blocking_file(path: Path) -> Path | None:
+    """The nearest existing ancestor of ``path`` when it is not a folder (nothing can be created there)."""
+    for parent in path.parents:
+        if parent.exists():
+            return None if parent.is_dir() else parent
+    return None
+
+
+def output_file(text: str) -> Path:
+    """An argparse type: a file to write (created or replaced), not a folder, its folder creatable."""
+    if not text:
+        raise argparse.ArgumentTypeError("expected a file name, got ''")
+    path = Path(text)
+    if path.is_dir():
+        raise argparse.ArgumentTypeError(f"{text} is a folder; expected a file name to write")
+    blocking = _blocking_file(path)
+    if blocking is not None:
+        raise argparse.ArgumentTypeError(f"cannot create {text}: {blocking} is a file, not a folder")
+    return path
+
+
+def output_dir(text: str) -> Path:
+    """An argparse type: a folder to write into (created if missing), not an existing file."""
+    if not text:
+        raise argparse.ArgumentTypeError("expected a folder name, got ''")
+    path = Path(text)
+    if path.exists() and not path.is_dir():
+        raise argparse.ArgumentTypeError(f"{text} exists and is not a folder; expected an output folder")
+    blocking = _blocking_file(path)
+    if blocking is not None:
+        raise argparse.ArgumentTypeError(f"cannot create {text}: {blocking} is a file, not a folder")
+    return path
+
+
 def write_text(path: str | Path, text: str) -> Path:
-    """Write ``text`` to ``path``, creating its folder, and return the path."""
-    out = Path(path)
-    out.parent.mkdir(parents=True, exist_ok=True)
-    out.write_text(text)
-    return out
+    """Write ``text`` (UTF-8) to ``path`` atomically, creating its folder, and return the path."""
+    return write_atomic(path, text.encode("utf-8"))

@@ -3,8 +3,9 @@
 from __future__ import annotations
 
 import argparse
+from collections.abc import Callable
 
-from handsim.cli._common import add_hand_size, write_text
+from handsim.cli._common import add_hand_size, output_file, positive_number, usage_error, write_text
 
 
 def _hand_spec(skeleton_path: str | None, args: argparse.Namespace):
@@ -26,9 +27,9 @@ def _print_model(spec) -> None:
 
 def _build_hand(args: argparse.Namespace) -> int:
     if args.skeleton is not None and args.default:
-        raise SystemExit("handsim build hand: give a SKELETON file or --default, not both")
+        return usage_error("build hand", "give a SKELETON file or --default, not both")
     if args.skeleton is None and not args.default:
-        raise SystemExit("handsim build hand: give a SKELETON file, or --default for the parametric hand")
+        return usage_error("build hand", "give a SKELETON file, or --default for the parametric hand")
     spec, skeleton = _hand_spec(args.skeleton, args)
     if skeleton is not None:
         print(f"skeleton   {skeleton.source} ({skeleton.njoints} joints, {skeleton.ndof} DoFs)")
@@ -38,6 +39,27 @@ def _build_hand(args: argparse.Namespace) -> int:
     if args.output is not None:
         print(f"wrote      {write_text(args.output, spec.to_xml())}")
     return 0
+
+
+def _decomposition_param(name: str, convert: type) -> Callable[[str], float | int]:
+    """An argparse type for a field of :class:`~handsim.builders.decompose.DecompositionParams`."""
+
+    def parse(text: str) -> float | int:
+        # imported here: the builders (trimesh, SciPy) are slow to import, and --help must not wait
+        from handsim.builders.decompose import DecompositionParams
+
+        try:
+            value = convert(text)
+        except ValueError:
+            kind = "a whole number" if convert is int else "a number"
+            raise argparse.ArgumentTypeError(f"expected {kind}, got {text!r}") from None
+        try:
+            DecompositionParams(**{name: value})
+        except ValueError as exc:
+            raise argparse.ArgumentTypeError(str(exc)) from None
+        return value
+
+    return parse
 
 
 def _decomposition_params(args: argparse.Namespace):
@@ -123,16 +145,31 @@ def _build_scene(args: argparse.Namespace) -> int:
 def _add_object_options(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--units", choices=("m", "mm"), help="units of a mesh file (required for mesh files)")
     mass = parser.add_mutually_exclusive_group()
-    mass.add_argument("--density", type=float, metavar="KG_M3", help="density (default: the object's own)")
-    mass.add_argument("--mass", type=float, metavar="KG", help="total object mass instead of a density")
+    mass.add_argument(
+        "--density", type=positive_number, metavar="KG_M3", help="density (default: the object's own)"
+    )
+    mass.add_argument(
+        "--mass", type=positive_number, metavar="KG", help="total object mass instead of a density"
+    )
     parser.add_argument(
         "--threshold",
-        type=float,
+        type=_decomposition_param("threshold", float),
         default=0.05,
         help="CoACD concavity threshold (default 0.05; lower = more hulls)",
     )
-    parser.add_argument("--max-hulls", type=int, default=16, help="most convex hulls per part (default 16)")
-    parser.add_argument("--timeout", type=float, default=600.0, metavar="S", help="CoACD time limit per part")
+    parser.add_argument(
+        "--max-hulls",
+        type=_decomposition_param("max_convex_hull", int),
+        default=16,
+        help="most convex hulls per part (default 16; -1: no limit)",
+    )
+    parser.add_argument(
+        "--timeout",
+        type=_decomposition_param("timeout_s", float),
+        default=600.0,
+        metavar="S",
+        help="CoACD time limit per part",
+    )
     parser.add_argument(
         "--cache-dir", metavar="DIR", help="decomposition cache (default: the user cache dir)"
     )
@@ -160,7 +197,9 @@ def register(commands: argparse._SubParsersAction) -> None:
     hand.add_argument("skeleton", nargs="?", metavar="SKELETON_FILE", help=".xmlskel or .SKEL file")
     hand.add_argument("--default", action="store_true", help="use the parametric default hand")
     _add_hand_options(hand, "--mass")
-    hand.add_argument("-o", "--output", metavar="XML", help="write the model as MJCF to this file")
+    hand.add_argument(
+        "-o", "--output", type=output_file, metavar="XML", help="write the model as MJCF to this file"
+    )
     hand.set_defaults(func=_build_hand)
 
     obj = kinds.add_parser(
@@ -173,7 +212,9 @@ def register(commands: argparse._SubParsersAction) -> None:
     )
     obj.add_argument("object", metavar="MESH_OR_CATALOG_NAME")
     _add_object_options(obj)
-    obj.add_argument("-o", "--output", metavar="XML", help="write the model as MJCF to this file")
+    obj.add_argument(
+        "-o", "--output", type=output_file, metavar="XML", help="write the model as MJCF to this file"
+    )
     obj.set_defaults(func=_build_object)
 
     scene = kinds.add_parser(
@@ -196,7 +237,9 @@ def register(commands: argparse._SubParsersAction) -> None:
     )
     _add_object_options(scene)
     scene.add_argument("--no-table", action="store_true", help="no table and floor")
-    scene.add_argument("-o", "--output", metavar="XML", help="write the model as MJCF to this file")
+    scene.add_argument(
+        "-o", "--output", type=output_file, metavar="XML", help="write the model as MJCF to this file"
+    )
     scene.set_defaults(func=_build_scene)
 
 
@@ -204,7 +247,7 @@ def _add_hand_options(parser: argparse.ArgumentParser, mass_flag: str) -> None:
     add_hand_size(parser)
     parser.add_argument(
         "--hand-breadth",
-        type=float,
+        type=positive_number,
         default=None,
         metavar="M",
         help="parametric hand: breadth across the metacarpals in metres (default 0.45 × length)",
@@ -212,7 +255,7 @@ def _add_hand_options(parser: argparse.ArgumentParser, mass_flag: str) -> None:
     parser.add_argument(
         mass_flag,
         dest="hand_mass",
-        type=float,
+        type=positive_number,
         default=None,
         metavar="KG",
         help="whole-hand mass in kg (default: 0.45 kg scaled with the cube of hand length)",

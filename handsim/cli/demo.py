@@ -17,7 +17,7 @@ from dataclasses import replace
 from pathlib import Path
 from typing import TYPE_CHECKING
 
-from handsim.cli._common import add_hand_size, non_negative_int, positive_int
+from handsim.cli._common import add_hand_size, non_negative_int, output_dir, positive_int
 
 if TYPE_CHECKING:
     from handsim.trials import Discovery
@@ -118,7 +118,9 @@ def register(commands: argparse._SubParsersAction) -> None:
         f"into OUT (default ./{DEFAULT_OUT}). Running it again reuses the records already there.",
     )
     add_hand_size(demo)
-    demo.add_argument("-o", "--output", metavar="OUT", default=DEFAULT_OUT, help="output folder")
+    demo.add_argument(
+        "-o", "--output", type=output_dir, metavar="OUT", default=DEFAULT_OUT, help="output folder"
+    )
     demo.add_argument(
         "--workers", type=positive_int, default=None, metavar="N", help="trials at once (default: every core)"
     )

@@ -2,19 +2,22 @@
 
 Exit codes: 0 replayed; 1 a handsim error (bad file, trajectory that does not fit the hand …);
 2 a usage error, including a file that is no kind of trial and options that do not apply to it;
-3 the simulation diverged (the summary covers the frames before the divergence, which is named).
+3 the simulation diverged (the summary covers the frames before the divergence, which is named);
+4 replayed but not valid: a plausibility flag says the numbers mean nothing (one line per flag on stderr).
 """
 
 from __future__ import annotations
 
 import argparse
 import json
+import math
 import sys
 
-from handsim.cli._common import write_text
+from handsim.cli._common import add_control_rate, output_file, positive_number, usage_error, write_text
 from handsim.headless import prefer_headless_gl
 
 EXIT_DIVERGED = 3
+EXIT_NOT_VALID = 4
 LABEL = 12  # width of the label column
 
 
@@ -62,6 +65,10 @@ def _print_summary(result) -> None:
         _line("", "the numbers below cover the frames before the divergence")
     else:
         _line("diverged", "no")
+    invalid = [f.code for f in result.flags if f.invalid]
+    _line("valid", f"no ({', '.join(invalid)}): the numbers below judge nothing" if invalid else "yes")
+    for flag in result.flags:
+        _line("flag", f"{flag.code}{'' if flag.invalid else ' (a note)'}: {flag.reason}")
     _line(
         "penetration",
         f"max {s['max_penetration_mm']:.2f} mm, p95 {s['p95_penetration_mm']:.2f} mm, "
@@ -168,9 +175,12 @@ def _stability_at(text: str) -> float | str:
     if text == "grasp":
         return text
     try:
-        return float(text)
+        value = float(text)
     except ValueError:
         raise argparse.ArgumentTypeError(f"expected 'grasp' or a time in seconds, got {text!r}") from None
+    if not (math.isfinite(value) and value >= 0.0):
+        raise argparse.ArgumentTypeError(f"expected 'grasp' or a time ≥ 0 s, got {text}")
+    return value
 
 
 def _replay(args: argparse.Namespace) -> int:
@@ -199,14 +209,15 @@ def _replay(args: argparse.Namespace) -> int:
             collision=args.collision,
         )
     except TrialError as exc:
-        print(f"handsim replay: error: {exc}", file=sys.stderr)
-        return 2
+        return usage_error("replay", str(exc))
     _print_trial(loaded)
     if args.stability == "grasp" and loaded.scene.setup.hold_window is None:
-        print(
-            "handsim replay: error: --stability grasp is for glove trials; give a time in s", file=sys.stderr
+        return usage_error("replay", "--stability grasp is for glove trials; give a time in s")
+    end = float(loaded.trajectory.times[-1])
+    if isinstance(args.stability, float) and args.stability > end:
+        return usage_error(
+            "replay", f"--stability {args.stability:g} s is after the recording's end ({end:.3f} s)"
         )
-        return 2
     result = replay(loaded.scene, loaded.trajectory, config)
     _print_summary(result)
     notes = [*loaded.notes, *loaded.scene.setup.notes, *result.notes]
@@ -241,7 +252,12 @@ def _replay(args: argparse.Namespace) -> int:
             f"{video.path} ({video.frames} frames at {video.fps:.1f} fps, {video.codec}, "
             f"camera {video.camera})",
         )
-    return EXIT_DIVERGED if result.diverged is not None else 0
+    if result.diverged is not None:
+        return EXIT_DIVERGED
+    invalid = [f for f in result.flags if f.invalid]
+    for flag in invalid:
+        print(f"handsim replay: not valid: {flag.reason}", file=sys.stderr)
+    return EXIT_NOT_VALID if invalid else 0
 
 
 def register(commands: argparse._SubParsersAction) -> None:
@@ -255,7 +271,8 @@ def register(commands: argparse._SubParsersAction) -> None:
         "gives their drift. A GraspDB14 glove recording drives the parametric default hand (or --skeleton), "
         "fixed palm down, holding the object (--object, else the one whose id the file name carries) placed "
         "where the grasp closes and released after it: the summary says whether it was held. "
-        f"Exit codes: 0 done, 1 handsim error, 2 usage error or not a trial, {EXIT_DIVERGED} diverged.",
+        f"Exit codes: 0 done, 1 handsim error, 2 usage error or not a trial, {EXIT_DIVERGED} diverged, "
+        f"{EXIT_NOT_VALID} not valid (a plausibility flag).",
     )
     replay.add_argument(
         "trajectory", metavar="TRAJECTORY", help="GraspDB14 .txt or Tzionas Model_Hand_*.MOTION"
@@ -269,26 +286,35 @@ def register(commands: argparse._SubParsersAction) -> None:
     )
     replay.add_argument("--units", choices=("m", "mm"), help="units of a mesh file given as --object")
     mass = replay.add_mutually_exclusive_group()
-    mass.add_argument("--density", type=float, metavar="KG_M3", help="object density instead of its own")
-    mass.add_argument("--mass", type=float, metavar="KG", help="object mass instead of its own")
+    mass.add_argument(
+        "--density", type=positive_number, metavar="KG_M3", help="object density instead of its own"
+    )
+    mass.add_argument("--mass", type=positive_number, metavar="KG", help="object mass instead of its own")
     replay.add_argument(
-        "--hand-length", type=float, default=None, metavar="M",
+        "--hand-length", type=positive_number, default=None, metavar="M",
         help="GraspDB14 without --skeleton: parametric hand length, wrist crease to middle fingertip (0.19)",
     )  # fmt: skip
     replay.add_argument(
         "--collision", choices=("capsules", "mesh"), default=None,
         help="hand collision shapes (default capsules; mesh: per-bone hulls of a skinned .SKEL hand)",
     )  # fmt: skip
-    replay.add_argument("--rate", type=float, default=100.0, metavar="HZ", help="control rate (default 100)")
+    add_control_rate(replay)
     replay.add_argument(
         "--stability", type=_stability_at, metavar="grasp|SECONDS",
         help="also run the grasp stability tests on the state at this time (grasp: the hold window's end)",
     )  # fmt: skip
-    replay.add_argument("--json", metavar="JSON", help="write the result and per-frame curves as JSON")
     replay.add_argument(
-        "--plot", metavar="PNG", help="plot penetration, contacts, errors, drift/slip over time"
+        "--json", type=output_file, metavar="JSON", help="write the result and per-frame curves as JSON"
     )
-    replay.add_argument("--video", metavar="MP4|GIF", help="render the replay (mp4 needs handsim[video])")
+    replay.add_argument(
+        "--plot",
+        type=output_file,
+        metavar="PNG",
+        help="plot penetration, contacts, errors, drift/slip over time",
+    )
+    replay.add_argument(
+        "--video", type=output_file, metavar="MP4|GIF", help="render the replay (mp4 needs handsim[video])"
+    )
     replay.add_argument(
         "--camera", default="track", choices=("track", "hand_cam", "overview"),
         help="video camera: track (follows the hand; default), hand_cam or overview (the scene's)",

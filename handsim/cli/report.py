@@ -1,29 +1,32 @@
 """``handsim report``: replay every trial of a dataset, record each, and render the report.
 
 Exit codes: 0 done (failed trials are recorded in the report, not an exit code); 1 a handsim error (a
-malformed records file, records of other parameters in OUT, Ray missing …); 2 a usage error (no dataset,
-no trial in it); 130 interrupted (the records written so far are kept: run the same command to resume).
+malformed records file, records of other parameters in OUT, Ray missing …) or a run in which every trial
+failed (the report is still written; stderr counts the errors by type); 2 a usage error (no dataset, no
+trial in it, a control rate below 20 Hz, OUT a file); 130 interrupted (the records written so far are kept:
+run the same command to resume).
 """
 
 from __future__ import annotations
 
 import argparse
-import signal
 import sys
 from pathlib import Path
 from typing import TYPE_CHECKING
 
-from handsim.cli._common import non_negative_int, positive_int
+from handsim.cli._common import (
+    EXIT_INTERRUPTED,
+    add_control_rate,
+    non_negative_int,
+    output_dir,
+    positive_int,
+    usage_error,
+)
 
 if TYPE_CHECKING:
+    from handsim.runner.execute import RunSummary
     from handsim.sim.replay import ReplayConfig
     from handsim.trials import Discovery
-
-EXIT_INTERRUPTED = 130
-
-
-def _interrupt(signum: int, frame: object) -> None:
-    raise KeyboardInterrupt(f"signal {signum}")
 
 
 def _render(out: Path) -> int:
@@ -74,7 +77,7 @@ def run_and_render(
         command: The command line for ``run.json``.
 
     Returns:
-        0 done, 2 no trial to run, 130 interrupted.
+        0 done, 1 every trial failed (the errors counted on stderr), 2 no trial to run, 130 interrupted.
 
     Raises:
         HandsimError: The dataset is missing, OUT holds records of other parameters, Ray is missing …
@@ -89,18 +92,16 @@ def run_and_render(
         print(f"unknown     {item.path}: {item.reason}")
     if not entries:
         what = f" matching {only!r}" if only else ""
-        print(f"handsim report: error: no trial{what} in {dataset}", file=sys.stderr)
-        return 2
+        return usage_error("report", f"no trial{what} in {dataset}")
     print(
         f"dataset     {discovery.root}: {len(discovery.entries)} trials, {len(discovery.companions)} "
         f"companion and {len(discovery.unknown)} unknown files; running {len(entries)}"
     )
     source = discovery if len(entries) == len(discovery.entries) else entries
-    previous = signal.signal(signal.SIGTERM, _interrupt)  # a killed job stops its workers too
     try:
         summary = run_dataset(
             source, out, workers=workers, backend=backend, address=address, config=config, frames=frames,
-            command=command,
+            command=command, progress=sys.stderr.isatty(),
         )  # fmt: skip
     except KeyboardInterrupt:
         print(
@@ -109,14 +110,26 @@ def run_and_render(
             file=sys.stderr,
         )
         return EXIT_INTERRUPTED
-    finally:
-        signal.signal(signal.SIGTERM, previous)
     for note in summary.notes:
         print(f"note        {note}")
     print(f"records     {out / 'records.jsonl'} ({len(summary.ran)} run now, {summary.skipped} resumed)")
     code = _render(out)
     print(summary.line())
+    if summary.all_failed:
+        return _all_failed(summary)
     return code
+
+
+def _all_failed(summary: RunSummary) -> int:
+    """Say that every trial failed, with the errors counted by type; exit code 1."""
+    counts = ", ".join(f"{n} {kind}" for kind, n, _ in summary.failures)
+    print(
+        f"handsim report: error: every trial failed ({summary.failed} of {summary.trials}): {counts}",
+        file=sys.stderr,
+    )
+    for kind, n, first in summary.failures:
+        print(f"  {kind} ×{n}, first: {first}", file=sys.stderr)
+    return 1
 
 
 def _report(args: argparse.Namespace) -> int:
@@ -125,15 +138,12 @@ def _report(args: argparse.Namespace) -> int:
     if args.render_only is not None:
         out = Path(args.render_only or args.output or "")
         if not str(out) or not (out / "records.jsonl").is_file():
-            print(f"handsim report: error: --render-only needs a run's folder with records.jsonl, got {out}",
-                  file=sys.stderr)  # fmt: skip
-            return 2
+            return usage_error("report", f"--render-only needs a run's folder with records.jsonl, got {out}")
         code = _render(out)
         print(_summary_line(out))
         return code
     if args.dataset is None or args.output is None:
-        print("handsim report: error: give DATASET and -o OUT (or --render-only OUT)", file=sys.stderr)
-        return 2
+        return usage_error("report", "give DATASET and -o OUT (or --render-only OUT)")
     config = ReplayConfig(control_rate=args.rate, stability_at=None if args.stability == "none" else "grasp")
     return run_and_render(
         args.dataset, args.output, workers=args.workers, backend=args.backend, address=args.address,
@@ -151,10 +161,12 @@ def register(commands: argparse._SubParsersAction) -> None:
         "ARCTIC raw_seqs), replay each in MuJoCo on all cores (or Ray), append one record per trial to "
         "OUT/records.jsonl, and render the report from the records. A killed run restarted with the same "
         "command resumes; a failing trial is recorded and the run goes on. Exit codes: 0 done, 1 handsim "
-        f"error, 2 usage error, {EXIT_INTERRUPTED} interrupted.",
+        f"error or every trial failed, 2 usage error, {EXIT_INTERRUPTED} interrupted.",
     )
     report.add_argument("dataset", nargs="?", metavar="DATASET", help="dataset folder or one recording")
-    report.add_argument("-o", "--output", metavar="OUT", help="output folder (records, frames, report)")
+    report.add_argument(
+        "-o", "--output", type=output_dir, metavar="OUT", help="output folder (records, frames, report)"
+    )
     report.add_argument(
         "--workers",
         type=positive_int,
@@ -178,7 +190,7 @@ def register(commands: argparse._SubParsersAction) -> None:
         "--stability", choices=("grasp", "none"), default="grasp",
         help="grasp stability tests at the end of the hold window of glove trials (default), or none",
     )  # fmt: skip
-    report.add_argument("--rate", type=float, default=100.0, metavar="HZ", help="control rate (default 100)")
+    add_control_rate(report)
     report.add_argument(
         "--render-only", nargs="?", const="", metavar="OUT",
         help="render the report of OUT (or -o OUT) from its records, without simulating",

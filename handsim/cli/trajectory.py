@@ -5,6 +5,8 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
+from handsim.cli._common import output_file
+
 
 def load_trajectory(path: str, skeleton_path: str | None, calibration_path: str | None):
     """Read a recording (with its skeleton and calibration when given) and attach annotated phases."""
@@ -84,7 +86,9 @@ def register(commands: argparse._SubParsersAction) -> None:
     inspect.add_argument("trajectory", metavar="TRAJECTORY")
     inspect.add_argument("--skeleton", metavar="SKELETON_FILE", help="hand skeleton: columns and limits")
     inspect.add_argument("--calibration", metavar="JSON", help="glove calibration for a raw-count file")
-    inspect.add_argument("--plot", metavar="PNG", help="write a plot of every DoF over time")
+    inspect.add_argument(
+        "--plot", type=output_file, metavar="PNG", help="write a plot of every DoF over time"
+    )
     inspect.set_defaults(func=_inspect)
 
     calibrate = commands.add_parser(
@@ -95,5 +99,7 @@ def register(commands: argparse._SubParsersAction) -> None:
         "flexion) and write them as a calibration JSON file (see docs/cyberglove.md).",
     )
     calibrate.add_argument("recording", metavar="CALIB_RECORDING")
-    calibrate.add_argument("-o", "--output", required=True, metavar="JSON", help="calibration file to write")
+    calibrate.add_argument(
+        "-o", "--output", type=output_file, required=True, metavar="JSON", help="calibration file to write"
+    )
     calibrate.set_defaults(func=_calibrate)

@@ -7,7 +7,6 @@ from __future__ import annotations
 
 import copy
 import dataclasses
-import math
 from typing import Any
 
 import gymnasium as gym
@@ -102,8 +101,11 @@ class HandEnv(gym.Env[np.ndarray, np.ndarray]):
         self._obs[self._pen_index] = penetration
         return penetration
 
-    def _action(self, action: npt.ArrayLike) -> tuple[np.ndarray, float]:
-        """The action as float64 and its sum of squares.
+    def _action(self, action: npt.ArrayLike) -> tuple[np.ndarray, float, int]:
+        """The action as float64 clipped to the action space, its sum of squares, and how many clipped.
+
+        A value outside the action space (a policy's 1e30) is clipped to its bound, never passed on: the
+        step's ``info["action_clipped"]`` says how many elements were. The caller's array is not changed.
 
         Raises:
             ValueError: Wrong shape, or a value that is NaN or infinite (MuJoCo would silently replace a
@@ -115,10 +117,14 @@ class HandEnv(gym.Env[np.ndarray, np.ndarray]):
                 f"{type(self).__name__}: action must have shape {self.action_space.shape} "
                 f"({self._action_doc}), got shape {a.shape}"
             )
-        squares = float(np.dot(a, a))
-        if not math.isfinite(squares):
+        if not np.isfinite(a).all():
             raise ValueError(f"{type(self).__name__}: action has NaN or infinite values: {a.tolist()}")
-        return a, squares
+        low, high = self.action_space.low, self.action_space.high
+        outside = (a < low) | (a > high)
+        clipped = int(np.count_nonzero(outside))
+        if clipped:
+            a = np.clip(a, low, high)
+        return a, float(np.dot(a, a)), clipped
 
     _action_doc = ""
 

@@ -277,7 +277,6 @@ class GraspEnv(HandEnv):
         lo, hi = layout.ctrl_range[:, 0], layout.ctrl_range[:, 1]
         self._ctrl_mid, self._ctrl_half = (lo + hi) / 2, (hi - lo) / 2
         self._ctrl = np.zeros(nu)
-        self._a = np.zeros(nu if root_control == "scripted" else nu + 3)
         self._mocap = layout.mocap
         self._obj = layout.objects[0]
         target_body = int(np.flatnonzero(self.model.body_mocapid == self._mocap)[0])
@@ -386,11 +385,9 @@ class GraspEnv(HandEnv):
             ValueError: ``action`` has the wrong shape or a non-finite value.
             ResetNeeded: The episode is over (or was never started).
         """
-        a, _ = self._action(action)
+        a, _, clipped = self._action(action)  # clipped to the action space
         if not self._started:
             raise gym.error.ResetNeeded("the episode is over or was never started: call reset()")
-        # clipped into a buffer, not in place: ``a`` may be the caller's array
-        a = np.minimum(np.maximum(a, -1.0, out=self._a), 1.0, out=self._a)
         nu = self._nu
         np.multiply(a[:nu], self._ctrl_half, out=self._ctrl)
         np.add(self._ctrl, self._ctrl_mid, out=self._data_ctrl)
@@ -438,6 +435,7 @@ class GraspEnv(HandEnv):
             "penetration": penetration,
             "fell": fell,
             "diverged": diverged,
+            "action_clipped": clipped,
         }
         if events:
             info["warnings"] = tuple(e.describe() for e in events)

@@ -298,7 +298,7 @@ class ReplayEnv(HandEnv):
             ValueError: ``action`` has the wrong shape or a non-finite value.
             ResetNeeded: The episode is over (or was never started).
         """
-        a, squares = self._action(action)
+        a, squares, clipped = self._action(action)
         k = self._driver.frame
         if k >= self._last or not self._started:
             raise gym.error.ResetNeeded(
@@ -350,6 +350,7 @@ class ReplayEnv(HandEnv):
             "object_drift": drift,
             "penetration": penetration,
             "diverged": diverged,
+            "action_clipped": clipped,
         }
         if events:
             info["warnings"] = tuple(e.describe() for e in events)

@@ -2,7 +2,9 @@
 
 Per-trial values come from a record's ``summary`` (mm, degrees, seconds as its key names say),
 ``trajectory_quality`` and ``meta``; missing, null or non-finite values are ``None`` and are left out of
-every statistic (a statistic over no values is ``None``).
+every statistic (a statistic over no values is ``None``). Trials flagged not valid (a plausibility flag,
+``summary["valid"]`` false) are counted as their own outcome, ``flagged``, and left out of every rate,
+statistic and distribution: their numbers judge nothing.
 """
 
 from __future__ import annotations
@@ -14,6 +16,7 @@ from collections.abc import Callable, Iterable, Sequence
 import numpy as np
 
 from handsim.report.records import STATUSES, natural_key
+from handsim.runner.records import record_valid
 
 GROUP_KEYS: tuple[str, ...] = ("object", "grasp", "actor")
 KINDS: tuple[str, ...] = ("graspdb", "tzionas", "arctic")
@@ -24,14 +27,15 @@ DISTRIBUTIONS: dict[str, str] = {
     "mean_tracking_error_deg": "Mean tracking error per trial (deg)",
 }
 RANKING = (
-    "Errors first, then diverged runs, then glove trials whose object was not held, then glove trials whose "
-    "hold could not be judged, then every other trial; within each of these tiers by max penetration "
-    "(deepest first), then by max drift (largest first), then by trial id."
+    "Errors first, then diverged runs, then trials flagged not valid, then glove trials whose object was "
+    "not held, then glove trials whose hold could not be judged, then every other trial; within each of "
+    "these tiers by max penetration (deepest first), then by max drift (largest first), then by trial id."
 )
-_TIERS = ("error", "diverged", "not held", "not judged", "ok")
-OUTCOMES: tuple[str, ...] = ("held", "not held", "not judged", "ran", "diverged", "error")
+_TIERS = ("error", "diverged", "flagged", "not held", "not judged", "ok")
+OUTCOMES: tuple[str, ...] = ("held", "not held", "not judged", "ran", "flagged", "diverged", "error")
 """How a trial ended: its object held or not (glove trials), its hold not judged (with the reason: too short
-a window after release, an infeasible placement …), ran without a hold test, diverged, failed."""
+a window after release, an infeasible placement …), ran without a hold test, ran but flagged not valid (a
+plausibility flag: its numbers judge nothing), diverged, failed."""
 ROBUST = 0.8
 """A held trial counts as robustly held when at least this fraction of its robustness ensemble held."""
 
@@ -105,10 +109,19 @@ def outcome(record: dict) -> str:
     """The trial's entry of :data:`OUTCOMES`."""
     if record["status"] != "ok":
         return record["status"]
+    if not record_valid(record):
+        return "flagged"
     value = held(record)
     if value is None:
         return "not judged" if has_hold(record) else "ran"
     return "held" if value else "not held"
+
+
+def invalid_reasons(record: dict) -> list[str]:
+    """The reasons of the flags that make the trial not valid (empty for a valid one)."""
+    return [
+        str(f.get("reason")) for f in record.get("flags") or [] if isinstance(f, dict) and f.get("invalid")
+    ]
 
 
 def outcome_counts(records: Sequence[dict], key: Callable[[dict], str | None]) -> dict[str, dict[str, int]]:
@@ -137,6 +150,8 @@ def trial_row(record: dict) -> dict:
         "held": held(record),
         "hold_reason": (record.get("hold") or {}).get("reason"),
         "hold_robustness": summary_value(record, "hold_robustness"),
+        "valid": record_valid(record),
+        "flags": [str(f.get("code")) for f in record.get("flags") or [] if isinstance(f, dict)],
         "time_held_s": summary_value(record, "time_held_s"),
         "max_slip_mm": summary_value(record, "max_slip_mm"),
         "max_penetration_mm": summary_value(record, "max_penetration_mm"),
@@ -157,32 +172,35 @@ def group_stats(records: Sequence[dict]) -> dict:
     """Statistics over a group of trials.
 
     Returns:
-        ``trials`` and counts per status; ``held`` of ``hold_judged`` (glove trials whose hold was judged:
-        those not judged are counted in ``not_judged`` and left out of the rates) and ``hold_rate``;
-        ``robust_held`` (held, with at least :data:`ROBUST` of the robustness ensemble held) and
-        ``robustness_mean`` (over judged trials with an ensemble); ``slip_median_mm``/``slip_max_mm`` over
-        each trial's max slip;
+        ``trials`` and counts per status, and ``flagged`` (trials flagged not valid, of any status: left out
+        of everything below but the totals); ``held`` of ``hold_judged`` (valid glove trials whose hold was
+        judged: those not judged are counted in ``not_judged`` and left out of the rates) and
+        ``hold_rate``; ``robust_held`` (held, with at least :data:`ROBUST` of the robustness ensemble held)
+        and ``robustness_mean`` (over judged trials with an ensemble); ``slip_median_mm``/``slip_max_mm``
+        over each trial's max slip;
         ``penetration_p50_mm``/``_p95_mm``/``_max_mm`` over each trial's max penetration;
         ``drift_mean_mm`` (mean of each trial's mean drift) and ``drift_max_mm``; totals of
-        ``limit_violations`` and ``gaps_filled`` (None if no trial reports them).
+        ``limit_violations`` and ``gaps_filled`` over every trial (None if no trial reports them).
     """
     status = Counter(r["status"] for r in records)
-    holds = [h for h in map(held, records) if h is not None]
-    judged = [r for r in records if hold_judged(r)]
+    valid = [r for r in records if record_valid(r)]
+    holds = [h for h in map(held, valid) if h is not None]
+    judged = [r for r in valid if hold_judged(r)]
     robustness = _present(summary_value(r, "hold_robustness") for r in judged)
-    slip = _present(summary_value(r, "max_slip_mm") for r in records)
-    penetration = _present(summary_value(r, "max_penetration_mm") for r in records)
-    drift_mean = _present(summary_value(r, "mean_drift_mm") for r in records)
-    drift_max = _present(summary_value(r, "max_drift_mm") for r in records)
+    slip = _present(summary_value(r, "max_slip_mm") for r in valid)
+    penetration = _present(summary_value(r, "max_penetration_mm") for r in valid)
+    drift_mean = _present(summary_value(r, "mean_drift_mm") for r in valid)
+    drift_max = _present(summary_value(r, "max_drift_mm") for r in valid)
     return {
         "trials": len(records),
         "ok": status["ok"],
         "diverged": status["diverged"],
         "errors": status["error"],
+        "flagged": len(records) - len(valid),
         "held": sum(holds),
         "hold_judged": len(holds),
         "hold_rate": sum(holds) / len(holds) if holds else None,
-        "not_judged": sum(1 for r in records if has_hold(r) and not hold_judged(r)),
+        "not_judged": sum(1 for r in valid if has_hold(r) and not hold_judged(r)),
         "robust_held": sum(
             1 for r in judged if held(r) and (summary_value(r, "hold_robustness") or 0.0) >= ROBUST
         ),
@@ -239,10 +257,12 @@ def _tier(record: dict) -> int:
         return 0
     if record["status"] == "diverged":
         return 1
+    if not record_valid(record):
+        return 2
     value = held(record)
     if value is False:
-        return 2
-    return 3 if value is None and has_hold(record) else 4
+        return 3
+    return 4 if value is None and has_hold(record) else 5
 
 
 def _reason(record: dict) -> str:
@@ -255,11 +275,13 @@ def _reason(record: dict) -> str:
         diverged = record.get("diverged") or {}
         where = f" at step {diverged['step']}" if diverged.get("step") is not None else ""
         return f"MuJoCo {diverged.get('name') or 'divergence'}{where}"
-    parts = []
     if tier == 2:
+        return "not valid: " + ("; ".join(invalid_reasons(record)) or "flagged")
+    parts = []
+    if tier == 3:
         reason = (record.get("hold") or {}).get("reason")
         parts.append(f"object lost: {reason}" if reason else "object not held")
-    if tier == 3:
+    if tier == 4:
         parts.append(str((record.get("hold") or {}).get("reason") or "hold not judged"))
     penetration = summary_value(record, "max_penetration_mm")
     if penetration is not None:
@@ -291,8 +313,12 @@ def rank(records: Sequence[dict]) -> list[dict]:
 
 
 def distributions(records: Sequence[dict]) -> dict[str, list[float]]:
-    """Per-trial values of each :data:`DISTRIBUTIONS` metric (trials without the value left out)."""
-    return {key: _present(summary_value(r, key) for r in records) for key in DISTRIBUTIONS}
+    """Per-trial values of each :data:`DISTRIBUTIONS` metric.
+
+    Trials without the value, and trials flagged not valid, are left out.
+    """
+    valid = [r for r in records if record_valid(r)]
+    return {key: _present(summary_value(r, key) for r in valid) for key in DISTRIBUTIONS}
 
 
 def distinct(values: Iterable[object]) -> list[dict]:

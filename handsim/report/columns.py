@@ -35,6 +35,11 @@ GROUP_COLUMNS: tuple[Column, ...] = (
     Column("diverged", lambda r: str(r["diverged"]), help="runs stopped by a MuJoCo divergence"),
     Column("errors", lambda r: str(r["errors"]), help="trials that failed to load or run"),
     Column(
+        "flagged",
+        lambda r: str(r["flagged"]),
+        help="trials flagged not valid (a plausibility flag): left out of every rate and statistic",
+    ),
+    Column(
         "hold rate",
         lambda r: fmt.rate(r["held"], r["hold_judged"]),
         help="glove trials whose object stayed in hand through the hold window, of those judged",
@@ -90,7 +95,8 @@ TRIAL_COLUMNS: tuple[Column, ...] = (
         "outcome",
         lambda r: r["outcome"],
         numeric=False,
-        help="held, not held, not judged (why: in the trial's section), ran (no hold test), diverged, error",
+        help="held, not held, not judged (why: in the trial's section), ran (no hold test), flagged (not "
+        "valid: out of the rates), diverged, error",
     ),
     Column(
         "robustness",

@@ -51,6 +51,7 @@ def _overview(run: RunRecords, summary: dict) -> str:
         ("ok", str(o["by_status"]["ok"]), "ok"),
         ("diverged", str(o["by_status"]["diverged"]), "diverged"),
         ("errors", str(o["by_status"]["error"]), "error"),
+        ("flagged not valid", str(total["flagged"]), ""),
         ("hold rate", fmt.rate(total["held"], total["hold_judged"]), ""),
         ("max penetration mm", fmt.num(total["penetration_max_mm"]), ""),
     ]
@@ -92,7 +93,8 @@ def _groups(run: RunRecords, summary: dict) -> str:
         '<section class="block" id="groups"><h2>Groups</h2>',
         '<p class="note">Hold rate: glove trials whose object stayed in hand through the hold window, of '
         "those judged. Slip and penetration statistics are over each trial's maximum; drift mean is the mean "
-        "of each trial's mean drift. Limit violations and gaps filled are totals over the group's "
+        "of each trial's mean drift. Trials flagged not valid (a plausibility flag) are counted but left out "
+        "of the rate and the statistics. Limit violations and gaps filled are totals over the group's "
         "recordings. Hover a header for its meaning.</p>",
     ]
     for key in GROUP_KEYS:
@@ -118,8 +120,8 @@ def _distributions(run: RunRecords) -> str:
     ]
     return (
         '<section class="block" id="distributions"><h2>Distributions</h2>'
-        '<p class="note">One value per trial; trials without the metric (e.g. drift for glove trials) are '
-        "left out. The dashed line marks the median.</p>"
+        '<p class="note">One value per trial; trials without the metric (e.g. drift for glove trials) and '
+        "trials flagged not valid are left out. The dashed line marks the median.</p>"
         '<div class="grid2">' + "".join(f"<div>{c}</div>" for c in charts) + "</div></section>"
     )
 

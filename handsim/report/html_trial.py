@@ -262,6 +262,18 @@ def _stability(record: dict) -> str:
     )
 
 
+def _flags(record: dict) -> str:
+    flags = [f for f in record.get("flags") or [] if isinstance(f, dict)]
+    if not flags:
+        return ""
+    items = "".join(
+        f"<li><strong>{esc(fmt.text(f.get('code')))}</strong> "
+        f"({'not valid' if f.get('invalid') else 'a note'}): {esc(fmt.text(f.get('reason')))}</li>"
+        for f in flags
+    )
+    return f'<h4>Plausibility flags</h4><ul class="plain">{items}</ul>'
+
+
 def _error(record: dict) -> str:
     error = record.get("error")
     if not error:
@@ -314,7 +326,7 @@ def trial_section(record: dict, row: dict, images: Sequence[FrameImage], trials:
     tier_class = {"error": "error", "diverged": "diverged"}.get(record["status"], "")
     reason = (
         f'<div class="reason {tier_class}">{esc(row["reason"])}</div>'
-        if row["outcome"] in ("not held", "not judged", "diverged")
+        if row["outcome"] in ("not held", "not judged", "flagged", "diverged")
         else ""
     )
     diverged = record.get("diverged") or {}
@@ -331,6 +343,7 @@ def trial_section(record: dict, row: dict, images: Sequence[FrameImage], trials:
         f'<div class="meta">{esc(" · ".join(facts))}</div>',
         reason,
         _error(record),
+        _flags(record),
         numbers(_fields(summary, SUMMARY_FIELDS)) if summary else "",
         ("<h4>Recording</h4>" + numbers(_fields(quality, _QUALITY_FIELDS))) if quality else "",
         _curves(record),

@@ -58,7 +58,8 @@ def render_markdown(summary: dict) -> str:
         f"# handsim physics-plausibility report — {cell(fmt.text(summary['dataset']))}",
         "",
         f"{o['trials']} trials: {o['by_status']['ok']} ok, {o['by_status']['diverged']} diverged, "
-        f"{o['by_status']['error']} errors. Metric spec "
+        f"{o['by_status']['error']} errors; {summary['all']['flagged']} flagged not valid (left out of "
+        "every rate and statistic). Metric spec "
         f"{', '.join(summary['metric_spec_versions']) or fmt.MISSING}. Plots, per-trial curves and frames: "
         f"[{HTML_NAME}]({HTML_NAME}).",
         "",

@@ -8,6 +8,7 @@ STATUS_COLOURS: dict[str, str] = {
     "not held": "#e0a030",
     "not judged": "#8c96a3",
     "ran": "#6b8fc7",
+    "flagged": "#7a7f87",
     "diverged": "#b45fc4",
     "error": "#c8423b",
 }

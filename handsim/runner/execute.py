@@ -35,10 +35,17 @@ from pathlib import Path
 from types import ModuleType
 
 from handsim.errors import HandsimError
-from handsim.runner.records import RecordWriter, load_records, repair_records, write_run_info
+from handsim.runner.records import (
+    RecordWriter,
+    load_records,
+    record_valid,
+    repair_records,
+    write_run_info,
+)
 from handsim.runner.worker import (
     TrialOutcome,
     base_record,
+    prepare_pool_worker,
     prepare_worker_process,
     run_parameters,
     run_trial,
@@ -53,6 +60,7 @@ __all__ = [
     "RunSummary",
     "RunnerError",
     "default_workers",
+    "failure_counts",
     "records_line",
     "run_dataset",
     "run_trial",
@@ -78,10 +86,13 @@ class RunSummary:
         ok: Selected trials whose record says ``ok``.
         diverged: … ``diverged``.
         failed: … ``error``.
-        held: Glove trials whose object was held through the hold window.
-        hold_trials: Glove trials with a hold outcome.
+        flagged: Of the ``ok`` and ``diverged`` ones, those flagged not valid (``summary["valid"]`` false).
+        held: Valid glove trials whose object was held through the hold window.
+        hold_trials: Valid glove trials with a hold outcome.
         notes: What was repaired or skipped (a truncated records line …).
         wall_s: Wall-clock time of this call, s.
+        failures: The failed trials' errors (:func:`failure_counts`): (error type, trials, first message),
+            most frequent first.
     """
 
     out: str
@@ -91,19 +102,50 @@ class RunSummary:
     ok: int
     diverged: int
     failed: int
+    flagged: int
     held: int
     hold_trials: int
     notes: tuple[str, ...]
     wall_s: float
+    failures: tuple[tuple[str, int, str], ...] = ()
+
+    @property
+    def all_failed(self) -> bool:
+        """Every selected trial (one at least) has an ``error`` record: the run produced no result."""
+        return self.trials > 0 and self.failed == self.trials
 
     def line(self) -> str:
         """One line for people: trial counts by status and the hold rate."""
-        counts = {k: getattr(self, k) for k in ("ok", "diverged", "failed", "held", "hold_trials")}
+        counts = {k: getattr(self, k) for k in ("ok", "diverged", "failed", "flagged", "held", "hold_trials")}
         return _line(self.trials, counts)
+
+
+def failure_counts(records: Sequence[dict]) -> tuple[tuple[str, int, str], ...]:
+    """The errors of the failed trials among ``records``, counted by exception type.
+
+    Args:
+        records: Records (any status).
+
+    Returns:
+        One (error type, trials, first line of the first such trial's message) per type, most frequent
+        first (ties by type name).
+    """
+    found: dict[str, list] = {}
+    for record in records:
+        if record["status"] != "error":
+            continue
+        error = record.get("error") or {}
+        lines = str(error.get("message") or "").strip().splitlines()
+        entry = found.setdefault(str(error.get("type") or "unknown error"), [0, lines[0] if lines else ""])
+        entry[0] += 1
+    ordered = sorted(found.items(), key=lambda item: (-item[1][0], item[0]))
+    return tuple((kind, n, first) for kind, (n, first) in ordered)
 
 
 def _line(trials: int, counts: dict) -> str:
     text = f"{trials} trials: {counts['ok']} ok, {counts['diverged']} diverged, {counts['failed']} failed"
+    if counts["flagged"]:
+        text += f" ({counts['flagged']} flagged not valid, left out of the rates)"
     if counts["hold_trials"]:
         rate = 100.0 * counts["held"] / counts["hold_trials"]
         text += f"; held {counts['held']} of {counts['hold_trials']} glove trials ({rate:.0f} %)"
@@ -199,34 +241,52 @@ class _TrackingContext:
         return process
 
 
-def _stop_pool(pool: cf.ProcessPoolExecutor) -> None:
-    """End a pool now: cancel queued trials, terminate its workers (running trials are lost), reap them."""
-    thread = getattr(pool, "_executor_manager_thread", None)
-    pool.shutdown(wait=False, cancel_futures=True)
-    context = pool._mp_context
-    processes = context.processes if isinstance(context, _TrackingContext) else []
-    for process in processes:
-        if process.is_alive():
-            process.terminate()
-    if thread is not None:
-        thread.join(timeout=10)  # it may start no process after this
-    for process in processes:
-        process.join(timeout=5)
-        if process.is_alive():  # SIGTERM not acted on in time (e.g. inside native code): SIGKILL
-            process.kill()
+class _Pool:
+    """A process pool of spawned workers and the context that started (and remembers) its processes.
+
+    Each worker ends with this process, also under ``kill -9``
+    (:func:`~handsim.runner.worker.prepare_pool_worker`).
+    """
+
+    def __init__(self, workers: int) -> None:
+        self.context = _TrackingContext()
+        self.executor = cf.ProcessPoolExecutor(
+            workers, mp_context=self.context, initializer=prepare_pool_worker
+        )
+
+    def submit(self, fn: Callable[..., object], /, *args: object) -> cf.Future:
+        """Schedule ``fn(*args)`` on a worker."""
+        return self.executor.submit(fn, *args)
+
+    def stop(self) -> None:
+        """End the pool now: terminate its workers (running trials are lost), reap them, then shut it down.
+
+        The workers go first, so that the executor's own thread finds them dead and ends: shutting down
+        then waits for that thread without a private attribute and without the risk of waiting forever on
+        a worker busy in native code.
+        """
+        processes = list(self.context.processes)
+        for process in processes:
+            if process.is_alive():
+                process.terminate()
+        for process in processes:
             process.join(timeout=5)
+            if process.is_alive():  # SIGTERM not acted on in time: SIGKILL
+                process.kill()
+                process.join(timeout=5)
+        self.executor.shutdown(wait=True, cancel_futures=True)
 
 
 POOL_START_TIMEOUT_S = 300.0
 """Longest wait for a new worker process to start and import handsim, s."""
 
 
-def _new_pool(workers: int) -> cf.ProcessPoolExecutor:
+def _new_pool(workers: int) -> _Pool:
     """A started pool of spawned workers; RunnerError when a worker cannot even start.
 
     A pool whose workers die at start would otherwise look like every trial crashing its worker.
     """
-    pool = cf.ProcessPoolExecutor(workers, mp_context=_TrackingContext(), initializer=prepare_worker_process)
+    pool = _Pool(workers)
     try:
         # one task per worker at once: the pool starts a worker per submit while none is idle, so all of
         # them start and import handsim in parallel before the first trial
@@ -234,7 +294,7 @@ def _new_pool(workers: int) -> cf.ProcessPoolExecutor:
         for future in started:
             future.result(timeout=POOL_START_TIMEOUT_S)
     except Exception as exc:
-        _stop_pool(pool)
+        pool.stop()
         raise RunnerError(
             f"the local pool's worker processes do not start ({type(exc).__name__}: {exc}); the spawn start "
             "method re-imports the main script, so run_dataset must be called from an importable script "
@@ -283,10 +343,10 @@ def _pool(
                         else:
                             suspects.append(entry)
                     inflight.clear()
-                    _stop_pool(pool)
+                    pool.stop()
                     pool = _new_pool(workers)
         finally:
-            _stop_pool(pool)
+            pool.stop()
 
 
 def _ray(
@@ -339,11 +399,13 @@ def _gl_env() -> dict[str, str]:
 
 def _counts(records: Sequence[dict], ids: set[str]) -> dict:
     mine = [r for r in records if r["id"] in ids]
-    held = [r["summary"]["held"] for r in mine if r.get("summary") and "held" in r["summary"]]
+    valid = [r for r in mine if record_valid(r)]
+    held = [r["summary"]["held"] for r in valid if r.get("summary") and "held" in r["summary"]]
     return {
         "ok": sum(r["status"] == "ok" for r in mine),
         "diverged": sum(r["status"] == "diverged" for r in mine),
         "failed": sum(r["status"] == "error" for r in mine),
+        "flagged": len(mine) - len(valid),
         "held": sum(bool(h) for h in held),
         "hold_trials": len(held),
     }
@@ -382,8 +444,8 @@ def run_dataset(
         What the run did, with counts over every selected trial's record (resumed ones included).
 
     Raises:
-        RunnerError: An unknown backend, ``workers`` or ``frames`` out of range, Ray missing, or ``OUT``
-            holding records made with other parameters.
+        RunnerError: An unknown backend, ``workers`` or ``frames`` out of range, Ray missing, ``OUT`` a
+            file, or ``OUT`` holding records made with other parameters.
         RecordsError: ``OUT/records.jsonl`` has a malformed line other than a truncated last one.
         KeyboardInterrupt: Ctrl-C; the records written so far are complete lines (run again to resume).
     """
@@ -404,6 +466,8 @@ def run_dataset(
     config = config or ReplayConfig(stability_at="grasp")
     entries, overview = _entries(source)
     out = Path(out)
+    if out.exists() and not out.is_dir():
+        raise RunnerError(f"{out} exists and is not a folder; expected an output folder")
     out.mkdir(parents=True, exist_ok=True)
     notes = list(repair_records(out))
     parameters = run_parameters(config, frames)
@@ -447,8 +511,11 @@ def run_dataset(
             bar.update(1)
             if on_record is not None:
                 on_record(outcome.record)
-    counts = _counts(load_records(out).records, {e.id for e in entries})
+    ids = {e.id for e in entries}
+    mine = [r for r in load_records(out).records if r["id"] in ids]
+    counts = _counts(mine, ids)
     return RunSummary(
+        failures=failure_counts(mine),
         out=str(out),
         trials=len(entries),
         skipped=len(entries) - len(todo),

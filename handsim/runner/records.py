@@ -11,9 +11,12 @@ shortest round-trip form, NaN and infinities as ``null``, UTF-8 without ASCII es
 
 from __future__ import annotations
 
+import contextlib
 import json
 import math
 import os
+import signal
+from collections.abc import Iterator
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -26,6 +29,15 @@ SCHEMA = 1
 STATUSES = ("ok", "diverged", "error")
 """A record's ``status`` values."""
 """Version of the record schema (``docs/records.md``); changes when a key changes meaning or goes away."""
+
+
+def record_valid(record: dict) -> bool:
+    """False when the record's replay was flagged not valid (``summary["valid"]`` false), else True.
+
+    Records without the key (failed trials, records written before the flags existed) count as valid; a
+    not-valid trial is its own outcome in counts and reports and is left out of every rate and statistic.
+    """
+    return (record.get("summary") or {}).get("valid") is not False
 
 
 class RecordsError(HandsimError):
@@ -176,6 +188,23 @@ def repair_records(out: str | Path) -> tuple[str, ...]:
     return read.notes
 
 
+@contextlib.contextmanager
+def _signals_deferred() -> Iterator[None]:
+    """Block SIGINT and SIGTERM in this thread inside the block; a signal that came meanwhile acts after.
+
+    Where signal masks do not exist (Windows) the block runs unprotected; a record cut short there is a
+    truncated last line, which reading ignores and resuming removes.
+    """
+    if not hasattr(signal, "pthread_sigmask"):
+        yield
+        return
+    previous = signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGINT, signal.SIGTERM})
+    try:
+        yield
+    finally:
+        signal.pthread_sigmask(signal.SIG_SETMASK, previous)
+
+
 class RecordWriter:
     """Appends records to ``OUT/records.jsonl``, each line flushed and fsynced before the next."""
 
@@ -186,10 +215,16 @@ class RecordWriter:
         self._file = open(self.path, "ab")
 
     def append(self, record: dict) -> None:
-        """Write one record as a complete line and make it durable."""
-        self._file.write(encode_record(record))
-        self._file.flush()
-        os.fsync(self._file.fileno())
+        """Write one record as a complete line and make it durable.
+
+        Ctrl-C and SIGTERM are held back while the line is written (POSIX): they act after it, so an
+        interrupted run leaves no partial record.
+        """
+        line = encode_record(record)
+        with _signals_deferred():
+            self._file.write(line)
+            self._file.flush()
+            os.fsync(self._file.fileno())
 
     def close(self) -> None:
         """Close the file."""
@@ -203,15 +238,26 @@ class RecordWriter:
 
 
 def write_atomic(path: str | Path, data: bytes) -> Path:
-    """Write a file so that readers see the old or the new content, never a part (temp file + rename)."""
+    """Write a file so that readers see the old or the new content, never a part (temp file + rename).
+
+    Raises:
+        OSError: The file cannot be written; its ``filename`` is ``path`` (not the temporary file's).
+    """
     target = Path(path)
-    target.parent.mkdir(parents=True, exist_ok=True)
     tmp = target.with_name(f".{target.name}.tmp{os.getpid()}")
-    with open(tmp, "wb") as f:
-        f.write(data)
-        f.flush()
-        os.fsync(f.fileno())
-    os.replace(tmp, target)
+    try:
+        target.parent.mkdir(parents=True, exist_ok=True)
+        with open(tmp, "wb") as f:
+            f.write(data)
+            f.flush()
+            os.fsync(f.fileno())
+        os.replace(tmp, target)
+    except BaseException as exc:  # a full disk, Ctrl-C: no partial file left behind
+        with contextlib.suppress(OSError):
+            tmp.unlink(missing_ok=True)
+        if isinstance(exc, OSError) and exc.errno is not None:
+            raise OSError(exc.errno, exc.strerror, str(target)) from exc
+        raise
     return target
 
 

@@ -16,6 +16,7 @@ import numpy as np
 
 from handsim.fingers import finger_groups
 from handsim.sim.compiled import SimScene
+from handsim.sim.plausibility import limit_violations
 from handsim.sim.replay import ReplayResult
 from handsim.trajectory import Trajectory
 from handsim.trials import TrialEntry
@@ -125,22 +126,10 @@ def trajectory_quality(trajectory: Trajectory, scene: SimScene) -> dict:
         (samples filled in by gap filling), ``filled_fraction`` (of all samples), ``invalid_samples``
         (samples still invalid, not filled).
     """
-    layout = scene.layout
-    column = {name: c for c, name in enumerate(trajectory.dof_names)}
-    targets = np.asarray(trajectory.targets, dtype=float)
+    violations = limit_violations(trajectory, scene.layout).values()
+    count = sum(n for n, _ in violations)
+    worst = max((e for _, e in violations), default=0.0)
     valid = np.asarray(trajectory.valid, dtype=bool)
-    count, worst = 0, 0.0
-    for name, (low, high) in zip(layout.dof_names, layout.ctrl_range, strict=True):
-        c = column.get(name)
-        if c is None:
-            continue
-        x = targets[:, c]
-        checked = valid[:, c] & np.isfinite(x)
-        excess = np.where(checked, np.maximum(low - x, x - high), 0.0)
-        outside = excess > 0.0
-        count += int(outside.sum())
-        if outside.any():
-            worst = max(worst, float(excess.max()))
     filled = 0 if trajectory.filled is None else int(np.asarray(trajectory.filled).sum())
     times = np.asarray(trajectory.times, dtype=float)
     return {

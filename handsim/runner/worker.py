@@ -14,6 +14,8 @@ from __future__ import annotations
 
 import dataclasses
 import hashlib
+import multiprocessing
+import multiprocessing.connection
 import os
 import signal
 import sys
@@ -22,6 +24,7 @@ import traceback
 from dataclasses import dataclass, field
 from pathlib import Path
 
+from handsim import lifeline
 from handsim.runner.records import SCHEMA, json_ready, write_atomic
 from handsim.sim.replay import ReplayConfig
 from handsim.trials import TrialEntry
@@ -61,6 +64,21 @@ def prepare_worker_process() -> None:
         signal.signal(signal.SIGINT, signal.SIG_IGN)
 
 
+def prepare_pool_worker() -> None:
+    """Initializer of a local process-pool worker: :func:`prepare_worker_process`, and no orphan.
+
+    The worker ends when the process that started it dies, even under ``kill -9`` (which leaves the pool
+    no chance to stop it): see :mod:`handsim.lifeline` (the kernel's parent-death signal on Linux, a thread
+    waiting on the parent's sentinel everywhere). Not for Ray workers, whose lifetime Ray manages.
+    """
+    prepare_worker_process()
+    parent = multiprocessing.parent_process()
+    if parent is None:  # not a multiprocessing child: nothing to watch
+        return
+    lifeline.die_with_parent(parent.pid)
+    lifeline.watch(lambda: multiprocessing.connection.wait([parent.sentinel]))
+
+
 def base_record(entry: TrialEntry, config: ReplayConfig, frames: int) -> dict:
     """A trial's record before it runs: identity, inputs, parameters, versions; status ``"error"``."""
     from handsim.runner.trial_record import input_hashes, versions
@@ -85,6 +103,7 @@ def base_record(entry: TrialEntry, config: ReplayConfig, frames: int) -> dict:
         "stability": None,
         "warnings": [],
         "diverged": None,
+        "flags": [],
         "notes": [],
         "trajectory_quality": None,
         "curves": None,
@@ -171,6 +190,7 @@ def trial_outcome(entry: TrialEntry, config: ReplayConfig, frames: int = 4) -> T
             stability=None if result.stability is None else result.stability.to_dict(),
             warnings=[dataclasses.asdict(w) for w in result.warnings],
             diverged=None if result.diverged is None else dataclasses.asdict(result.diverged),
+            flags=[f.to_dict() for f in result.flags],
             notes=[*notes, *result.notes],
             curves=curves(result),
         )

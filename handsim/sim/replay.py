@@ -15,6 +15,7 @@ from handsim.sim.compiled import SimScene
 from handsim.sim.control import DEFAULT_CONTROL_RATE, ControlSchedule, control_schedule
 from handsim.sim.drive import ScheduleDriver, scenario_switches
 from handsim.sim.metrics import FrameMetrics, MetricSpec, frame_metrics
+from handsim.sim.plausibility import Flag, check_control_rate, is_valid, replay_flags
 from handsim.sim.robustness import HoldRobustness, hold_robustness
 from handsim.sim.stability import StabilityResult, stability_test
 from handsim.sim.stepper import Stepper, WarningEvent
@@ -27,7 +28,8 @@ class ReplayConfig:
     """How to replay.
 
     Attributes:
-        control_rate: Control frames per second (rounded to a whole number of steps per frame).
+        control_rate: Control frames per second (rounded to a whole number of steps per frame); at least
+            :func:`~handsim.sim.plausibility.min_control_rate` (20 Hz at the default metrics).
         metrics: Thresholds and scenario parameters (versioned, written into each result).
         keep_states: Keep ``qpos`` of every frame in the result (for rendering videos); off by default to
             keep results small.
@@ -36,6 +38,10 @@ class ReplayConfig:
             scenario); None: no test.
         ensemble: Glove scenario: judge the hold over the scene's robustness ensemble too
             (:mod:`handsim.sim.robustness`) and test the grip at the release in six gravity directions.
+
+    Raises:
+        ValueError: ``control_rate`` is not a number or below the minimum, or ``stability_at`` is a
+            string other than ``"grasp"``.
     """
 
     control_rate: float = DEFAULT_CONTROL_RATE
@@ -45,6 +51,7 @@ class ReplayConfig:
     ensemble: bool = True
 
     def __post_init__(self) -> None:
+        object.__setattr__(self, "control_rate", check_control_rate(self.control_rate, self.metrics))
         if isinstance(self.stability_at, str) and self.stability_at != "grasp":
             raise ValueError(
                 f"stability_at must be a time in seconds, 'grasp' or None, got {self.stability_at!r}"
@@ -83,6 +90,8 @@ class ReplayResult:
         scene: Scene facts (model hash, scenario, setup notes) (JSON-ready).
         trajectory: Source file and SHA-256 of the trajectory.
         notes: Decisions made while replaying.
+        flags: Plausibility flags (:func:`~handsim.sim.plausibility.replay_flags`); ``summary["valid"]`` is
+            false when one of them makes the replay invalid.
     """
 
     frames: FrameMetrics
@@ -101,6 +110,7 @@ class ReplayResult:
     scene: dict
     trajectory: dict
     notes: tuple[str, ...]
+    flags: tuple[Flag, ...] = ()
 
     def to_dict(self) -> dict:
         """JSON-ready result without per-frame arrays (those are in ``frames``)."""
@@ -119,6 +129,7 @@ class ReplayResult:
             "scene": self.scene,
             "trajectory": self.trajectory,
             "notes": list(self.notes),
+            "flags": [f.to_dict() for f in self.flags],
         }
 
 
@@ -165,7 +176,8 @@ def replay(scene: SimScene, trajectory: Trajectory, config: ReplayConfig | None 
         config: Replay parameters (default :class:`ReplayConfig`).
 
     Returns:
-        The result; a diverged run stops at the divergence and says so (``diverged``).
+        The result; a diverged run stops at the divergence and says so (``diverged``); a replay whose
+        inputs cannot give a meaningful answer is flagged (``flags``, ``summary["valid"]`` false).
 
     Raises:
         TrajectoryError: The trajectory does not fit the scene (see :func:`control_schedule`).
@@ -185,6 +197,8 @@ def replay(scene: SimScene, trajectory: Trajectory, config: ReplayConfig | None 
     summary = summarize(frames, spec)
     summary["diverged"] = diverged is not None
     summary["warnings"] = len(warnings)
+    flags = replay_flags(scene, trajectory, schedule, switches, frames)
+    summary["valid"] = is_valid(flags)
     hold = robustness = release_stability = None
     if release >= 0 and setup.hold_window is not None and scene.layout.objects:
         hold = _hold(scene, schedule, frames, qpos, release, spec)
@@ -245,6 +259,7 @@ def replay(scene: SimScene, trajectory: Trajectory, config: ReplayConfig | None 
             "frames": int(trajectory.times.shape[0]),
         },
         notes=notes,
+        flags=flags,
     )
 
 

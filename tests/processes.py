@@ -1,0 +1,100 @@
+"""Test helpers for child processes: run this checkout's handsim; list and reap what a test started."""
+
+from __future__ import annotations
+
+import contextlib
+import os
+import signal
+import subprocess
+import time
+from collections.abc import Iterator
+from pathlib import Path
+
+import pytest
+
+ROOT = Path(__file__).resolve().parents[1]
+
+
+def child_env(*first: Path) -> dict[str, str]:
+    """The environment of a ``python -m handsim.cli`` child that imports this checkout's handsim (after
+    the folders ``first``)."""
+    path = [*map(str, first), str(ROOT), os.environ.get("PYTHONPATH", "")]
+    return {**os.environ, "PYTHONPATH": os.pathsep.join(path)}
+
+
+def descendants(pid: int) -> set[int]:
+    """Every live process below ``pid`` (Linux: from /proc)."""
+    children: dict[int, list[int]] = {}
+    for entry in Path("/proc").iterdir():
+        if not entry.name.isdigit():
+            continue
+        try:
+            stat = (entry / "stat").read_text()
+        except OSError:
+            continue
+        ppid = int(stat.rsplit(")", 1)[1].split()[1])
+        children.setdefault(ppid, []).append(int(entry.name))
+    found, todo = set(), [pid]
+    while todo:
+        for child in children.get(todo.pop(), []):
+            found.add(child)
+            todo.append(child)
+    return found
+
+
+def _stat(pid: int) -> list[str] | None:
+    """The fields of ``/proc/PID/stat`` after the command name (state first), or None when gone."""
+    try:
+        return Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()
+    except OSError:
+        return None
+
+
+def alive(pid: int) -> bool:
+    """The process exists and is not a zombie."""
+    fields = _stat(pid)
+    return fields is not None and fields[0] != "Z"
+
+
+class Children(dict):
+    """Processes a test started (pid → start time), so that only they are ever killed by it."""
+
+    def add(self, pids: set[int]) -> Children:
+        """Remember these processes; returns self (true when some are known)."""
+        for pid in pids:
+            fields = _stat(pid)
+            if fields is not None:
+                self.setdefault(pid, fields[19])
+        return self
+
+    def alive(self) -> list[int]:
+        """Those still alive (the same process: same start time, not a zombie)."""
+        return [pid for pid, start in self.items() if alive(pid) and _stat(pid)[19] == start]
+
+
+def wait_for(condition, timeout: float, what: str) -> None:
+    """Poll ``condition`` until it holds; fail naming ``what`` after ``timeout`` seconds (a bound, not a
+    speed assertion)."""
+    deadline = time.monotonic() + timeout
+    while not condition():
+        if time.monotonic() > deadline:
+            pytest.fail(f"{what} within {timeout:g} s")
+        time.sleep(0.05)
+
+
+linux_only = pytest.mark.skipif(not Path("/proc/self/stat").exists(), reason="reads processes from /proc")
+
+
+@contextlib.contextmanager
+def reaped(process: subprocess.Popen) -> Iterator[Children]:
+    """For the test to fill with ``process``'s children; whatever is left of them and of the process is
+    killed afterwards (a failing test leaves no process behind)."""
+    children = Children()
+    try:
+        yield children
+    finally:
+        for pid in children.alive():
+            os.kill(pid, signal.SIGKILL)
+        if process.poll() is None:
+            process.kill()
+            process.wait()
