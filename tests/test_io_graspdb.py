@@ -760,3 +760,33 @@ def test_random_valid_rows_read_back_exactly(
             np.testing.assert_array_equal(traj.channels[sensor.name], values[:, sensor.index])
     assert traj.switch is not None
     assert traj.switch.tolist() == switches[:n]
+
+
+# --------------------------------------------------------------------------------------------------
+# Values that are not radians: raw counts, degrees, or one bad value
+
+
+def test_a_file_in_degrees_is_called_degrees_not_raw_counts(tmp_path: Path) -> None:
+    start = datetime(2014, 9, 15, 8, 2, 9, 24000)
+    degrees = [f"{-30.0 + 4.5 * k:.4f}" for k in range(23)]  # -30 .. 69 degrees
+    lines = [_row(start + timedelta(milliseconds=16 * i), sensors=degrees) for i in range(4)]
+    path = _write(tmp_path, lines)
+    with pytest.raises(FormatError) as err:
+        read_graspdb_glove(path)
+    assert str(err.value) == (
+        f"{path}:1 [sensor T-TMCJ]: value -30.0000 exceeds 7 in magnitude: the sensor values reach 69 and "
+        "87% of them exceed 7, so they look like angles in degrees; GraspDB14 'rad' files hold radians "
+        "(|x| <= 2*pi): convert the file's sensor values to radians"
+    )
+
+
+def test_one_value_beyond_seven_in_a_file_of_radians_is_one_bad_value(tmp_path: Path) -> None:
+    lines = _rows(4)
+    lines[2] = _replace_token(lines[2], 28, "-7.5")
+    path = _write(tmp_path, lines)
+    with pytest.raises(FormatError) as err:
+        read_graspdb_glove(path)
+    assert str(err.value) == (
+        f"{path}:3 [sensor W-FE]: value -7.5 exceeds 7 in magnitude; expected a joint angle in radians "
+        "(|x| <= 2*pi)"
+    )

@@ -18,6 +18,7 @@ from scipy.spatial.transform import Rotation
 
 from handsim.builders import build_hand
 from handsim.errors import FormatError, InputFileError, TrajectoryError
+from handsim.io import read_trajectory
 from handsim.io.tzionas import read_tzionas_skeleton
 from handsim.io.tzionas_motion import (
     DEFAULT_FPS,
@@ -282,6 +283,21 @@ def test_sequence_17_without_its_hand_files_names_the_missing_file(tzionas_dir: 
         TrajectoryError, match=re.escape(f"{info}: no hand 'Model_Hand_X' (Model_Hand_*) listed")
     ):
         read_tzionas_sequence(models, hand="Model_Hand_X")
+
+
+def test_a_folder_named_like_a_motion_is_called_a_folder_not_a_missing_file(
+    tzionas_dir: Path, tmp_path
+) -> None:
+    models = tmp_path / "Models" / "20"
+    models.mkdir(parents=True)
+    for ext in ("SKEL", "LIMITS"):
+        shutil.copy(tzionas_dir / "Models" / "20" / f"Model_Hand_R.{ext}", models)
+    folder = models / "Model_Hand_R.MOTION"
+    folder.mkdir()
+    for read in (read_trajectory, lambda p: read_tzionas_motion(p.with_suffix(".SKEL"))):
+        with pytest.raises(InputFileError) as err:
+            read(folder)
+        assert str(err.value) == f"{folder}: is a directory, expected a file"
 
 
 def test_without_index_bounds_every_row_after_the_rigging_pose_is_a_frame(

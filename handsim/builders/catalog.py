@@ -23,6 +23,7 @@ from handsim.builders.graspdb_objects import (
     graspdb_object,
 )
 from handsim.errors import InputFileError
+from handsim.io._text import require_file
 from handsim.object_model import ObjectModel, mesh_object
 
 DEFAULT_DENSITY = 1000.0
@@ -147,16 +148,28 @@ def resolve(
 
     Raises:
         UnknownObjectError: Not a path and not a catalogue name (the message lists the names).
-        InputFileError: A mesh file without ``units``.
+        InputFileError: A mesh file without ``units``; a missing file; a file or name with an extension
+            that is not a mesh's (``.obj``, ``.off``, ``.stl``, ``.ply``) or ``.skel``.
     """
+    from handsim.io.mesh import MESH_SUFFIXES
+
     path = Path(what)
     if path.is_dir():
         return arctic(path, density=density, mass=mass)
-    if path.suffix.lower() == ".skel" and path.is_file():
+    suffix = path.suffix.lower()
+    if suffix == ".skel":
         from handsim.io.tzionas_objects import read_tzionas_object
 
-        return _with_mass(read_tzionas_object(path), density, mass)
-    if path.suffix.lower() in {".obj", ".off", ".stl", ".ply"}:
+        return _with_mass(read_tzionas_object(require_file(path)), density, mass)
+    if suffix not in ("", *MESH_SUFFIXES) or (not suffix and path.is_file()):
+        what_it_is = (
+            f"unsupported mesh extension {path.suffix!r}" if suffix else "a file without a mesh extension"
+        )
+        raise InputFileError(
+            f"{path}: {what_it_is}; handsim reads meshes {', '.join(MESH_SUFFIXES)} (give their units), "
+            "Tzionas object .SKEL files, ARCTIC template folders and catalogue names (see `handsim catalog`)"
+        )
+    if suffix in MESH_SUFFIXES:
         from handsim.io.mesh import read_mesh
 
         if units is None:

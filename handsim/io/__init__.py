@@ -18,6 +18,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING
 
 from handsim.errors import InputFileError
+from handsim.io._text import require_file
 from handsim.skeleton import Skeleton
 from handsim.trajectory import Trajectory
 
@@ -33,8 +34,7 @@ TRAJECTORY_SUFFIXES = {
 
 
 def _suffix_or_error(path: Path, known: dict[str, str], what: str) -> str:
-    if not path.exists():
-        raise InputFileError(f"{path}: file not found")
+    require_file(path)
     suffix = path.suffix.lower()
     if path.name.lower().endswith(".grasp.json"):
         suffix = ".grasp.json"

@@ -32,7 +32,7 @@ import numpy as np
 from handsim.errors import FormatError, TrajectoryError
 from handsim.glove.calibration import GloveCalibration, apply_calibration
 from handsim.glove.sensors import SENSOR_NAMES, SENSORS, computed_dofs, discarded_sensors, driven_dofs
-from handsim.io._text import parse_float, read_bytes, sha256_of
+from handsim.io._text import decode_text, parse_float, read_bytes, sha256_of
 from handsim.skeleton import Skeleton
 from handsim.trajectory import Trajectory
 
@@ -44,6 +44,10 @@ RAW_LIMIT = 7.0
 
 RAW_MAX = 255
 """Largest raw sensor count (8 bits)."""
+
+DEGREES_SHARE = 0.25
+"""Share of sensor values above :data:`RAW_LIMIT` from which a file that holds no raw counts is taken to be
+in degrees (in the three GraspDB14 sample trials converted to degrees, 53 to 69 % exceed 7)."""
 
 _TIMESTAMP_FIELDS = ("year", "month", "day", "hour", "minute", "second")
 FIELDS: tuple[str, ...] = (
@@ -336,7 +340,7 @@ def read_graspdb_glove(
         if held:
             notes.append(f"DoFs not driven by the glove are held at 0: {held}")
 
-    return Trajectory(
+    trajectory = Trajectory(
         times=times,
         dof_names=tuple(dof_names),
         targets=targets,
@@ -348,6 +352,7 @@ def read_graspdb_glove(
         sha256=sha256_of(data),
         notes=tuple(notes),
     )
+    return trajectory
 
 
 def _calibration_notes(calibration: GloveCalibration, counts: np.ndarray) -> list[str]:
@@ -391,8 +396,8 @@ def _parse(p: Path, data: bytes, kind: str, why: str) -> tuple[np.ndarray, np.nd
             0..:data:`RAW_MAX`).
         why: Text added to the message of a sensor value that does not fit ``kind``.
     """
-    # Invalid UTF-8 can only sit in a token that is not a number; it shows as U+FFFD in that error.
-    text = data.decode("utf-8", errors="replace")
+    # Text that is not UTF-8 can only sit in a token that is not a number; that error shows it as Latin-1.
+    text = decode_text(data)
     linenos, rows = _split_rows(text)
     if not rows:
         what = "23 sensor values in radians" if kind == "rad" else "23 raw sensor counts"
@@ -484,6 +489,37 @@ def _minute(fields: np.ndarray | list[float]) -> datetime:
     return datetime(*ints)
 
 
+def _not_radians(token: str, rows: list[list[str]], why: str) -> str:
+    """Why a sensor value above :data:`RAW_LIMIT` is not an angle in radians, judged on every row.
+
+    Raw counts: every sensor value of the file is an integer 0..:data:`RAW_MAX`. Degrees: not counts, at
+    least :data:`DEGREES_SHARE` of the values exceed :data:`RAW_LIMIT` and none exceeds 360 (a GraspDB14
+    trial converted to degrees has 53 to 69 % of its values above 7). Anything else is one bad value.
+    """
+    numbers = []
+    for tokens in rows:
+        for t in tokens[_FIRST_SENSOR:]:
+            try:
+                numbers.append(float(t))
+            except ValueError:
+                continue
+    values = np.array(numbers)
+    values = values[np.isfinite(values)]
+    exceeds = f"value {token} exceeds {RAW_LIMIT:g} in magnitude"
+    if np.all((values >= 0) & (values <= RAW_MAX) & (values == np.round(values))):
+        radians = "angles in radians satisfy |x| <= 2*pi"
+        return f"{exceeds}, so this is a raw-count file ({radians}){why}; {_RAW_ADVICE}"
+    magnitude = np.abs(values)
+    share = float(np.mean(magnitude > RAW_LIMIT))
+    if share >= DEGREES_SHARE and magnitude.max() <= 360.0:
+        return (
+            f"{exceeds}: the sensor values reach {magnitude.max():g} and {share:.0%} of them exceed 7, so "
+            "they look like angles in degrees; GraspDB14 'rad' files hold radians (|x| <= 2*pi): convert "
+            "the file's sensor values to radians"
+        )
+    return f"{exceeds}; expected a joint angle in radians (|x| <= 2*pi)"
+
+
 def _checked_parse(path: Path, linenos: list[int], rows: list[list[str]], kind: str, why: str) -> np.ndarray:
     """Parse row by row, raising a :class:`FormatError` that names line and field at the first problem.
 
@@ -526,13 +562,7 @@ def _checked_parse(path: Path, linenos: list[int], rows: list[list[str]], kind: 
             )
         for i in range(_FIRST_SENSOR, NTOKENS):
             if kind == "rad" and abs(row[i]) > RAW_LIMIT:
-                raise FormatError(
-                    path,
-                    f"value {tokens[i]} exceeds {RAW_LIMIT:g} in magnitude, so this is a raw-count file "
-                    f"(angles in radians satisfy |x| <= 2*pi){why}; {_RAW_ADVICE}",
-                    line=line,
-                    field=FIELDS[i],
-                )
+                raise FormatError(path, _not_radians(tokens[i], rows, why), line=line, field=FIELDS[i])
             if kind == "raw" and not (row[i].is_integer() and 0 <= row[i] <= RAW_MAX):
                 raise FormatError(
                     path,

@@ -343,7 +343,7 @@ def _row_line(path: Path, bone: str, row: int) -> int:
 
 def _read_recording(skel: Path, frames: int, bones: list[SkelBone]) -> _Recording:
     motion = _sibling(skel, "MOTION")
-    if not motion.is_file():
+    if not motion.exists():
         raise InputFileError(f"{motion}: file not found; a motion needs the .MOTION beside the .SKEL {skel}")
     data = read_bytes(motion)
     blocks = read_motion(motion, [b.name for b in bones], frames)
