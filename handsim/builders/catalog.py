@@ -25,6 +25,7 @@ from handsim.builders.graspdb_objects import (
 from handsim.errors import InputFileError
 from handsim.io._text import require_file
 from handsim.object_model import ObjectModel, mesh_object
+from handsim.physical_ranges import DENSITY, OBJECT_MASS
 
 DEFAULT_DENSITY = 1000.0
 """kg/m³ for a mesh file given neither density nor mass (water; plastics are 900–1400)."""
@@ -133,6 +134,7 @@ def resolve(
     units: str | None = None,
     density: float | None = None,
     mass: float | None = None,
+    force: bool = False,
 ) -> ObjectModel:
     """An object from a catalogue name, an ARCTIC template folder, a Tzionas ``.SKEL`` or a mesh file.
 
@@ -142,17 +144,25 @@ def resolve(
         density: Density in kg/m³ for a mesh file (default 1000, water), or to override a catalogue,
             ARCTIC or Tzionas object's own.
         mass: Total mass in kg instead of a density (the mesh may then be open).
+        force: Accept a ``density`` or ``mass`` outside its documented range
+            (:mod:`handsim.physical_ranges`); checked before any file is read. The built object's total
+            mass is checked again by :func:`handsim.builders.objects.prepare_object`.
 
     Returns:
         The object model.
 
     Raises:
+        OutOfRangeError: ``density`` or ``mass`` is implausible and ``force`` is False.
         UnknownObjectError: Not a path and not a catalogue name (the message lists the names).
         InputFileError: A mesh file without ``units``; a missing file; a file or name with an extension
             that is not a mesh's (``.obj``, ``.off``, ``.stl``, ``.ply``) or ``.skel``.
     """
     from handsim.io.mesh import MESH_SUFFIXES
 
+    if density is not None:
+        DENSITY.check(density, force=force, subject="object ")
+    if mass is not None:
+        OBJECT_MASS.check(mass, force=force, subject="object ")
     path = Path(what)
     if path.is_dir():
         return arctic(path, density=density, mass=mass)

@@ -12,6 +12,7 @@ from collections.abc import Sequence
 
 from handsim import __version__
 from handsim.cli import build, catalog, demo, export, replay, report, trajectory
+from handsim.cli._common import range_problem
 from handsim.errors import HandsimError
 
 DESCRIPTION = """\
@@ -43,6 +44,9 @@ def main(argv: Sequence[str] | None = None) -> int:
     if getattr(args, "func", None) is None:
         parser.print_help()
         return 2
+    problem = range_problem(args)
+    if problem is not None:
+        args.command_parser.error(problem)  # usage and the problem on stderr, exit 2
     try:
         return args.func(args)
     except HandsimError as exc:

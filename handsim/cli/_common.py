@@ -3,7 +3,12 @@
 from __future__ import annotations
 
 import argparse
+import math
 from pathlib import Path
+from typing import TYPE_CHECKING
+
+if TYPE_CHECKING:
+    from handsim.physical_ranges import PhysicalRange
 
 
 def add_hand_size(parser: argparse.ArgumentParser) -> None:
@@ -15,6 +20,57 @@ def add_hand_size(parser: argparse.ArgumentParser) -> None:
         metavar="M",
         help="parametric hand: wrist crease to middle fingertip in metres (default 0.19)",
     )
+
+
+def add_ranged_float(
+    parser: argparse.ArgumentParser,
+    container: argparse.ArgumentParser | argparse._ArgumentGroup,
+    flag: str,
+    value_range: PhysicalRange,
+    **kwargs,
+) -> None:
+    """Add a float option whose value :func:`range_problem` checks against ``value_range`` after parsing.
+
+    Args:
+        parser: The command's parser (its usage is printed with the error).
+        container: Where the option goes: ``parser`` or one of its (mutually exclusive) groups.
+        flag: The option, e.g. ``"--mass"``.
+        value_range: Its documented range.
+        **kwargs: ``add_argument`` options (``dest``, ``metavar``, ``help`` …).
+    """
+    action = container.add_argument(flag, type=float, **kwargs)
+    checks = (*(parser.get_default("range_checks") or ()), (flag, action.dest, value_range))
+    parser.set_defaults(range_checks=checks, command_parser=parser)
+
+
+def add_force(parser: argparse.ArgumentParser) -> None:
+    """Add ``--force``: accept a mass or density outside its documented range."""
+    parser.add_argument(
+        "--force",
+        action="store_true",
+        help="accept a mass or density outside its documented range (docs/objects.md)",
+    )
+
+
+def range_problem(args: argparse.Namespace) -> str | None:
+    """The usage error of the first option of :func:`add_ranged_float` out of its range, or None.
+
+    A value outside the range passes with ``--force`` when the command has it; a value that is not a
+    positive finite number never does.
+    """
+    forced = bool(getattr(args, "force", False))
+    for flag, dest, value_range in getattr(args, "range_checks", ()):
+        value = getattr(args, dest, None)
+        problem = None if value is None else value_range.problem(value)
+        if problem is None:
+            continue
+        if not (math.isfinite(value) and value > 0):
+            return f"argument {flag}: {problem}"
+        if forced:
+            continue
+        hint = "; give --force to use it anyway" if hasattr(args, "force") else ""
+        return f"argument {flag}: {problem}{hint}"
+    return None
 
 
 def non_negative_int(text: str) -> int:
