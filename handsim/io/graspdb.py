@@ -35,6 +35,7 @@ from handsim.glove.sensors import SENSOR_NAMES, SENSORS, computed_dofs, discarde
 from handsim.io._text import decode_text, parse_float, read_bytes, sha256_of
 from handsim.skeleton import Skeleton
 from handsim.trajectory import Trajectory
+from handsim.trajectory_ops import with_limit_note
 
 NTOKENS = 30
 """Entries per motion row: 6 time-stamp fields, the switch, 23 sensors."""
@@ -44,6 +45,21 @@ RAW_LIMIT = 7.0
 
 RAW_MAX = 255
 """Largest raw sensor count (8 bits)."""
+
+MIN_FRAMES = 3
+"""Fewest rows of a recording: two sample intervals, the least that describes a motion (a velocity and its
+change); a 1- or 2-row file is a fragment, not a grasp (a GraspDB14 trial has 231 to 282 rows)."""
+
+MIN_SAMPLE_INTERVAL_S = 1.0 / 150.0
+"""Shortest time between two rows, s: 150 Hz, above the fastest CyberGlove (the CyberGlove III streams up
+to 120 records/s, about 100 Hz for the original glove; GraspDB14 recorded at 60 Hz) with room for 1 ms
+time-stamp jitter; see docs/cyberglove.md."""
+
+MAX_SAMPLE_INTERVAL_S = 1.0
+"""Longest time between two rows, s: 30 times the largest interval in the GraspDB14 samples (32 ms, one
+dropped sample); over a longer hole the replay would interpolate more than a second of invented motion,
+as long as a whole reach-to-grasp movement. A longer jump is refused before any resampling (a 1-hour jump
+would be 360,000 frames at 100 Hz)."""
 
 DEGREES_SHARE = 0.25
 """Share of sensor values above :data:`RAW_LIMIT` from which a file that holds no raw counts is taken to be
@@ -352,7 +368,7 @@ def read_graspdb_glove(
         sha256=sha256_of(data),
         notes=tuple(notes),
     )
-    return trajectory
+    return trajectory if skeleton is None else with_limit_note(trajectory, skeleton)
 
 
 def _calibration_notes(calibration: GloveCalibration, counts: np.ndarray) -> list[str]:
@@ -415,7 +431,39 @@ def _parse(p: Path, data: bytes, kind: str, why: str) -> tuple[np.ndarray, np.nd
         times = _fast_times(values)
         if times is None:  # pragma: no cover - the row-by-row check covers every fast-path check
             raise FormatError(p, "rows failed validation, but no single row could be blamed")
+    _check_timing(p, linenos, rows, times)
     return values, times, rows
+
+
+def _check_timing(p: Path, linenos: list[int], rows: list[list[str]], times: np.ndarray) -> None:
+    """Refuse too few rows, and sample intervals no CyberGlove produces (see the bounds' docstrings)."""
+    if len(times) < MIN_FRAMES:
+        raise FormatError(
+            p,
+            f"{len(times)} row{'s' if len(times) != 1 else ''}: a recording needs at least {MIN_FRAMES} "
+            "(two sample intervals) to describe a motion",
+        )
+    steps = np.diff(times)
+    fast = np.flatnonzero(steps < MIN_SAMPLE_INTERVAL_S)
+    slow = np.flatnonzero(steps > MAX_SAMPLE_INTERVAL_S)
+    first = min((*fast[:1], *slow[:1]), default=None)
+    if first is None:
+        return
+    k = int(first) + 1
+    step = float(steps[k - 1])
+    after = f"time stamp {_stamp(rows[k])!r} is {step:.6g} s after the previous row's (line {linenos[k - 1]})"
+    if step < MIN_SAMPLE_INTERVAL_S:
+        reason = (
+            f"{after}: closer than {MIN_SAMPLE_INTERVAL_S * 1e3:.3g} ms, a sampling rate above "
+            f"{1 / MIN_SAMPLE_INTERVAL_S:g} Hz, faster than any CyberGlove records (at most 120 records/s); "
+            "are the time stamps right?"
+        )
+    else:
+        reason = (
+            f"{after}: more than the {MAX_SAMPLE_INTERVAL_S:g} s a recording may skip (the replay would "
+            "invent the hand's motion over the hole); cut the recording there into two files"
+        )
+    raise FormatError(p, reason, line=linenos[k], field="timestamp")
 
 
 def _split_rows(text: str) -> tuple[list[int], list[list[str]]]:
