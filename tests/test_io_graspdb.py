@@ -848,6 +848,30 @@ def test_sample_intervals_from_7_ms_to_1_s_are_accepted(tmp_path: Path, step_ms:
     np.testing.assert_allclose(np.diff(traj.times), step_ms / 1000, atol=1e-9)
 
 
+def test_a_1_s_interval_that_rounds_above_1_s_in_floating_point_is_accepted(tmp_path: Path) -> None:
+    # found by the property test: 8.021 - 7.021 = 1.0000000000000009
+    start = datetime(2000, 1, 1, 0, 0, 7, 0)
+    stamps = [start + timedelta(milliseconds=ms) for ms in (0, 7, 14, 21, 1021)]
+    traj = read_graspdb_glove(_write(tmp_path, [_row(d) for d in stamps]))
+    assert traj.times[-1] - traj.times[-2] > 1.0  # the floating-point difference, accepted
+    assert traj.nframes == 5
+
+
+@pytest.mark.parametrize(
+    ("step_us", "accepted"), [(6670, True), (6660, False), (1_000_000, True), (1_000_010, False)]
+)
+def test_interval_bounds_hold_at_the_files_10_microsecond_resolution(
+    tmp_path: Path, step_us: int, accepted: bool
+) -> None:
+    start = datetime(2014, 9, 15, 8, 2, 9, 24000)
+    path = _write(tmp_path, [_row(start + timedelta(microseconds=step_us * i)) for i in range(3)])
+    if accepted:
+        assert read_graspdb_glove(path).nframes == 3
+    else:
+        with pytest.raises(FormatError, match=r":2 \[timestamp\]: time stamp "):
+            read_graspdb_glove(path)
+
+
 # --------------------------------------------------------------------------------------------------
 # Joint limits on the glove path
 

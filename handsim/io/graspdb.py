@@ -61,6 +61,10 @@ dropped sample); over a longer hole the replay would interpolate more than a sec
 as long as a whole reach-to-grasp movement. A longer jump is refused before any resampling (a 1-hour jump
 would be 360,000 frames at 100 Hz)."""
 
+STAMP_TOLERANCE_S = 1e-6
+"""Rounding allowed when an interval is compared with those bounds, s: a tenth of the files' 10 µs time-stamp
+resolution (8.021 s − 7.021 s is 1.0000000000000009 s in floating point, and is 1 s)."""
+
 DEGREES_SHARE = 0.25
 """Share of sensor values above :data:`RAW_LIMIT` from which a file that holds no raw counts is taken to be
 in degrees (in the three GraspDB14 sample trials converted to degrees, 53 to 69 % exceed 7)."""
@@ -444,15 +448,15 @@ def _check_timing(p: Path, linenos: list[int], rows: list[list[str]], times: np.
             "(two sample intervals) to describe a motion",
         )
     steps = np.diff(times)
-    fast = np.flatnonzero(steps < MIN_SAMPLE_INTERVAL_S)
-    slow = np.flatnonzero(steps > MAX_SAMPLE_INTERVAL_S)
+    fast = np.flatnonzero(steps < MIN_SAMPLE_INTERVAL_S - STAMP_TOLERANCE_S)
+    slow = np.flatnonzero(steps > MAX_SAMPLE_INTERVAL_S + STAMP_TOLERANCE_S)
     first = min((*fast[:1], *slow[:1]), default=None)
     if first is None:
         return
     k = int(first) + 1
     step = float(steps[k - 1])
     after = f"time stamp {_stamp(rows[k])!r} is {step:.6g} s after the previous row's (line {linenos[k - 1]})"
-    if step < MIN_SAMPLE_INTERVAL_S:
+    if step < MIN_SAMPLE_INTERVAL_S - STAMP_TOLERANCE_S:
         reason = (
             f"{after}: closer than {MIN_SAMPLE_INTERVAL_S * 1e3:.3g} ms, a sampling rate above "
             f"{1 / MIN_SAMPLE_INTERVAL_S:g} Hz, faster than any CyberGlove records (at most 120 records/s); "
