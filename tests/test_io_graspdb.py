@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import hashlib
-import time
 from dataclasses import replace
 from datetime import datetime, timedelta
 from pathlib import Path
@@ -322,13 +321,11 @@ def test_switch_state_is_read_per_row(tmp_path: Path) -> None:
     assert traj.switch.tolist() == [True, False, True]
 
 
-def test_ten_thousand_rows_parse_fast(tmp_path: Path) -> None:
-    path = _write(tmp_path, _rows(10_000))
-    start = time.perf_counter()
+def test_ten_thousand_rows_read_back(tmp_path: Path) -> None:
+    path = _write(tmp_path, _rows(10_000))  # the reading time: benchmarks/io_and_cache.py
     traj = read_graspdb_glove(path)
-    elapsed = time.perf_counter() - start
     assert traj.nframes == 10_000
-    assert elapsed < 0.5
+    np.testing.assert_allclose(traj.times[-1], 9_999 * 0.016, atol=1e-9)
 
 
 # --------------------------------------------------------------------------------------------------
@@ -705,16 +702,15 @@ def test_empty_raw_file_says_raw_counts_are_expected(tmp_path: Path) -> None:
         read_graspdb_raw(path)
 
 
-def test_ten_thousand_raw_rows_parse_fast(tmp_path: Path) -> None:
+def test_ten_thousand_raw_rows_read_back(tmp_path: Path) -> None:
     start = datetime(2014, 9, 12, 8, 49, 21, 712000)
     lines = [
         _row(start + timedelta(milliseconds=16 * i), "1", [str(c) for c in RAW_COUNTS]) for i in range(10_000)
     ]
-    path = _write(tmp_path, lines, name=RAW_NAME)
-    t0 = time.perf_counter()
+    path = _write(tmp_path, lines, name=RAW_NAME)  # the reading time: benchmarks/io_and_cache.py
     recording = read_graspdb_raw(path)
-    assert time.perf_counter() - t0 < 0.5
     assert recording.counts.shape == (10_000, 23)
+    assert recording.counts[-1].tolist() == RAW_COUNTS
 
 
 # --------------------------------------------------------------------------------------------------

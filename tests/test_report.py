@@ -1092,6 +1092,7 @@ def test_report_opens_in_headless_chromium_without_console_errors(run_dir, tmp_p
     assert pixels.std() > 20 and len(np.unique(pixels.reshape(-1, 3), axis=0)) > 50  # not blank
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("dataset", ["graspdb14", "tzionas_ijcv16"])
 def test_real_dataset_run_reports_every_trial_and_opens_in_chromium(dataset, tmp_path):
     data = _require(SHARED_DATA / dataset)
