@@ -256,3 +256,51 @@ def test_a_business_card_thick_mesh_is_accepted(tmp_path):
     path = tmp_path / "card.obj"
     trimesh.creation.box((85.0, 55.0, 0.4)).export(path)
     assert read_mesh(path, "mm").extent[2] == pytest.approx(0.0004)
+
+
+@pytest.mark.parametrize(("faces", "present"), [("13", 20), ("11", 20), ("899999999", 20)])
+def test_ascii_ply_header_promising_other_counts_than_the_file_holds_is_an_error(tmp_path, faces, present):
+    text = trimesh.creation.box((50.0, 40.0, 30.0)).export(file_type="ply", encoding="ascii").decode()
+    assert "element face 12\n" in text
+    path = tmp_path / "box.ply"
+    path.write_text(text.replace("element face 12\n", f"element face {faces}\n"))
+    with pytest.raises(FormatError) as err:
+        read_mesh(path, "mm")
+    promised = 8 + int(faces)
+    assert str(err.value) == (
+        f"{path}:10 [header]: the header promises elements 8 'vertex', {faces} 'face' ({promised} data "
+        f"lines), but {present} follow it"
+    )
+
+
+def test_binary_stl_shorter_than_its_triangle_count_is_an_error(tmp_path):
+    data = trimesh.creation.box((50.0, 40.0, 30.0)).export(file_type="stl")
+    path = tmp_path / "box.stl"
+    path.write_bytes(data[:-10])
+    with pytest.raises(FormatError) as err:
+        read_mesh(path, "mm")
+    assert str(err.value) == (
+        f"{path} [triangle count]: the binary STL header promises 12 triangles (684 bytes), but the file has "
+        "674 bytes"
+    )
+    path.write_bytes(data)
+    assert read_mesh(path, "mm").volume == pytest.approx(6e-5)
+
+
+def test_trimesh_logs_nothing_while_handsim_reads_a_malformed_file(tmp_path, caplog):
+    path = tmp_path / "bad.stl"  # a facet normal that is no number: trimesh logs a traceback, then reads it
+    path.write_text(
+        "solid x\nfacet normal 0 0 zz\nouter loop\nvertex 0 0 0\nvertex 50 0 0\nvertex 0 50 0\nendloop\n"
+        "endfacet\nendsolid\n"
+    )
+    with caplog.at_level("DEBUG", logger="trimesh"), pytest.raises(MeshError):
+        read_mesh(path, "mm")
+    assert [r for r in caplog.records if r.name.startswith("trimesh")] == []
+
+
+def test_a_file_trimesh_reads_nothing_from_is_not_called_a_point_cloud(tmp_path):
+    path = tmp_path / "bad.stl"
+    path.write_text("solid x\nfacet normal 0 0 1\n outer loop\n  vertex 0 0 zz\n")
+    with pytest.raises(MeshError) as err:
+        read_mesh(path, "mm")
+    assert str(err.value) == f"{path}: no triangle could be read from it as STL; is it a valid STL file?"

@@ -2,6 +2,9 @@
 
 from __future__ import annotations
 
+import contextlib
+import logging
+from collections.abc import Iterator
 from pathlib import Path
 
 import numpy as np
@@ -9,6 +12,7 @@ import trimesh
 
 from handsim.errors import InputFileError, MeshError
 from handsim.io._text import UTF8_BOM, decode_text, read_bytes
+from handsim.io.mesh_counts import check_ascii_ply, check_stl
 from handsim.io.off import parse_off
 from handsim.mesh import Mesh, principal_extents, validate_mesh
 
@@ -60,7 +64,8 @@ def read_mesh_arrays(path: str | Path, units: str) -> tuple[np.ndarray, np.ndarr
 
     Raises:
         InputFileError: Missing or unreadable file, or an unsupported extension.
-        FormatError: An OFF file that does not follow its format (file, line and field named).
+        FormatError: An OFF file that does not follow its format, an ASCII PLY or binary STL that holds
+            fewer or more elements than its header promises (file, line and field named).
         MeshError: An unknown unit, an unparsable file, a file without faces, an implausible size or an
             object thinner than :data:`MIN_THICKNESS_M` (see :func:`read_mesh`).
     """
@@ -76,17 +81,32 @@ def read_mesh_arrays(path: str | Path, units: str) -> tuple[np.ndarray, np.ndarr
     if suffix == ".off":
         vertices, faces = parse_off(decode_text(data), p, UNIT_SCALES[units])
     else:
-        vertices, faces = _trimesh_arrays(p, _without_text_bom(data, suffix))
+        data = _without_text_bom(data, suffix)
+        if suffix == ".stl":
+            check_stl(p, data)
+        elif suffix == ".ply":
+            check_ascii_ply(p, decode_text(data))
+        vertices, faces = _trimesh_arrays(p, data)
         vertices = vertices * UNIT_SCALES[units]
     if len(faces) == 0:
-        listed = _obj_vertex_lines(data) if suffix == ".obj" else len(vertices)
-        raise MeshError(
-            f"{p}: the file holds {listed} vertices but no faces; a mesh needs triangles or polygons "
-            "(OBJ 'f' lines) that close its surface, not a point cloud"
-        )
+        _no_faces(p, suffix, data, len(vertices))
     if len(vertices) and np.all(np.isfinite(vertices)):
         _check_size(p, vertices, units)
     return vertices, faces
+
+
+def _no_faces(p: Path, suffix: str, data: bytes, nvertices: int) -> None:
+    """Raise the error of a file from which no face was read: a point cloud, or not that format at all."""
+    kind = suffix[1:].upper()
+    if suffix == ".obj":
+        nvertices = _obj_vertex_lines(data)
+    elif nvertices == 0:
+        raise MeshError(f"{p}: no triangle could be read from it as {kind}; is it a valid {kind} file?")
+    lines = " (OBJ 'f' lines)" if suffix == ".obj" else ""
+    raise MeshError(
+        f"{p}: the file holds {nvertices} vertices but no faces; a mesh needs triangles or polygons{lines} "
+        "that close its surface, not a point cloud"
+    )
 
 
 def _without_text_bom(data: bytes, suffix: str) -> bytes:
@@ -101,9 +121,10 @@ def _trimesh_arrays(p: Path, data: bytes) -> tuple[np.ndarray, np.ndarray]:
     suffix = p.suffix.lower()
     options = {"maintain_order": True} if suffix == ".obj" else {}
     try:
-        loaded = trimesh.load_mesh(
-            trimesh.util.wrap_as_stream(data), file_type=suffix[1:], process=False, **options
-        )
+        with _quiet_trimesh():
+            loaded = trimesh.load_mesh(
+                trimesh.util.wrap_as_stream(data), file_type=suffix[1:], process=False, **options
+            )
         if isinstance(loaded, trimesh.Scene):
             geometries = [g for g in loaded.geometry.values() if isinstance(g, trimesh.Trimesh)]
             loaded = trimesh.util.concatenate(geometries) if geometries else trimesh.Trimesh()
@@ -112,6 +133,22 @@ def _trimesh_arrays(p: Path, data: bytes) -> tuple[np.ndarray, np.ndarray]:
     except Exception as exc:  # trimesh raises many types for malformed files
         raise MeshError(f"{p}: cannot parse as {suffix[1:].upper()}: {exc}") from exc
     return vertices, faces
+
+
+@contextlib.contextmanager
+def _quiet_trimesh() -> Iterator[None]:
+    """Silence trimesh's logger while it reads a file.
+
+    On a malformed file trimesh logs the traceback of every fallback it tries; handsim reports the
+    failure itself, in one line.
+    """
+    log = logging.getLogger("trimesh")
+    level = log.level
+    log.setLevel(logging.CRITICAL)
+    try:
+        yield
+    finally:
+        log.setLevel(level)
 
 
 def _obj_vertex_lines(data: bytes) -> int:
