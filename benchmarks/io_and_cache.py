@@ -16,14 +16,12 @@ from __future__ import annotations
 
 import argparse
 import dataclasses
-import statistics
 import tempfile
-import time
-from collections.abc import Callable
 from datetime import datetime, timedelta
 from pathlib import Path
 
 import trimesh
+from timing import median_seconds  # benchmarks/timing.py (scripts run from benchmarks/)
 
 from handsim.builders.decompose import DecompositionError, DecompositionParams, decompose
 from handsim.io.graspdb import read_graspdb_glove, read_graspdb_raw
@@ -47,16 +45,6 @@ def recording(folder: Path, name: str, counts: bool) -> Path:
     path = folder / name
     path.write_text("".join(lines))
     return path
-
-
-def median_seconds(fn: Callable[[], object], repeats: int) -> float:
-    """Median wall time of ``fn()`` over ``repeats`` calls, s."""
-    times = []
-    for _ in range(repeats):
-        start = time.perf_counter()
-        fn()
-        times.append(time.perf_counter() - start)
-    return statistics.median(times)
 
 
 def timeout_return(mesh, cache: Path) -> None:

@@ -43,6 +43,27 @@ def add_ranged_float(
     parser.set_defaults(range_checks=checks, command_parser=parser)
 
 
+def add_object_mass_options(parser: argparse.ArgumentParser, *, forced: bool) -> None:
+    """Add ``--density`` or ``--mass`` (one of them) of an object, checked against their ranges.
+
+    Args:
+        parser: The command's parser.
+        forced: The command also has ``--force`` (:func:`add_force`), which accepts values out of range.
+    """
+    from handsim.physical_ranges import DENSITY, OBJECT_MASS
+
+    group = parser.add_mutually_exclusive_group()
+    unless = " without --force" if forced else ""
+    add_ranged_float(
+        parser, group, "--density", DENSITY, metavar="KG_M3",
+        help=f"object density instead of its own, {DENSITY.describe()}{unless}",
+    )  # fmt: skip
+    add_ranged_float(
+        parser, group, "--mass", OBJECT_MASS, metavar="KG",
+        help=f"total object mass instead of a density, {OBJECT_MASS.describe()}{unless}",
+    )  # fmt: skip
+
+
 def add_force(parser: argparse.ArgumentParser) -> None:
     """Add ``--force``: accept a mass or density outside its documented range."""
     parser.add_argument(

@@ -4,8 +4,14 @@ from __future__ import annotations
 
 import argparse
 
-from handsim.cli._common import add_force, add_hand_size, add_ranged_float, write_text
-from handsim.physical_ranges import DENSITY, HAND_MASS, OBJECT_MASS
+from handsim.cli._common import (
+    add_force,
+    add_hand_size,
+    add_object_mass_options,
+    add_ranged_float,
+    write_text,
+)
+from handsim.physical_ranges import HAND_MASS
 
 
 def _hand_spec(skeleton_path: str | None, args: argparse.Namespace):
@@ -131,15 +137,7 @@ def _build_scene(args: argparse.Namespace) -> int:
 
 def _add_object_options(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--units", choices=("m", "mm"), help="units of a mesh file (required for mesh files)")
-    mass = parser.add_mutually_exclusive_group()
-    add_ranged_float(
-        parser, mass, "--density", DENSITY, metavar="KG_M3",
-        help=f"density (default: the object's own), {DENSITY.describe()} without --force",
-    )  # fmt: skip
-    add_ranged_float(
-        parser, mass, "--mass", OBJECT_MASS, metavar="KG",
-        help=f"total object mass instead of a density, {OBJECT_MASS.describe()} without --force",
-    )  # fmt: skip
+    add_object_mass_options(parser, forced=True)
     parser.add_argument(
         "--threshold",
         type=float,

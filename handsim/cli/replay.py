@@ -11,9 +11,8 @@ import argparse
 import json
 import sys
 
-from handsim.cli._common import add_ranged_float, write_text
+from handsim.cli._common import add_object_mass_options, write_text
 from handsim.headless import prefer_headless_gl
-from handsim.physical_ranges import DENSITY, OBJECT_MASS
 
 EXIT_DIVERGED = 3
 LABEL = 12  # width of the label column
@@ -237,15 +236,7 @@ def register(commands: argparse._SubParsersAction) -> None:
         "--calibration", metavar="JSON", help="GraspDB14: calibration of a raw-count recording"
     )
     replay.add_argument("--units", choices=("m", "mm"), help="units of a mesh file given as --object")
-    mass = replay.add_mutually_exclusive_group()
-    add_ranged_float(
-        replay, mass, "--density", DENSITY, metavar="KG_M3",
-        help=f"object density instead of its own, {DENSITY.describe()}",
-    )  # fmt: skip
-    add_ranged_float(
-        replay, mass, "--mass", OBJECT_MASS, metavar="KG",
-        help=f"object mass instead of its own, {OBJECT_MASS.describe()}",
-    )  # fmt: skip
+    add_object_mass_options(replay, forced=False)
     replay.add_argument(
         "--hand-length", type=float, default=None, metavar="M",
         help="GraspDB14 without --skeleton: parametric hand length, wrist crease to middle fingertip (0.19)",
