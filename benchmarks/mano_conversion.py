@@ -10,13 +10,12 @@ hand, the largest decomposition residual, and for reference the time of reading 
 from __future__ import annotations
 
 import re
-import statistics
 import sys
 import tempfile
-import time
 from pathlib import Path
 
 import numpy as np
+from timing import median_seconds  # benchmarks/timing.py (scripts run from benchmarks/)
 
 from handsim.builders.mano_hand import mano_hand_skeleton
 from handsim.io.arctic_motion import read_arctic_mano
@@ -37,21 +36,11 @@ def random_sequence(n: int, seed: int = 0) -> MANOSequence:
     )
 
 
-def median_seconds(fn, repeats: int = 7) -> float:
-    """Median wall time of ``fn()`` in seconds."""
-    times = []
-    for _ in range(repeats):
-        start = time.perf_counter()
-        fn()
-        times.append(time.perf_counter() - start)
-    return statistics.median(times)
-
-
 def main() -> int:
     skeleton = mano_hand_skeleton()
     seq = random_sequence(NFRAMES)
     convert = lambda: mano_pose_to_trajectory(seq, skeleton, flat_hand_mean=True)  # noqa: E731
-    seconds = median_seconds(convert)
+    seconds = median_seconds(convert, 7)
     residual = next(n for n in convert().notes if "residual" in n)
     with tempfile.TemporaryDirectory() as tmp:
         path = Path(tmp) / "bench.mano.npy"
@@ -62,7 +51,7 @@ def main() -> int:
             hand = {k: np.asarray(getattr(seq, k), dtype=np.float32) for k in ("rot", "pose", "shape")}
             hands[side] = {**hand, "trans": wrist.astype(np.float32), "fitting_err": [0.005] * NFRAMES}
         np.save(path, hands, allow_pickle=True)
-        read_s = median_seconds(lambda: read_arctic_mano(path, "right"))
+        read_s = median_seconds(lambda: read_arctic_mano(path, "right"), 7)
     print(f"mano_conversion_{NFRAMES}_frames_s={seconds:.3f} (target < {TARGET_S:g})")
     print(f"per_frame_us={seconds / NFRAMES * 1e6:.1f}")
     worst = re.search(r"residual (\S+) rad", residual).group(1)

@@ -8,10 +8,10 @@ too), of the cube track and of the whole sequence, and how many times faster tha
 
 from __future__ import annotations
 
-import statistics
 import sys
-import time
 from pathlib import Path
+
+from timing import median_seconds  # benchmarks/timing.py (scripts run from benchmarks/)
 
 from handsim.io.tzionas import read_tzionas_skeleton
 from handsim.io.tzionas_motion import (
@@ -22,16 +22,6 @@ from handsim.io.tzionas_motion import (
 
 SHARED = Path(__file__).resolve().parents[1].parent / "shared" / "data" / "tzionas_ijcv16"
 BUNDLED = Path(__file__).resolve().parents[1] / "handsim" / "assets" / "tzionas_ijcv16"
-
-
-def median_seconds(call, repeats: int = 5) -> float:
-    """Median wall time of ``call()`` over ``repeats`` runs."""
-    times = []
-    for _ in range(repeats):
-        start = time.perf_counter()
-        call()
-        times.append(time.perf_counter() - start)
-    return statistics.median(times)
 
 
 def main() -> int:

@@ -53,6 +53,10 @@ class FormatError(HandsimError):
         super().__init__(f"{where}: {reason}")
 
 
+class OutOfRangeError(HandsimError):
+    """A physical parameter (a mass, a density) lies outside its documented plausible range."""
+
+
 class SkeletonError(HandsimError):
     """A skeleton is inconsistent (unknown joint, bad DoF, wrong array shape)."""
 

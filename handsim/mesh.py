@@ -143,6 +143,23 @@ def validate_mesh(
     )
 
 
+def principal_extents(vertices: npt.ArrayLike) -> np.ndarray:
+    """Extents of a point set along its principal axes, largest first, in its own units, shape (3,).
+
+    The smallest is the thickness of a plate whatever its orientation (an axis-aligned box would overstate
+    a tilted plate's).
+
+    Args:
+        vertices: Points, shape (V, 3), V ≥ 1, finite.
+    """
+    v = np.asarray(vertices, dtype=float)
+    centred = v - v.mean(axis=0)
+    _, _, axes = np.linalg.svd(centred, full_matrices=False)
+    projected = centred @ axes.T
+    extents = projected.max(axis=0) - projected.min(axis=0)
+    return np.concatenate([extents, np.zeros(3 - len(extents))])
+
+
 def boundary_loops(faces: npt.ArrayLike) -> list[list[int]]:
     """The open boundary of a consistently wound triangle mesh as closed vertex loops.
 

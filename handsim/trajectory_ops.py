@@ -250,6 +250,35 @@ def limit_violations(trajectory: Trajectory, skeleton: Skeleton) -> LimitReport:
     )
 
 
+def with_limit_note(trajectory: Trajectory, skeleton: Skeleton, what: str = "targets") -> Trajectory:
+    """The trajectory with a note counting, per DoF, its valid samples outside the skeleton's limits.
+
+    What every reader that maps a recording onto a skeleton adds (glove recordings, Tzionas motions): the
+    position actuators clamp such targets to the joint range, so the user must be told how many and how
+    far (:func:`limit_violations`).
+
+    Args:
+        trajectory: The trajectory (targets in rad).
+        skeleton: The hand whose DoF limits apply (DoFs matched by name).
+        what: What the samples are, for the note, e.g. ``"fitted angles"``.
+
+    Returns:
+        The trajectory with one note appended.
+    """
+    report = limit_violations(trajectory, skeleton)
+    if not report.total:
+        note = f"every valid sample of the {what} lies within its DoF limits"
+    else:
+        parts = [
+            f"{d.name} {d.count}/{report.nframes} (up to {d.worst_deg:.1f}° beyond)" for d in report.violating
+        ]
+        note = (
+            f"{what} outside the DoF limits of {skeleton.name!r} in {report.total} samples (position "
+            f"actuators clamp them to the joint range): {', '.join(parts)}"
+        )
+    return replace(trajectory, notes=(*trajectory.notes, note))
+
+
 def clamp_to_limits(trajectory: Trajectory, skeleton: Skeleton) -> Trajectory:
     """Clamp the valid samples outside the skeleton's limits to the nearest limit.
 

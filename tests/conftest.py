@@ -1,16 +1,39 @@
-"""Shared fixtures: paths to the real sample data in ../shared/data (skipped when absent)."""
+"""Shared fixtures and test settings.
+
+Data: the Tzionas sample and the MANO mean joints ship with handsim (``handsim.assets``, byte-identical to
+``../shared/data``; ``tests/test_bundled_data.py`` pins them), so tests that need only those run
+everywhere. The GraspDB14 files carry no license and are never bundled: tests that need them use
+``graspdb_dir`` and skip with a reason when ``../shared/data`` is absent (a user's clone).
+
+Hypothesis runs derandomized (seeded from each test, no example database) and without deadlines, so a
+loaded machine cannot make a property test fail. (Hypothesis also draws constants from the local modules
+loaded when a test runs, so one test may see other examples alone than in the whole suite: property tests
+must hold for every valid input, which is what they claim anyway.)
+
+Tests over about 5 s carry ``@pytest.mark.slow`` (registered in ``pyproject.toml``): ``python -m pytest
+-q`` runs them, ``-m "not slow"`` leaves them out. No test asserts a wall-clock time; those figures are
+printed by ``benchmarks/``.
+"""
 
 from __future__ import annotations
 
 from pathlib import Path
 
 import pytest
+from hypothesis import settings
+
+from handsim.assets import MANO_DIR, TZIONAS_DIR
 
 ROOT = Path(__file__).resolve().parents[1]
 SHARED_DATA = ROOT.parent / "shared" / "data"
 GRASPDB = SHARED_DATA / "graspdb14"
-TZIONAS = SHARED_DATA / "tzionas_ijcv16"
-MANO = SHARED_DATA / "mano"
+TZIONAS = TZIONAS_DIR
+"""The Tzionas sample: the bundled copy (identical to ``../shared/data/tzionas_ijcv16``)."""
+MANO = MANO_DIR
+"""The MANO mean-joint table: the bundled copy (identical to ``../shared/data/mano``)."""
+
+settings.register_profile("handsim", derandomize=True, deadline=None, database=None, print_blob=False)
+settings.load_profile("handsim")
 
 _REASON = "needs the real sample data in ../shared/data (present in the project's CI, not in a user's clone)"
 
@@ -23,11 +46,11 @@ def _require(path: Path) -> Path:
 
 @pytest.fixture
 def graspdb_dir() -> Path:
-    """The GraspDB14 sample folder (skips the test when absent)."""
+    """The GraspDB14 sample folder (skips the test when absent: GraspDB14 is never bundled)."""
     return _require(GRASPDB)
 
 
 @pytest.fixture
 def tzionas_dir() -> Path:
-    """The Tzionas IJCV16 sample folder (skips the test when absent)."""
-    return _require(TZIONAS)
+    """The Tzionas IJCV16 sample folder bundled with handsim (never skips)."""
+    return TZIONAS

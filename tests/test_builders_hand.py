@@ -30,8 +30,6 @@ def hand(request):
     label, make, collision = request.param
     if label.startswith("graspdb") and not GRASPDB.exists():
         pytest.skip("needs ../shared/data/graspdb14 (present in CI, not in a user's clone)")
-    if label.startswith("tzionas") and not TZIONAS.exists():
-        pytest.skip("needs ../shared/data/tzionas_ijcv16 (present in CI, not in a user's clone)")
     skeleton = make()
     spec = build_hand(skeleton, collision=collision)
     return skeleton, spec, compile_spec(spec)

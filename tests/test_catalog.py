@@ -58,6 +58,30 @@ def test_get_unknown_name_raises_error_listing_the_catalogue():
         assert name in str(info.value)
 
 
+@pytest.mark.parametrize("what", ["foo.xyz", "foo.DAE", "teapot.glb"])
+def test_resolve_of_an_unsupported_extension_names_it_and_lists_what_handsim_reads(what):
+    with pytest.raises(InputFileError) as err:
+        catalog.resolve(what)
+    suffix = what[what.index(".") :]
+    assert str(err.value) == (
+        f"{what}: unsupported mesh extension {suffix!r}; handsim reads meshes .obj, .off, .stl, .ply (give "
+        "their units), Tzionas object .SKEL files, ARCTIC template folders and catalogue names (see "
+        "`handsim catalog`)"
+    )
+
+
+def test_resolve_of_a_file_without_extension_is_not_looked_up_in_the_catalogue(tmp_path):
+    path = tmp_path / "mug"
+    path.write_text("v 0 0 0\n")
+    with pytest.raises(InputFileError, match=rf"^{path}: a file without a mesh extension; handsim reads"):
+        catalog.resolve(path)
+
+
+def test_resolve_of_a_missing_tzionas_skel_says_file_not_found():
+    with pytest.raises(InputFileError, match=r"^nope\.SKEL: file not found$"):
+        catalog.resolve("nope.SKEL")
+
+
 def test_resolve_mesh_file_without_units_raises_error(tmp_path):
     path = tmp_path / "thing.stl"
     path.write_bytes(b"")

@@ -19,6 +19,7 @@ def test_help_explains_the_commands(capsys):
     assert "handsim demo" in out and "build" in out
 
 
+@pytest.mark.slow
 def test_demo_checks_the_default_hand_and_reports_on_the_bundled_tzionas_sample(capsys, tmp_path):
     out_dir = tmp_path / "demo"
     assert main(["demo", "-o", str(out_dir), "--workers", "1", "--frames", "0"]) == 0

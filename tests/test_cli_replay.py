@@ -132,6 +132,7 @@ def _run_video(path: Path) -> subprocess.CompletedProcess:
     return done
 
 
+@pytest.mark.slow
 def test_replay_writes_a_gif_video(tmp_path):
     pil = pytest.importorskip("PIL.Image", reason="GIF videos need Pillow")
     out_gif = tmp_path / "seq20.gif"

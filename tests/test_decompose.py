@@ -9,7 +9,6 @@ from __future__ import annotations
 import dataclasses
 import re
 import sys
-import time
 from pathlib import Path
 
 import mujoco
@@ -160,10 +159,7 @@ def test_decompose_reads_second_call_from_cache(
 ) -> None:
     first, cache = decomposed
     assert files_under(cache) == [entry_path(cache, first.key)]
-    start = time.perf_counter()
-    again = decompose(annulus, PARAMS, cache_dir=cache)
-    elapsed = time.perf_counter() - start
-    assert elapsed < 0.5
+    again = decompose(annulus, PARAMS, cache_dir=cache)  # its time: benchmarks/io_and_cache.py
     assert again.from_cache is True
     assert again.key == first.key
     assert again.seconds == 0.0
@@ -290,15 +286,13 @@ def test_default_cache_dir_follows_xdg_on_linux(monkeypatch: pytest.MonkeyPatch,
 
 
 def test_decompose_raises_exact_error_on_timeout_and_caches_nothing(annulus: Mesh, tmp_path: Path) -> None:
-    params = dataclasses.replace(PARAMS, timeout_s=0.01)
-    start = time.perf_counter()
+    params = dataclasses.replace(PARAMS, timeout_s=0.01)  # how soon it returns: benchmarks/io_and_cache.py
     with pytest.raises(
         DecompositionError,
         match=r"^annulus: CoACD did not finish within 0\.01 s \(threshold 0\.05, max 16 hulls\); "
         r"raise the timeout or the threshold$",
     ):
         decompose(annulus, params, cache_dir=tmp_path)
-    assert time.perf_counter() - start < 2.0
     assert files_under(tmp_path) == []
 
 

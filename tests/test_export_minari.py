@@ -226,6 +226,7 @@ def test_recover_replay_env_rebuilds_the_episode_environment(dataset) -> None:
         recover_replay_env(dataset, 1)
 
 
+@pytest.mark.slow
 def test_cli_export_in_worker_processes_gives_the_same_arrays(dataset, record, tmp_path, capsys) -> None:
     from handsim.cli import export as export_cli
 
@@ -356,6 +357,7 @@ def test_failed_overwrite_keeps_the_dataset_it_would_replace(dataset, record, tm
     np.testing.assert_array_equal(kept[0].observations, dataset[0].observations)
 
 
+@pytest.mark.slow
 def test_export_refuses_trials_with_different_layouts_in_one_dataset(record, graspdb_dir, tmp_path) -> None:
     glove = _record(find_trial(graspdb_dir / "01_ex01-rad-002-grasp-su01.txt"), record_id="graspdb/01")
     run = _write_records(tmp_path / "run", record, glove)

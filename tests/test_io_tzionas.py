@@ -416,6 +416,15 @@ def test_read_motion_raises_error_if_bone_is_unknown(tmp_path: Path) -> None:
         read_motion(motion, ["Lower Arm", "Fing.0", "Fing.1"])
 
 
+@pytest.mark.parametrize("bones", [["Lower Arm", "Fing.0", "Fing.1"], None])
+def test_read_motion_row_whose_first_entry_is_not_a_number_names_that_entry(tmp_path: Path, bones) -> None:
+    path = write_model(tmp_path, MOTION=MOTION.replace(f"{_I} 11 0 0", f"l{_I[1:]} 11 0 0"))
+    motion = path.with_suffix(".MOTION")
+    with pytest.raises(FormatError) as err:
+        read_motion(motion, bones)
+    assert str(err.value) == f"{motion}:6 [R[0][0]]: expected a number, got 'l'"
+
+
 def test_read_motion_raises_error_if_row_has_wrong_token_count(tmp_path: Path) -> None:
     path = write_model(tmp_path, MOTION=MOTION.replace(f"{_I} 11 0 0", f"{_I} 11 0"))
     motion = path.with_suffix(".MOTION")

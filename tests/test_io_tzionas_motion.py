@@ -18,6 +18,7 @@ from scipy.spatial.transform import Rotation
 
 from handsim.builders import build_hand
 from handsim.errors import FormatError, InputFileError, TrajectoryError
+from handsim.io import read_trajectory
 from handsim.io.tzionas import read_tzionas_skeleton
 from handsim.io.tzionas_motion import (
     DEFAULT_FPS,
@@ -272,6 +273,18 @@ def test_pipe_articulation_is_the_hinge_angle_of_its_second_bone(tzionas_dir: Pa
     assert worst < 0.01 * MM
 
 
+def test_sequence_20_notes_its_fitted_angles_beyond_the_limits_per_dof(hand_fit) -> None:
+    trajectory, fit = hand_fit
+    note = next(n for n in trajectory.notes if "DoF limits" in n)
+    assert note == (
+        "fitted angles outside the DoF limits of 'Model_Hand_R' in 95 samples (position actuators clamp them "
+        "to the joint range): RFing_0_Hand_abd 49/186 (up to 0.7° beyond), RFing_0_Hand_flex 6/186 (up to "
+        "0.3° beyond), RFing_2_0_pron 4/186 (up to 1.1° beyond), RFing_3_0_pron 28/186 (up to 1.4° beyond), "
+        "RFing_4_0_abd 8/186 (up to 0.2° beyond)"
+    )
+    assert fit.notes == trajectory.notes
+
+
 def test_sequence_17_without_its_hand_files_names_the_missing_file(tzionas_dir: Path) -> None:
     models = tzionas_dir / "Models" / "17"
     info = tzionas_dir / "Configs" / "17" / "MODELS_INFO.txt"
@@ -282,6 +295,21 @@ def test_sequence_17_without_its_hand_files_names_the_missing_file(tzionas_dir: 
         TrajectoryError, match=re.escape(f"{info}: no hand 'Model_Hand_X' (Model_Hand_*) listed")
     ):
         read_tzionas_sequence(models, hand="Model_Hand_X")
+
+
+def test_a_folder_named_like_a_motion_is_called_a_folder_not_a_missing_file(
+    tzionas_dir: Path, tmp_path
+) -> None:
+    models = tmp_path / "Models" / "20"
+    models.mkdir(parents=True)
+    for ext in ("SKEL", "LIMITS"):
+        shutil.copy(tzionas_dir / "Models" / "20" / f"Model_Hand_R.{ext}", models)
+    folder = models / "Model_Hand_R.MOTION"
+    folder.mkdir()
+    for read in (read_trajectory, lambda p: read_tzionas_motion(p.with_suffix(".SKEL"))):
+        with pytest.raises(InputFileError) as err:
+            read(folder)
+        assert str(err.value) == f"{folder}: is a directory, expected a file"
 
 
 def test_without_index_bounds_every_row_after_the_rigging_pose_is_a_frame(

@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import json
 import re
 import sys
 
@@ -16,7 +15,6 @@ from handsim.errors import FormatError, ModelError, SkeletonError, TrajectoryErr
 from handsim.io.mano import (
     FINGERS,
     MANO_JOINT_NAMES,
-    MEAN_JOINTS_FILE,
     MANOSequence,
     axis_angle_to_matrix,
     full_mano_pose,
@@ -30,7 +28,6 @@ from handsim.io.mano import (
 )
 from handsim.io.safe_pickle import load_restricted_pickle
 from handsim.sim import compile_spec, warning_counts
-from tests.conftest import MANO
 from tests.mano_fixtures import (
     PARENTS,
     TIP_IDS,
@@ -173,14 +170,6 @@ def test_fingertips_are_extrapolated_when_the_model_has_too_few_vertices(tmp_pat
     j = {n: skeleton.joints[skeleton.joint_index(n)].position for n in skeleton.joint_names}
     direction = j["index3"] - j["index2"]
     np.testing.assert_allclose(np.cross(j["index_tip"] - j["index3"], direction), 0.0, atol=1e-15)
-
-
-def test_bundled_mean_joint_table_is_the_shared_one():
-    shared = MANO / "mano_right_mean_joints.json"
-    if not shared.exists():
-        pytest.skip(f"needs the real sample data in ../shared/data: {shared} is absent")
-    assert json.loads(MEAN_JOINTS_FILE.read_text()) == json.loads(shared.read_text())
-    assert (MEAN_JOINTS_FILE.parent / "NOTICE").read_text().count("MANO") >= 3
 
 
 def test_mano_skeleton_raises_error_if_side_contradicts_the_joints():

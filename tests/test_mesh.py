@@ -6,9 +6,9 @@ import numpy as np
 import pytest
 import trimesh
 
-from handsim.errors import InputFileError, MeshError
+from handsim.errors import FormatError, InputFileError, MeshError
 from handsim.io.mesh import read_mesh
-from handsim.mesh import boundary_loops, cap_loops, validate_mesh
+from handsim.mesh import boundary_loops, cap_loops, principal_extents, validate_mesh
 
 BOX = trimesh.creation.box((0.05, 0.04, 0.03))
 
@@ -173,3 +173,134 @@ def test_tzionas_cube_and_pipe_meshes_read_in_mm(tzionas_dir):
     assert cube.watertight
     pipe = read_mesh(tzionas_dir / "Models/17/Model_Object_Pipe_Gray.OFF", "mm")
     assert pipe.extent.max() == pytest.approx(0.35, abs=1e-3)
+
+
+def _box_text(file_type: str) -> str:
+    text = trimesh.creation.box((50.0, 40.0, 30.0)).export(file_type=file_type)
+    return "".join(line + "\n" for line in text.splitlines() if not line.startswith("#"))
+
+
+def test_obj_without_faces_is_reported_as_vertices_without_faces(tmp_path):
+    path = tmp_path / "cloud.obj"
+    path.write_text("".join(line + "\n" for line in _box_text("obj").splitlines() if line.startswith("v ")))
+    with pytest.raises(MeshError) as err:
+        read_mesh(path, "mm")
+    assert str(err.value) == (
+        f"{path}: the file holds 8 vertices but no faces; a mesh needs triangles or polygons (OBJ 'f' lines) "
+        "that close its surface, not a point cloud"
+    )
+
+
+@pytest.mark.parametrize(
+    ("counts", "expected"),
+    [("8 13 0", "8 vertices and 13 faces"), ("9 12 0", "9 vertices and 12 faces")],
+)
+def test_off_header_promising_more_than_the_file_holds_names_the_header_line(tmp_path, counts, expected):
+    lines = _box_text("off").splitlines()
+    assert lines[1] == "8 12 0"
+    lines[1] = counts
+    path = tmp_path / "box.off"
+    path.write_text("\n".join(lines) + "\n")
+    with pytest.raises(FormatError) as err:
+        read_mesh(path, "mm")
+    held = "8 vertex and 12 face lines" if counts == "8 13 0" else "9 vertex and 11 face lines"
+    assert str(err.value) == (
+        f"{path}:2 [counts]: the header promises {expected}, but the file ends after {held} (line 22)"
+    )
+
+
+def test_off_header_promising_fewer_faces_than_the_file_holds_is_an_error(tmp_path):
+    lines = _box_text("off").splitlines()
+    lines[1] = "8 11 0"
+    path = tmp_path / "box.off"
+    path.write_text("\n".join(lines) + "\n")
+    with pytest.raises(FormatError) as err:
+        read_mesh(path, "mm")
+    assert (
+        str(err.value)
+        == f"{path}:22 [end]: unexpected content after the 11 faces the header (line 2) promises"
+    )
+
+
+def test_off_with_face_colours_and_a_coff_header_reads(tmp_path):
+    lines = _box_text("off").splitlines()
+    lines[0] = "COFF"
+    lines[2:10] = [f"{line} 255 0 0 255" for line in lines[2:10]]
+    lines[10:] = [f"{line} 0.5 0.5 0.5" for line in lines[10:]]
+    path = tmp_path / "box.off"
+    path.write_text("\n".join(lines) + "\n")
+    assert read_mesh(path, "mm").volume == pytest.approx(6e-5)
+
+
+def test_mesh_thinner_than_a_sheet_of_paper_is_refused_with_its_thickness(tmp_path):
+    path = tmp_path / "foil.obj"
+    trimesh.creation.box((50.0, 50.0, 0.003)).export(path)  # 3 µm thick, 0.0075 g of water
+    with pytest.raises(MeshError) as err:
+        read_mesh(path, "mm")
+    assert str(err.value) == (
+        f"{path}: the object is 0.003 mm thick (its smallest extent along its principal axes), thinner "
+        "than the 0.1 mm handsim accepts (a sheet of paper); a surface this thin has no usable volume, "
+        "mass or contact"
+    )
+
+
+def test_thickness_is_measured_across_a_tilted_plate():
+    plate = trimesh.creation.box((0.05, 0.05, 0.001))
+    plate.apply_transform(trimesh.transformations.rotation_matrix(0.7, [1.0, 1.0, 0.0]))
+    extents = principal_extents(plate.vertices)
+    assert extents[2] == pytest.approx(0.001, rel=1e-9)
+    assert np.ptp(plate.vertices, axis=0).min() > 0.02  # an axis-aligned box would call it 20+ mm thick
+
+
+def test_a_business_card_thick_mesh_is_accepted(tmp_path):
+    path = tmp_path / "card.obj"
+    trimesh.creation.box((85.0, 55.0, 0.4)).export(path)
+    assert read_mesh(path, "mm").extent[2] == pytest.approx(0.0004)
+
+
+@pytest.mark.parametrize(("faces", "present"), [("13", 20), ("11", 20), ("899999999", 20)])
+def test_ascii_ply_header_promising_other_counts_than_the_file_holds_is_an_error(tmp_path, faces, present):
+    text = trimesh.creation.box((50.0, 40.0, 30.0)).export(file_type="ply", encoding="ascii").decode()
+    assert "element face 12\n" in text
+    path = tmp_path / "box.ply"
+    path.write_text(text.replace("element face 12\n", f"element face {faces}\n"))
+    with pytest.raises(FormatError) as err:
+        read_mesh(path, "mm")
+    promised = 8 + int(faces)
+    assert str(err.value) == (
+        f"{path}:10 [header]: the header promises elements 8 'vertex', {faces} 'face' ({promised} data "
+        f"lines), but {present} follow it"
+    )
+
+
+def test_binary_stl_shorter_than_its_triangle_count_is_an_error(tmp_path):
+    data = trimesh.creation.box((50.0, 40.0, 30.0)).export(file_type="stl")
+    path = tmp_path / "box.stl"
+    path.write_bytes(data[:-10])
+    with pytest.raises(FormatError) as err:
+        read_mesh(path, "mm")
+    assert str(err.value) == (
+        f"{path} [triangle count]: the binary STL header promises 12 triangles (684 bytes), but the file has "
+        "674 bytes"
+    )
+    path.write_bytes(data)
+    assert read_mesh(path, "mm").volume == pytest.approx(6e-5)
+
+
+def test_trimesh_logs_nothing_while_handsim_reads_a_malformed_file(tmp_path, caplog):
+    path = tmp_path / "bad.stl"  # a facet normal that is no number: trimesh logs a traceback, then reads it
+    path.write_text(
+        "solid x\nfacet normal 0 0 zz\nouter loop\nvertex 0 0 0\nvertex 50 0 0\nvertex 0 50 0\nendloop\n"
+        "endfacet\nendsolid\n"
+    )
+    with caplog.at_level("DEBUG", logger="trimesh"), pytest.raises(MeshError):
+        read_mesh(path, "mm")
+    assert [r for r in caplog.records if r.name.startswith("trimesh")] == []
+
+
+def test_a_file_trimesh_reads_nothing_from_is_not_called_a_point_cloud(tmp_path):
+    path = tmp_path / "bad.stl"
+    path.write_text("solid x\nfacet normal 0 0 1\n outer loop\n  vertex 0 0 zz\n")
+    with pytest.raises(MeshError) as err:
+        read_mesh(path, "mm")
+    assert str(err.value) == f"{path}: no triangle could be read from it as STL; is it a valid STL file?"

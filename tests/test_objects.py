@@ -84,6 +84,7 @@ def test_arctic_mesh_obj_with_parts_json_gives_the_same_parts(arctic_folder, tmp
         np.testing.assert_allclose(np.sort(pa.mesh.vertices, axis=0), np.sort(pb.mesh.vertices, axis=0))
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("theta", [0.0, 0.4, 1.3, -2.0])
 def test_arctic_hinge_matches_the_arctic_formula(arctic_folder, arctic_spec, theta):
     model = compile_spec(arctic_spec)
@@ -101,6 +102,7 @@ def test_arctic_hinge_matches_the_arctic_formula(arctic_folder, arctic_spec, the
     np.testing.assert_allclose(simulated, expected, atol=1e-9)
 
 
+@pytest.mark.slow
 def test_arctic_object_drops_onto_the_table_and_rests_without_warnings(arctic_spec):
     result = drop_test(arctic_spec)
     assert result.warnings == {}

@@ -42,7 +42,7 @@ from handsim.report.charts import (
 )
 from handsim.report.frames import FrameBudget, load_frames
 from handsim.runner.records import RecordsError
-from tests.conftest import SHARED_DATA, _require
+from tests.conftest import GRASPDB, TZIONAS, _require
 
 # --------------------------------------------------------------------------------------------- fixtures
 
@@ -1092,9 +1092,10 @@ def test_report_opens_in_headless_chromium_without_console_errors(run_dir, tmp_p
     assert pixels.std() > 20 and len(np.unique(pixels.reshape(-1, 3), axis=0)) > 50  # not blank
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("dataset", ["graspdb14", "tzionas_ijcv16"])
 def test_real_dataset_run_reports_every_trial_and_opens_in_chromium(dataset, tmp_path):
-    data = _require(SHARED_DATA / dataset)
+    data = TZIONAS if dataset == "tzionas_ijcv16" else _require(GRASPDB)  # the Tzionas sample is bundled
     out = tmp_path / "out"
     command = [sys.executable, "-m", "handsim.cli", "report", str(data), "-o", str(out)]
     done = subprocess.run(command, capture_output=True, text=True, timeout=900, check=False)

@@ -477,6 +477,7 @@ def test_run_dataset_raises_error_for_a_bad_option(tmp_path, options, message):
 # Execution without the shared data (copies of the bundled Tzionas sequence)
 
 
+@pytest.mark.slow
 def test_resume_after_an_interrupt_equals_an_uninterrupted_run_and_runs_no_trial_twice(tmp_path, monkeypatch):
     discovery = discover(_tzionas_copies(tmp_path / "data", [20, 21, 22]))
     config = ReplayConfig(control_rate=50.0)
@@ -605,6 +606,7 @@ def real_run(tmp_path_factory):
     return discover(SHARED_DATA), out, summary, read_records(out)
 
 
+@pytest.mark.slow
 def test_the_real_data_run_records_every_trial(real_run):
     discovery, out, summary, records = real_run
     assert sorted(r["id"] for r in records) == [*GRASPDB_IDS, TZIONAS_ID]
@@ -643,6 +645,7 @@ def test_the_real_data_run_records_every_trial(real_run):
     assert max(recorded["curves"]["contacts_per_finger"]["thumb"]) > 0  # the thumb pushes the cube
 
 
+@pytest.mark.slow
 def test_a_process_pool_gives_the_in_process_records_and_resumes_after_an_interrupt(real_run, tmp_path):
     discovery, _, _, records = real_run
     entries = tuple(e for e in discovery.entries if e.id in FAST_IDS)
@@ -663,6 +666,7 @@ def test_a_process_pool_gives_the_in_process_records_and_resumes_after_an_interr
     assert _without_timing(read_records(tmp_path)) == expected
 
 
+@pytest.mark.slow
 def test_the_ray_backend_gives_bitwise_the_records_of_the_local_backend(real_run, tmp_path):
     ray = pytest.importorskip("ray")
     discovery, _, _, records = real_run

@@ -23,9 +23,11 @@ from handsim.builders.graspdb_objects import (
     graspdb_object,
 )
 from handsim.errors import InputFileError
+from handsim.io._text import require_file
 from handsim.io.arctic_motion import ARCTIC_OBJECTS as ARCTIC_NAMES
 from handsim.io.mesh import MESH_SUFFIXES
 from handsim.object_model import ObjectModel, mesh_object
+from handsim.physical_ranges import DENSITY, OBJECT_MASS
 
 DEFAULT_DENSITY = 1000.0
 """kg/m³ for a mesh file given neither density nor mass (water; plastics are 900–1400)."""
@@ -137,6 +139,7 @@ def resolve(
     units: str | None = None,
     density: float | None = None,
     mass: float | None = None,
+    force: bool = False,
 ) -> ObjectModel:
     """An object from a catalogue name, an ARCTIC template folder, a Tzionas ``.SKEL`` or a mesh file.
 
@@ -146,25 +149,41 @@ def resolve(
         density: Density in kg/m³ for a mesh file (default 1000, water), or to override a catalogue,
             ARCTIC or Tzionas object's own.
         mass: Total mass in kg instead of a density (the mesh may then be open).
+        force: Accept a ``density`` or ``mass`` outside its documented range
+            (:mod:`handsim.physical_ranges`); checked before any file is read. The built object's total
+            mass is checked again by :func:`handsim.builders.objects.prepare_object`.
 
     Returns:
         The object model.
 
     Raises:
+        OutOfRangeError: ``density`` or ``mass`` is implausible and ``force`` is False.
         UnknownObjectError: Not a path and not a catalogue name (the message lists the names), or the name
             of an ARCTIC object (its template folder is needed).
-        InputFileError: A path that does not exist (a file or folder name, not a catalogue name), or a mesh
-            file without ``units``.
+        InputFileError: A mesh file without ``units``; a path that does not exist (a file or folder name,
+            not a catalogue name); a file or name with an extension that is not a mesh's (``.obj``,
+            ``.off``, ``.stl``, ``.ply``) or ``.skel``.
     """
+    if density is not None:
+        DENSITY.check(density, force=force, subject="object ")
+    if mass is not None:
+        OBJECT_MASS.check(mass, force=force, subject="object ")
     path = Path(what)
     if path.is_dir():
         return arctic(path, density=density, mass=mass)
-    if not path.exists() and (len(path.parts) > 1 or path.suffix):
+    suffix = path.suffix.lower()
+    if suffix not in ("", ".skel", *MESH_SUFFIXES):
+        raise InputFileError(
+            f"{path}: unsupported mesh extension {path.suffix!r}; handsim reads meshes "
+            f"{', '.join(MESH_SUFFIXES)} (give their units), Tzionas object .SKEL files, ARCTIC template "
+            "folders and catalogue names (see `handsim catalog`)"
+        )
+    if not path.exists() and (len(path.parts) > 1 or suffix) and suffix != ".skel":
         kind = (
             "ARCTIC template folder"
             if path.parent.name == "object_vtemplates"
             else "mesh file"
-            if path.suffix.lower() in MESH_SUFFIXES
+            if suffix in MESH_SUFFIXES
             else "file or folder"
         )
         raise InputFileError(
@@ -176,11 +195,17 @@ def resolve(
             f"{what!r} is an ARCTIC object; ARCTIC's templates are not bundled (their licence forbids it): "
             f"pass your template folder, e.g. arctic_data/data/meta/object_vtemplates/{what}"
         )
-    if path.suffix.lower() == ".skel" and path.is_file():
+    if suffix == ".skel":
         from handsim.io.tzionas_objects import read_tzionas_object
 
-        return _with_mass(read_tzionas_object(path), density, mass)
-    if path.suffix.lower() in MESH_SUFFIXES:
+        return _with_mass(read_tzionas_object(require_file(path)), density, mass)
+    if not suffix and path.is_file():
+        raise InputFileError(
+            f"{path}: a file without a mesh extension; handsim reads meshes {', '.join(MESH_SUFFIXES)} (give "
+            "their units), Tzionas object .SKEL files, ARCTIC template folders and catalogue names "
+            "(see `handsim catalog`)"
+        )
+    if suffix in MESH_SUFFIXES:
         from handsim.io.mesh import read_mesh
 
         if units is None:

@@ -28,6 +28,7 @@ from handsim.builders.geom_classes import add_geom_classes
 from handsim.builders.hand_geometry import Capsule, default_hand_mass, finger_chains, hand_geometry
 from handsim.builders.surfaces import SKIN
 from handsim.errors import ModelError
+from handsim.physical_ranges import HAND_MASS
 from handsim.skeleton import Skeleton, mj_name
 
 SKIN_RGBA = (0.87, 0.70, 0.60, 1.0)
@@ -132,6 +133,7 @@ def build_hand(
     collision: str = "capsules",
     name: str | None = None,
     timestep: float = 0.002,
+    force: bool = False,
 ) -> mujoco.MjSpec:
     """Build a position-controlled MuJoCo hand from a skeleton.
 
@@ -144,6 +146,7 @@ def build_hand(
             whose hulls intersect in the rest pose do not collide with each other).
         name: Model name; the skeleton's name by default.
         timestep: Simulation timestep in seconds.
+        force: Accept a ``mass`` outside :data:`handsim.physical_ranges.HAND_MASS` (0.1 to 1 kg).
 
     Returns:
         An uncompiled spec. The root body sits at the skeleton's root rest position and frame; DoFs of
@@ -151,7 +154,10 @@ def build_hand(
 
     Raises:
         ModelError: Unknown ``collision`` option, or ``"mesh"`` without a skinned mesh.
+        OutOfRangeError: ``mass`` is not a human hand's and ``force`` is False.
     """
+    if mass is not None:
+        HAND_MASS.check(mass, force=force)
     if collision not in ("capsules", "mesh"):
         raise ModelError(f"unknown collision option {collision!r}; expected 'capsules' or 'mesh'")
     spec = mujoco.MjSpec()

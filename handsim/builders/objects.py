@@ -35,6 +35,7 @@ from handsim.builders.surfaces import CONTACT_CONDIM, OBJECT, Surface
 from handsim.errors import ModelError
 from handsim.mesh import Mesh
 from handsim.object_model import Hinge, ObjectModel, Primitive
+from handsim.physical_ranges import DENSITY, OBJECT_MASS
 
 OBJECT_RGBA = (0.55, 0.60, 0.68, 1.0)
 HULL_RGBA = (0.9, 0.5, 0.2, 0.4)
@@ -96,8 +97,9 @@ def prepare_object(
     cache_dir: str | None = None,
     use_cache: bool = True,
     progress: bool = False,
+    force: bool = False,
 ) -> PreparedObject:
-    """Decompose the object's parts (cached) and compute their mass properties.
+    """Compute the object's mass properties, check its mass, and decompose its parts (cached).
 
     Args:
         model: The object.
@@ -105,19 +107,30 @@ def prepare_object(
         cache_dir: Decomposition cache directory (default: ``default_cache_dir()``).
         use_cache: Read and write the decomposition cache.
         progress: Show a progress bar while CoACD runs.
+        force: Accept a density or total mass outside :data:`handsim.physical_ranges.DENSITY` /
+            :data:`~handsim.physical_ranges.OBJECT_MASS`.
 
     Returns:
         The prepared object.
 
     Raises:
+        OutOfRangeError: The density or the total mass (mesh volume × density) is outside its documented
+            range and ``force`` is False; checked before any decomposition.
         DecompositionError: CoACD failed or timed out on a part (the message names the mesh).
     """
     params = params or DecompositionParams()
+    masses, notes = _mass_properties(model)
+    _check_mass(model, masses, force)
     decompositions = {
         part.name: decompose(part.mesh, params, cache_dir=cache_dir, use_cache=use_cache, progress=progress)
         for part in model.parts
         if not part.primitives
     }
+    return PreparedObject(model, decompositions, masses, tuple(notes))
+
+
+def _mass_properties(model: ObjectModel) -> tuple[dict[str, MassProperties], list[str]]:
+    """Each part's mass properties from its mesh and the density (or the total mass), with notes."""
     notes: list[str] = []
     if model.density is not None:
         masses = {p.name: _mesh_mass_properties(p.mesh.to_trimesh(), model.density) for p in model.parts}
@@ -135,7 +148,24 @@ def prepare_object(
                 f"mass {model.mass:g} kg given; parts {hulled} are open, so their volume and inertia come "
                 "from their convex hulls"
             )
-    return PreparedObject(model, decompositions, masses, tuple(notes))
+    return masses, notes
+
+
+def _check_mass(model: ObjectModel, masses: dict[str, MassProperties], force: bool) -> None:
+    """Refuse a density or total mass outside its documented range, unless forced.
+
+    The density checked is the given one, or the given mass over the volume the mass was spread over.
+    """
+    subject = f"object {model.name!r} "
+    volume = sum(p.volume for p in masses.values())
+    total = sum(p.mass for p in masses.values())
+    cm3 = f"{volume * 1e6:.4g} cm³"
+    if model.density is not None:
+        DENSITY.check(model.density, force=force, subject=subject)
+        OBJECT_MASS.check(total, force=force, subject=subject, context=f" ({cm3} at {model.density:g} kg/m³)")
+    else:
+        OBJECT_MASS.check(total, force=force, subject=subject)
+        DENSITY.check(total / volume, force=force, subject=subject, context=f" ({total:g} kg over {cm3})")
 
 
 def hinge_friction(hinge: Hinge, child: MassProperties, gravity: float = 9.81) -> float:
@@ -305,6 +335,7 @@ def build_object(
     progress: bool = False,
     free: bool = True,
     surface: Surface = OBJECT,
+    force: bool = False,
 ) -> mujoco.MjSpec:
     """Build an object's MuJoCo spec: :func:`prepare_object` then :func:`object_spec`.
 
@@ -316,11 +347,18 @@ def build_object(
         progress: Show a progress bar while CoACD runs.
         free: Give the root body a free joint.
         surface: Contact parameters of the collision geoms (:mod:`handsim.builders.surfaces`).
+        force: Accept a density or mass outside the documented ranges (see :func:`prepare_object`).
 
     Returns:
         The spec; it is not compiled.
+
+    Raises:
+        OutOfRangeError: The density or total mass is implausible and ``force`` is False.
+        DecompositionError: CoACD failed or timed out on a part.
     """
-    prepared = prepare_object(model, params, cache_dir=cache_dir, use_cache=use_cache, progress=progress)
+    prepared = prepare_object(
+        model, params, cache_dir=cache_dir, use_cache=use_cache, progress=progress, force=force
+    )
     return object_spec(prepared, free=free, surface=surface)
 
 

@@ -18,7 +18,7 @@ from collections.abc import Sequence
 
 from handsim import __version__
 from handsim.cli import build, catalog, demo, export, replay, report, trajectory
-from handsim.cli._common import EXIT_INTERRUPTED, Parser
+from handsim.cli._common import EXIT_INTERRUPTED, Parser, range_problem
 from handsim.errors import HandsimError
 
 DESCRIPTION = """\
@@ -53,6 +53,9 @@ def main(argv: Sequence[str] | None = None) -> int:
         if getattr(args, "func", None) is None:
             parser.print_help()
             return 2
+        problem = range_problem(args)
+        if problem is not None:
+            args.command_parser.error(problem)  # the problem first, then the usage, on stderr: exit 2
         return args.func(args)
     except HandsimError as exc:
         print(f"handsim: error: {exc}", file=sys.stderr)

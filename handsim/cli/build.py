@@ -5,17 +5,28 @@ from __future__ import annotations
 import argparse
 from collections.abc import Callable
 
-from handsim.cli._common import add_hand_size, output_file, positive_number, usage_error, write_text
+from handsim.cli._common import (
+    add_force,
+    add_hand_size,
+    add_object_mass_options,
+    add_ranged_float,
+    output_file,
+    positive_number,
+    usage_error,
+    write_text,
+)
+from handsim.physical_ranges import HAND_MASS
 
 
 def _hand_spec(skeleton_path: str | None, args: argparse.Namespace):
     from handsim.builders import build_hand, default_hand
     from handsim.io import read_skeleton
 
+    force = args.force
     if skeleton_path is None:
-        return default_hand(args.hand_length, args.hand_breadth, mass=args.hand_mass), None
+        return default_hand(args.hand_length, args.hand_breadth, mass=args.hand_mass, force=force), None
     skeleton = read_skeleton(skeleton_path)
-    return build_hand(skeleton, mass=args.hand_mass, collision=args.collision), skeleton
+    return build_hand(skeleton, mass=args.hand_mass, collision=args.collision, force=force), skeleton
 
 
 def _print_model(spec) -> None:
@@ -74,13 +85,14 @@ def _prepare(what: str, args: argparse.Namespace):
     from handsim.builders.catalog import resolve
     from handsim.builders.objects import prepare_object
 
-    model = resolve(what, units=args.units, density=args.density, mass=args.mass)
+    model = resolve(what, units=args.units, density=args.density, mass=args.mass, force=args.force)
     return prepare_object(
         model,
         _decomposition_params(args),
         cache_dir=args.cache_dir,
         use_cache=not args.no_cache,
         progress=True,
+        force=args.force,
     )
 
 
@@ -99,16 +111,22 @@ def _print_object(prepared) -> None:
             collision = f"{len(d.hulls)} hulls ({origin}; CoACD {d.coacd_seconds:.1f} s)"
         size = " × ".join(f"{e * 1000:.0f}" for e in part.mesh.extent)
         print(
-            f"part       {part.name}: {size} mm, {props.volume * 1e6:.1f} cm³, {props.mass * 1000:.1f} g; "
+            f"part       {part.name}: {size} mm, {props.volume * 1e6:.1f} cm³, {_grams(props.mass)}; "
             f"collision {collision}"
         )
     if model.hinge is not None:
         h = model.hinge
         limits = "unlimited" if h.range is None else f"{h.range[0]:.3f} .. {h.range[1]:.3f} rad"
         print(f"hinge      axis {tuple(round(a, 4) for a in h.axis)} through {h.pos} m, {limits}")
-    print(f"mass       {prepared.total_mass * 1000:.1f} g")
+    print(f"mass       {_grams(prepared.total_mass)}")
     for note in (*model.notes, *prepared.notes):
         print(f"note       {note}")
+
+
+def _grams(kg: float) -> str:
+    """A mass in grams to 0.1 g, with three significant digits below 1 g (never a bare "0.0 g")."""
+    grams = kg * 1000
+    return f"{grams:.1f} g" if grams >= 1 else f"{grams:.3g} g"
 
 
 def _build_object(args: argparse.Namespace) -> int:
@@ -144,13 +162,7 @@ def _build_scene(args: argparse.Namespace) -> int:
 
 def _add_object_options(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--units", choices=("m", "mm"), help="units of a mesh file (required for mesh files)")
-    mass = parser.add_mutually_exclusive_group()
-    mass.add_argument(
-        "--density", type=positive_number, metavar="KG_M3", help="density (default: the object's own)"
-    )
-    mass.add_argument(
-        "--mass", type=positive_number, metavar="KG", help="total object mass instead of a density"
-    )
+    add_object_mass_options(parser, forced=True)
     parser.add_argument(
         "--threshold",
         type=_decomposition_param("threshold", float),
@@ -197,6 +209,7 @@ def register(commands: argparse._SubParsersAction) -> None:
     hand.add_argument("skeleton", nargs="?", metavar="SKELETON_FILE", help=".xmlskel or .SKEL file")
     hand.add_argument("--default", action="store_true", help="use the parametric default hand")
     _add_hand_options(hand, "--mass")
+    add_force(hand)
     hand.add_argument(
         "-o", "--output", type=output_file, metavar="XML", help="write the model as MJCF to this file"
     )
@@ -212,6 +225,7 @@ def register(commands: argparse._SubParsersAction) -> None:
     )
     obj.add_argument("object", metavar="MESH_OR_CATALOG_NAME")
     _add_object_options(obj)
+    add_force(obj)
     obj.add_argument(
         "-o", "--output", type=output_file, metavar="XML", help="write the model as MJCF to this file"
     )
@@ -236,6 +250,7 @@ def register(commands: argparse._SubParsersAction) -> None:
         "--object", action="append", default=[], metavar="MESH_OR_CATALOG_NAME", help="an object (repeatable)"
     )
     _add_object_options(scene)
+    add_force(scene)
     scene.add_argument("--no-table", action="store_true", help="no table and floor")
     scene.add_argument(
         "-o", "--output", type=output_file, metavar="XML", help="write the model as MJCF to this file"
@@ -252,14 +267,11 @@ def _add_hand_options(parser: argparse.ArgumentParser, mass_flag: str) -> None:
         metavar="M",
         help="parametric hand: breadth across the metacarpals in metres (default 0.45 × length)",
     )
-    parser.add_argument(
-        mass_flag,
-        dest="hand_mass",
-        type=positive_number,
-        default=None,
-        metavar="KG",
-        help="whole-hand mass in kg (default: 0.45 kg scaled with the cube of hand length)",
-    )
+    add_ranged_float(
+        parser, parser, mass_flag, HAND_MASS, dest="hand_mass", default=None, metavar="KG",
+        help="whole-hand mass in kg (default: 0.45 kg scaled with the cube of hand length), "
+        f"{HAND_MASS.describe()} without --force",
+    )  # fmt: skip
     parser.add_argument(
         "--collision",
         choices=("capsules", "mesh"),

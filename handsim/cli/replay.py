@@ -13,7 +13,14 @@ import json
 import math
 import sys
 
-from handsim.cli._common import add_control_rate, output_file, positive_number, usage_error, write_text
+from handsim.cli._common import (
+    add_control_rate,
+    add_object_mass_options,
+    output_file,
+    positive_number,
+    usage_error,
+    write_text,
+)
 from handsim.headless import prefer_headless_gl
 
 EXIT_DIVERGED = 3
@@ -285,11 +292,7 @@ def register(commands: argparse._SubParsersAction) -> None:
         "--calibration", metavar="JSON", help="GraspDB14: calibration of a raw-count recording"
     )
     replay.add_argument("--units", choices=("m", "mm"), help="units of a mesh file given as --object")
-    mass = replay.add_mutually_exclusive_group()
-    mass.add_argument(
-        "--density", type=positive_number, metavar="KG_M3", help="object density instead of its own"
-    )
-    mass.add_argument("--mass", type=positive_number, metavar="KG", help="object mass instead of its own")
+    add_object_mass_options(replay, forced=False)
     replay.add_argument(
         "--hand-length", type=positive_number, default=None, metavar="M",
         help="GraspDB14 without --skeleton: parametric hand length, wrist crease to middle fingertip (0.19)",

@@ -12,7 +12,9 @@ def load_trajectory(path: str, skeleton_path: str | None, calibration_path: str 
     """Read a recording (with its skeleton and calibration when given) and attach annotated phases."""
     from handsim.glove import attach_phases, find_annotation_file, load_calibration
     from handsim.io import read_skeleton, read_trajectory
+    from handsim.io._text import require_file
 
+    require_file(path)  # before its skeleton: a folder named x.MOTION is not "x.SKEL: file not found"
     if skeleton_path is None and Path(path).suffix.lower() == ".motion":
         skeleton_path = str(Path(path).with_suffix(".SKEL"))  # a Tzionas motion's own skeleton
     skeleton = read_skeleton(skeleton_path) if skeleton_path else None

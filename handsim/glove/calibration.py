@@ -287,14 +287,12 @@ def load_calibration(path: str | Path) -> GloveCalibration:
         FormatError: The file is not JSON, or does not follow the schema; the message names the field,
             e.g. ``sensors[3].gain``.
     """
-    from handsim.io._text import read_bytes  # lazy: handsim.io imports handsim.glove
+    from handsim.io._text import decode_utf8, read_bytes  # lazy: handsim.io imports handsim.glove
 
     p = Path(path)
-    data = read_bytes(p)
+    text = decode_utf8(read_bytes(p), p)
     try:
-        obj = json.loads(data.decode("utf-8"))
-    except UnicodeDecodeError as exc:
-        raise FormatError(p, f"not UTF-8 text ({exc.reason} at byte {exc.start})") from None
+        obj = json.loads(text)
     except json.JSONDecodeError as exc:
         raise FormatError(p, f"invalid JSON: {exc.msg} (column {exc.colno})", line=exc.lineno) from None
     return calibration_from_dict(obj, p)

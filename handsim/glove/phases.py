@@ -167,10 +167,10 @@ def read_phase_annotations(path: str | Path) -> tuple[PhaseAnnotation, ...]:
             start after the previous one ends, or the file holds no interval. The message names the file,
             the 1-based line and the field.
     """
-    from handsim.io._text import read_bytes  # lazy: handsim.io imports handsim.glove
+    from handsim.io._text import read_text  # lazy: handsim.io imports handsim.glove
 
     p = Path(path)
-    text = read_bytes(p).decode("utf-8", errors="replace")
+    text = read_text(p)
     result: list[PhaseAnnotation] = []
     for lineno, raw in enumerate(text.splitlines(), start=1):
         line = raw.strip()

@@ -19,6 +19,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING
 
 from handsim.errors import InputFileError
+from handsim.io._text import require_file
 from handsim.skeleton import Skeleton
 from handsim.trajectory import Trajectory
 
@@ -34,8 +35,7 @@ TRAJECTORY_SUFFIXES = {
 
 
 def _suffix_or_error(path: Path, known: dict[str, str], what: str) -> str:
-    if not path.exists():
-        raise InputFileError(f"{path}: file not found")
+    require_file(path)
     if what == "trajectory" and path.name.endswith((".mano.npy", ".object.npy")):
         raise InputFileError(
             f"{path}: an ARCTIC sequence (two MANO hands in <seq>.mano.npy, the object in <seq>.object.npy), "

@@ -8,27 +8,62 @@ from pathlib import Path
 
 from handsim.errors import FormatError, InputFileError
 
+UTF8_BOM = b"\xef\xbb\xbf"
+"""The UTF-8 byte-order mark some editors (Windows Notepad, Excel) write at the start of a text file."""
+
+
+def require_file(path: str | Path) -> Path:
+    """``path`` as a :class:`~pathlib.Path` when it is an existing file (or a link to one).
+
+    Raises:
+        InputFileError: Nothing exists at ``path`` ("file not found"), or it is a directory.
+    """
+    p = Path(path)
+    if p.is_dir():
+        raise InputFileError(f"{p}: is a directory, expected a file")
+    if not p.exists():
+        raise InputFileError(f"{p}: file not found")
+    return p
+
 
 def read_bytes(path: str | Path) -> bytes:
     """Read a file's bytes, turning OS errors into :class:`InputFileError` naming the file."""
-    p = Path(path)
-    if not p.exists():
-        raise InputFileError(f"{p}: file not found")
-    if p.is_dir():
-        raise InputFileError(f"{p}: is a directory, expected a file")
+    p = require_file(path)
     try:
         return p.read_bytes()
     except OSError as exc:
         raise InputFileError(f"{p}: cannot read ({exc.strerror or exc})") from exc
 
 
-def read_text(path: str | Path) -> str:
-    """Read a text file (UTF-8, with Latin-1 as fallback for old datasets)."""
-    data = read_bytes(path)
+def decode_text(data: bytes) -> str:
+    """A text file's content: UTF-8 after any byte-order mark, Latin-1 when it is not UTF-8.
+
+    Line ends are left as they are: ``str.splitlines`` (used by every reader) splits LF, CRLF and CR
+    alike, and ``str.split``/``str.strip`` drop trailing blanks.
+    """
+    data = data.removeprefix(UTF8_BOM)
     try:
         return data.decode("utf-8")
     except UnicodeDecodeError:
         return data.decode("latin-1")
+
+
+def decode_utf8(data: bytes, path: str | Path) -> str:
+    """A UTF-8 text file's content (JSON), after any byte-order mark.
+
+    Raises:
+        FormatError: The bytes are not UTF-8 (the message gives the byte offset in the file).
+    """
+    skip = len(UTF8_BOM) if data.startswith(UTF8_BOM) else 0
+    try:
+        return data[skip:].decode("utf-8")
+    except UnicodeDecodeError as exc:
+        raise FormatError(path, f"not UTF-8 text ({exc.reason} at byte {skip + exc.start})") from None
+
+
+def read_text(path: str | Path) -> str:
+    """Read a text file (see :func:`decode_text`: a byte-order mark dropped, Latin-1 as fallback)."""
+    return decode_text(read_bytes(path))
 
 
 def sha256_of(data: bytes) -> str:

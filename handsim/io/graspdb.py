@@ -32,9 +32,10 @@ import numpy as np
 from handsim.errors import FormatError, TrajectoryError
 from handsim.glove.calibration import GloveCalibration, apply_calibration
 from handsim.glove.sensors import SENSOR_NAMES, SENSORS, computed_dofs, discarded_sensors, driven_dofs
-from handsim.io._text import parse_float, read_bytes, sha256_of
+from handsim.io._text import decode_text, parse_float, read_bytes, sha256_of
 from handsim.skeleton import Skeleton
 from handsim.trajectory import Trajectory
+from handsim.trajectory_ops import with_limit_note
 
 NTOKENS = 30
 """Entries per motion row: 6 time-stamp fields, the switch, 23 sensors."""
@@ -44,6 +45,29 @@ RAW_LIMIT = 7.0
 
 RAW_MAX = 255
 """Largest raw sensor count (8 bits)."""
+
+MIN_FRAMES = 3
+"""Fewest rows of a recording: two sample intervals, the least that describes a motion (a velocity and its
+change); a 1- or 2-row file is a fragment, not a grasp (a GraspDB14 trial has 231 to 282 rows)."""
+
+MIN_SAMPLE_INTERVAL_S = 1.0 / 150.0
+"""Shortest time between two rows, s: 150 Hz, above the fastest CyberGlove (the CyberGlove III streams up
+to 120 records/s, about 100 Hz for the original glove; GraspDB14 recorded at 60 Hz) with room for 1 ms
+time-stamp jitter; see docs/cyberglove.md."""
+
+MAX_SAMPLE_INTERVAL_S = 1.0
+"""Longest time between two rows, s: 30 times the largest interval in the GraspDB14 samples (32 ms, one
+dropped sample); over a longer hole the replay would interpolate more than a second of invented motion,
+as long as a whole reach-to-grasp movement. A longer jump is refused before any resampling (a 1-hour jump
+would be 360,000 frames at 100 Hz)."""
+
+STAMP_TOLERANCE_S = 1e-6
+"""Rounding allowed when an interval is compared with those bounds, s: a tenth of the files' 10 µs time-stamp
+resolution (8.021 s − 7.021 s is 1.0000000000000009 s in floating point, and is 1 s)."""
+
+DEGREES_SHARE = 0.25
+"""Share of sensor values above :data:`RAW_LIMIT` from which a file that holds no raw counts is taken to be
+in degrees (in the three GraspDB14 sample trials converted to degrees, 53 to 69 % exceed 7)."""
 
 _TIMESTAMP_FIELDS = ("year", "month", "day", "hour", "minute", "second")
 FIELDS: tuple[str, ...] = (
@@ -336,7 +360,7 @@ def read_graspdb_glove(
         if held:
             notes.append(f"DoFs not driven by the glove are held at 0: {held}")
 
-    return Trajectory(
+    trajectory = Trajectory(
         times=times,
         dof_names=tuple(dof_names),
         targets=targets,
@@ -348,6 +372,7 @@ def read_graspdb_glove(
         sha256=sha256_of(data),
         notes=tuple(notes),
     )
+    return trajectory if skeleton is None else with_limit_note(trajectory, skeleton)
 
 
 def _calibration_notes(calibration: GloveCalibration, counts: np.ndarray) -> list[str]:
@@ -391,8 +416,8 @@ def _parse(p: Path, data: bytes, kind: str, why: str) -> tuple[np.ndarray, np.nd
             0..:data:`RAW_MAX`).
         why: Text added to the message of a sensor value that does not fit ``kind``.
     """
-    # Invalid UTF-8 can only sit in a token that is not a number; it shows as U+FFFD in that error.
-    text = data.decode("utf-8", errors="replace")
+    # Text that is not UTF-8 can only sit in a token that is not a number; that error shows it as Latin-1.
+    text = decode_text(data)
     linenos, rows = _split_rows(text)
     if not rows:
         what = "23 sensor values in radians" if kind == "rad" else "23 raw sensor counts"
@@ -410,7 +435,39 @@ def _parse(p: Path, data: bytes, kind: str, why: str) -> tuple[np.ndarray, np.nd
         times = _fast_times(values)
         if times is None:  # pragma: no cover - the row-by-row check covers every fast-path check
             raise FormatError(p, "rows failed validation, but no single row could be blamed")
+    _check_timing(p, linenos, rows, times)
     return values, times, rows
+
+
+def _check_timing(p: Path, linenos: list[int], rows: list[list[str]], times: np.ndarray) -> None:
+    """Refuse too few rows, and sample intervals no CyberGlove produces (see the bounds' docstrings)."""
+    if len(times) < MIN_FRAMES:
+        raise FormatError(
+            p,
+            f"{len(times)} row{'s' if len(times) != 1 else ''}: a recording needs at least {MIN_FRAMES} "
+            "(two sample intervals) to describe a motion",
+        )
+    steps = np.diff(times)
+    fast = np.flatnonzero(steps < MIN_SAMPLE_INTERVAL_S - STAMP_TOLERANCE_S)
+    slow = np.flatnonzero(steps > MAX_SAMPLE_INTERVAL_S + STAMP_TOLERANCE_S)
+    first = min((*fast[:1], *slow[:1]), default=None)
+    if first is None:
+        return
+    k = int(first) + 1
+    step = float(steps[k - 1])
+    after = f"time stamp {_stamp(rows[k])!r} is {step:.6g} s after the previous row's (line {linenos[k - 1]})"
+    if step < MIN_SAMPLE_INTERVAL_S - STAMP_TOLERANCE_S:
+        reason = (
+            f"{after}: closer than {MIN_SAMPLE_INTERVAL_S * 1e3:.3g} ms, a sampling rate above "
+            f"{1 / MIN_SAMPLE_INTERVAL_S:g} Hz, faster than any CyberGlove records (at most 120 records/s); "
+            "are the time stamps right?"
+        )
+    else:
+        reason = (
+            f"{after}: more than the {MAX_SAMPLE_INTERVAL_S:g} s a recording may skip (the replay would "
+            "invent the hand's motion over the hole); cut the recording there into two files"
+        )
+    raise FormatError(p, reason, line=linenos[k], field="timestamp")
 
 
 def _split_rows(text: str) -> tuple[list[int], list[list[str]]]:
@@ -484,6 +541,37 @@ def _minute(fields: np.ndarray | list[float]) -> datetime:
     return datetime(*ints)
 
 
+def _not_radians(token: str, rows: list[list[str]], why: str) -> str:
+    """Why a sensor value above :data:`RAW_LIMIT` is not an angle in radians, judged on every row.
+
+    Raw counts: every sensor value of the file is an integer 0..:data:`RAW_MAX`. Degrees: not counts, at
+    least :data:`DEGREES_SHARE` of the values exceed :data:`RAW_LIMIT` and none exceeds 360 (a GraspDB14
+    trial converted to degrees has 53 to 69 % of its values above 7). Anything else is one bad value.
+    """
+    numbers = []
+    for tokens in rows:
+        for t in tokens[_FIRST_SENSOR:]:
+            try:
+                numbers.append(float(t))
+            except ValueError:
+                continue
+    values = np.array(numbers)
+    values = values[np.isfinite(values)]
+    exceeds = f"value {token} exceeds {RAW_LIMIT:g} in magnitude"
+    if np.all((values >= 0) & (values <= RAW_MAX) & (values == np.round(values))):
+        radians = "angles in radians satisfy |x| <= 2*pi"
+        return f"{exceeds}, so this is a raw-count file ({radians}){why}; {_RAW_ADVICE}"
+    magnitude = np.abs(values)
+    share = float(np.mean(magnitude > RAW_LIMIT))
+    if share >= DEGREES_SHARE and magnitude.max() <= 360.0:
+        return (
+            f"{exceeds}: the sensor values reach {magnitude.max():g} and {share:.0%} of them exceed 7, so "
+            "they look like angles in degrees; GraspDB14 'rad' files hold radians (|x| <= 2*pi): convert "
+            "the file's sensor values to radians"
+        )
+    return f"{exceeds}; expected a joint angle in radians (|x| <= 2*pi)"
+
+
 def _checked_parse(path: Path, linenos: list[int], rows: list[list[str]], kind: str, why: str) -> np.ndarray:
     """Parse row by row, raising a :class:`FormatError` that names line and field at the first problem.
 
@@ -526,13 +614,7 @@ def _checked_parse(path: Path, linenos: list[int], rows: list[list[str]], kind: 
             )
         for i in range(_FIRST_SENSOR, NTOKENS):
             if kind == "rad" and abs(row[i]) > RAW_LIMIT:
-                raise FormatError(
-                    path,
-                    f"value {tokens[i]} exceeds {RAW_LIMIT:g} in magnitude, so this is a raw-count file "
-                    f"(angles in radians satisfy |x| <= 2*pi){why}; {_RAW_ADVICE}",
-                    line=line,
-                    field=FIELDS[i],
-                )
+                raise FormatError(path, _not_radians(tokens[i], rows, why), line=line, field=FIELDS[i])
             if kind == "raw" and not (row[i].is_integer() and 0 <= row[i] <= RAW_MAX):
                 raise FormatError(
                     path,

@@ -38,7 +38,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from handsim.errors import FormatError
-from handsim.io._text import read_bytes, sha256_of
+from handsim.io._text import decode_utf8, read_bytes, sha256_of
 from handsim.trajectory import Phase, Trajectory
 
 if TYPE_CHECKING:
@@ -83,10 +83,9 @@ def _number(data: dict, key: str, path: Path, low: float, high: float, *, low_op
 
 def _fields(path: Path, raw: bytes) -> dict:
     try:
-        data = json.loads(raw.decode("utf-8"))
-    except (UnicodeDecodeError, json.JSONDecodeError) as exc:
-        line = getattr(exc, "lineno", None)
-        raise FormatError(path, f"not a JSON document ({exc})", line=line) from None
+        data = json.loads(decode_utf8(raw, path))
+    except json.JSONDecodeError as exc:
+        raise FormatError(path, f"not a JSON document ({exc})", line=exc.lineno) from None
     if not isinstance(data, dict):
         raise FormatError(path, f"expected a JSON object, got {type(data).__name__}")
     unknown = sorted(set(data) - {*_REQUIRED, *_OPTIONAL})

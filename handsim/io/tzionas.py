@@ -29,6 +29,7 @@ import numpy as np
 
 from handsim.errors import FormatError, InputFileError
 from handsim.io._text import numbered_lines, parse_float, parse_floats, parse_int, read_text
+from handsim.io.off import read_off
 from handsim.skeleton import Dof, Joint, Skeleton, SkinnedMesh, mj_name
 
 ROOT_PARENT = "Root_NULL_Bone_0"
@@ -238,6 +239,15 @@ def _is_number(token: str) -> bool:
     return True
 
 
+def _is_row(tokens: list[str]) -> bool:
+    """Whether a ``.MOTION`` line is a row of numbers rather than a bone name.
+
+    It is when it starts with a number, or has 12 tokens of which the last 11 are numbers (a row with a
+    bad first entry, e.g. ``O.98`` for ``0.98``, whose error must name that entry, not an unknown bone).
+    """
+    return _is_number(tokens[0]) or (len(tokens) == len(MOTION_FIELDS) and all(map(_is_number, tokens[1:])))
+
+
 @dataclass
 class _MotionBlock:
     name_line: int
@@ -254,7 +264,7 @@ def _motion_blocks(
     lines = numbered_lines(read_text(path))
     for ln, s in lines:
         tokens = s.split()
-        if s not in known and _is_number(tokens[0]):
+        if s not in known and _is_row(tokens):
             if not blocks:
                 raise FormatError(
                     path, "expected a bone name before the first row", line=ln, field="bone name"
@@ -301,62 +311,6 @@ def read_motion(
     """
     blocks = _motion_blocks(Path(path), bone_names, expected_frames)
     return {k: (rows[:, :9].reshape(-1, 3, 3), rows[:, 9:] * MM) for k, (rows, _) in blocks.items()}
-
-
-def read_off(path: str | Path, units_scale: float = 1e-3) -> tuple[np.ndarray, np.ndarray]:
-    """Read an OFF mesh; polygons are triangulated as fans.
-
-    Args:
-        path: The ``.OFF`` file.
-        units_scale: Factor applied to the coordinates (1e-3: mm to m).
-
-    Returns:
-        Vertices (V, 3) and triangles (F, 3).
-
-    Raises:
-        FormatError: Bad header or counts, wrong token counts, indices out of range, truncated file.
-    """
-    p = Path(path)
-    lines = [(ln, s) for ln, s in numbered_lines(read_text(p)) if not s.startswith("#")]
-    if not lines or lines[0][1].split()[0] != "OFF":
-        raise FormatError(p, "expected the keyword 'OFF'", line=lines[0][0] if lines else 1, field="header")
-    counts = lines[0][1].split()[1:]
-    k = 1
-    if not counts:
-        if len(lines) < 2:
-            raise FormatError(p, "file ends; expected 'nv nf ne'", line=lines[0][0], field="counts")
-        counts, k = lines[1][1].split(), 2
-    if len(counts) not in (2, 3):
-        raise FormatError(p, f"expected 'nv nf ne', got {counts}", line=lines[k - 1][0], field="counts")
-    nv, nf, *_ = (
-        parse_int(c, p, lines[k - 1][0], f) for c, f in zip(counts, ("nv", "nf", "ne"), strict=False)
-    )
-    if len(lines) < k + nv + nf:
-        last = lines[-1][0]
-        msg = f"file ends after {len(lines) - k} vertex/face lines; expected {nv} vertices and {nf} faces"
-        raise FormatError(p, msg, line=last, field="vertex" if len(lines) < k + nv else "face")
-    verts = np.empty((nv, 3))
-    for i, (ln, s) in enumerate(lines[k : k + nv]):
-        tokens = s.split()
-        if len(tokens) != 3:
-            raise FormatError(p, f"expected 3 coordinates, got {len(tokens)}", line=ln, field="vertex")
-        verts[i] = parse_floats(tokens, p, ln, ["x", "y", "z"])
-    tris: list[tuple[int, int, int]] = []
-    for ln, s in lines[k + nv : k + nv + nf]:
-        tokens = s.split()
-        n = parse_int(tokens[0], p, ln, "face size", minimum=3)
-        if len(tokens) != n + 1:
-            msg = f"face of {n} vertices needs {n + 1} tokens, got {len(tokens)}"
-            raise FormatError(p, msg, line=ln, field="face")
-        idx = [parse_int(t, p, ln, "face index") for t in tokens[1:]]
-        if max(idx) >= nv:
-            msg = f"vertex index {max(idx)} out of range; expected 0..{nv - 1}"
-            raise FormatError(p, msg, line=ln, field="face index")
-        tris.extend((idx[0], idx[j], idx[j + 1]) for j in range(1, n - 1))
-    if len(lines) > k + nv + nf:
-        ln = lines[k + nv + nf][0]
-        raise FormatError(p, f"unexpected content after the {nf} faces", line=ln, field="end")
-    return verts * units_scale, np.array(tris, dtype=np.int64).reshape(-1, 3)
 
 
 def _split_names(path: Path, line: int, text: str, bone_names: list[str]) -> list[str]:

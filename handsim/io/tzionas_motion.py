@@ -54,6 +54,7 @@ from handsim.io.tzionas import SkelBone, read_motion, read_skel, read_tzionas_sk
 from handsim.poses import quat_conjugate, quat_multiply
 from handsim.skeleton import Skeleton, rotation_about_axis
 from handsim.trajectory import ObjectTrack, Trajectory
+from handsim.trajectory_ops import with_limit_note
 
 DEFAULT_FPS = 30.0
 """Frame rate assumed when none is given, Hz: the dataset's Kinect-class RGB-D sensor streams at 30 Hz."""
@@ -343,7 +344,7 @@ def _row_line(path: Path, bone: str, row: int) -> int:
 
 def _read_recording(skel: Path, frames: int, bones: list[SkelBone]) -> _Recording:
     motion = _sibling(skel, "MOTION")
-    if not motion.is_file():
+    if not motion.exists():
         raise InputFileError(f"{motion}: file not found; a motion needs the .MOTION beside the .SKEL {skel}")
     data = read_bytes(motion)
     blocks = read_motion(motion, [b.name for b in bones], frames)
@@ -526,22 +527,6 @@ def _fit_notes(fit: MotionFit) -> list[str]:
     ]
 
 
-def _limit_notes(skeleton: Skeleton, targets: np.ndarray) -> list[str]:
-    parts = []
-    for i, d in enumerate(skeleton.dofs):
-        values = targets[:, i]
-        outside = int(np.sum((values < d.lower) | (values > d.upper)))
-        if outside:
-            beyond = max(d.lower - values.min(), values.max() - d.upper)
-            parts.append(f"{d.name} {outside}/{len(values)} (up to {math.degrees(beyond):.1f}° beyond)")
-    if not parts:
-        return ["every fitted angle lies within its DoF limits"]
-    return [
-        "fitted angles outside the DoF limits (position actuators clamp such targets to the joint range): "
-        + ", ".join(parts)
-    ]
-
-
 @dataclass(frozen=True)
 class _Setup:
     path: Path
@@ -626,7 +611,6 @@ def fit_tzionas_motion(
         "root_pose = world pose of the root body of build_hand (root bone origin and frame): MOTION "
         "row M_root,k itself; DoF angles fitted to each bone's rotation relative to its parent",
         *_fit_notes(fit),
-        *_limit_notes(setup.skeleton, targets),
     )
     trajectory = Trajectory(
         times=np.arange(len(setup.rows)) / rate,
@@ -638,7 +622,9 @@ def fit_tzionas_motion(
         sha256=setup.recording.sha256,
         notes=notes,
     )
-    return trajectory, MotionFit(fit.bones, fit.rotation_residual, fit.joints, fit.position_error, notes)
+    trajectory = with_limit_note(trajectory, setup.skeleton, "fitted angles")
+    fit = MotionFit(fit.bones, fit.rotation_residual, fit.joints, fit.position_error, trajectory.notes)
+    return trajectory, fit
 
 
 def read_tzionas_motion(

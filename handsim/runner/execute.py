@@ -25,7 +25,9 @@ import contextlib
 import logging
 import multiprocessing
 import os
+import signal
 import sys
+import threading
 import time
 from collections import deque
 from collections.abc import Callable, Iterator, Sequence
@@ -255,8 +257,20 @@ class _Pool:
         )
 
     def submit(self, fn: Callable[..., object], /, *args: object) -> cf.Future:
-        """Schedule ``fn(*args)`` on a worker."""
-        return self.executor.submit(fn, *args)
+        """Schedule ``fn(*args)`` on a worker (the executor starts a worker here while none is idle).
+
+        A worker started here inherits an ignored SIGINT through exec, so a Ctrl-C sent to the whole process
+        group while its interpreter starts (before :func:`~handsim.runner.worker.prepare_pool_worker` runs)
+        cannot kill it with "Fatal Python error: init_import_site" on the shared stderr; this process stops
+        the pool instead.
+        """
+        if threading.current_thread() is not threading.main_thread():
+            return self.executor.submit(fn, *args)
+        previous = signal.signal(signal.SIGINT, signal.SIG_IGN)
+        try:
+            return self.executor.submit(fn, *args)
+        finally:
+            signal.signal(signal.SIGINT, previous)
 
     def stop(self) -> None:
         """End the pool now: terminate its workers (running trials are lost), reap them, then shut it down.
