@@ -259,18 +259,20 @@ class _Pool:
     def submit(self, fn: Callable[..., object], /, *args: object) -> cf.Future:
         """Schedule ``fn(*args)`` on a worker (the executor starts a worker here while none is idle).
 
-        A worker started here inherits an ignored SIGINT through exec, so a Ctrl-C sent to the whole process
-        group while its interpreter starts (before :func:`~handsim.runner.worker.prepare_pool_worker` runs)
-        cannot kill it with "Fatal Python error: init_import_site" on the shared stderr; this process stops
-        the pool instead.
+        SIGINT is blocked (not ignored) in this thread meanwhile: a worker started here inherits the blocked
+        mask through exec, so a Ctrl-C sent to the whole process group while its interpreter starts (before
+        :func:`~handsim.runner.worker.prepare_pool_worker` ignores SIGINT) cannot kill it with "Fatal Python
+        error: init_import_site" on the shared stderr, and this process receives the pending Ctrl-C as soon as
+        the submit returns, so it is never lost: this process stops the pool.
         """
-        if threading.current_thread() is not threading.main_thread():
+        in_main_thread = threading.current_thread() is threading.main_thread()
+        if not hasattr(signal, "pthread_sigmask") or not in_main_thread:
             return self.executor.submit(fn, *args)
-        previous = signal.signal(signal.SIGINT, signal.SIG_IGN)
+        previous = signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGINT})
         try:
             return self.executor.submit(fn, *args)
         finally:
-            signal.signal(signal.SIGINT, previous)
+            signal.pthread_sigmask(signal.SIG_SETMASK, previous)
 
     def stop(self) -> None:
         """End the pool now: terminate its workers (running trials are lost), reap them, then shut it down.
