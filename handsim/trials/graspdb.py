@@ -79,13 +79,14 @@ def _find(path: Path, options: TrialOptions) -> Trial:
         mass=options.mass,
         hand_length=DEFAULT_HAND_LENGTH_M if options.hand_length is None else float(options.hand_length),
         collision=options.collision or "capsules",
+        thumb_rest=options.thumb_rest,
         notes=tuple(notes),
     )
 
 
 def _load(trial: Trial, metrics: MetricSpec | None, progress: bool) -> LoadedTrial:
     from handsim.builders import build_hand
-    from handsim.glove import attach_phases, load_calibration
+    from handsim.glove import apply_thumb_rest, attach_phases, load_calibration, thumb_rest_note
     from handsim.io import read_skeleton, read_trajectory
 
     if trial.skeleton_path is None:
@@ -98,8 +99,11 @@ def _load(trial: Trial, metrics: MetricSpec | None, progress: bool) -> LoadedTri
     trajectory = read_trajectory(trial.trajectory_path, skeleton=skeleton, calibration=calibration)
     if trial.annotation_path is not None and not trajectory.phases:
         trajectory = attach_phases(trajectory, trial.annotation_path)
-    skeleton_notes = skeleton.notes if trial.skeleton_path else ()
-    return glove_loaded(trial, hand, hand_text, trajectory, metrics, progress, skeleton_notes)
+    notes = skeleton.notes if trial.skeleton_path else ()
+    if trial.thumb_rest is not None:
+        trajectory = apply_thumb_rest(trajectory, skeleton, *trial.thumb_rest)
+        notes = (*notes, thumb_rest_note(*trial.thumb_rest))
+    return glove_loaded(trial, hand, hand_text, trajectory, metrics, progress, notes)
 
 
 def _inputs(trial: Trial, base: Path) -> tuple[TrialInput, ...]:
@@ -183,7 +187,17 @@ KIND = TrialKind(
     label="a GraspDB14 recording",
     files="GraspDB14 CyberGlove recording .txt (radians; raw counts with a calibration)",
     options=frozenset(
-        {"skeleton", "obj", "calibration", "units", "density", "mass", "hand_length", "collision"}
+        {
+            "skeleton",
+            "obj",
+            "calibration",
+            "units",
+            "density",
+            "mass",
+            "hand_length",
+            "collision",
+            "thumb_rest",
+        }
     ),
     brings="a glove recording takes the hand's skeleton, the object and the glove calibration",
     matches=_matches,
