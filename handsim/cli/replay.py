@@ -77,16 +77,19 @@ def _print_summary(result) -> None:
     _line("valid", f"no ({', '.join(invalid)}): the numbers below judge nothing" if invalid else "yes")
     for flag in result.flags:
         _line("flag", f"{flag.code}{'' if flag.invalid else ' (a note)'}: {flag.reason}")
-    _line(
-        "penetration",
-        f"max {s['max_penetration_mm']:.2f} mm, p95 {s['p95_penetration_mm']:.2f} mm, "
-        f"{s['frames_penetrating_over_1mm']} frames over 1 mm",
-    )
-    _line(
-        "contact",
-        f"{s['contact_frames']} of {s['frames']} frames; up to {s['max_contact_links']} links at once; "
-        f"peak total normal force {s['max_total_normal_force_n']:.2f} N",
-    )
+    if s["max_penetration_mm"] is None:
+        _line("penetration", s.get("hold_reason") or "not judged: no object")
+    else:
+        _line(
+            "penetration",
+            f"max {s['max_penetration_mm']:.2f} mm, p95 {s['p95_penetration_mm']:.2f} mm, "
+            f"{s['frames_penetrating_over_1mm']} frames over 1 mm",
+        )
+        _line(
+            "contact",
+            f"{s['contact_frames']} of {s['frames']} frames; up to {s['max_contact_links']} links at once; "
+            f"peak total normal force {s['max_total_normal_force_n']:.2f} N",
+        )
     _line(
         "tracking",
         f"mean {_num(s['mean_tracking_error_deg'])}°, max {_num(s['max_tracking_error_deg'])}° (joint angle)",
@@ -94,6 +97,16 @@ def _print_summary(result) -> None:
     _line(
         "tips", f"mean {_num(s['mean_tip_error_mm'], '.1f')} mm, max {_num(s['max_tip_error_mm'], '.1f')} mm"
     )
+    limits = next((f for f in result.flags if f.code == "joint_limits"), None)
+    _line(
+        "limits",
+        "no target beyond the joint limits"
+        if limits is None
+        else f"{limits.values['samples']} target samples beyond the joint limits in "
+        f"{len(limits.values['dofs'])} DoFs (flag joint_limits above)",
+    )
+    if "max_self_penetration_mm" in s:
+        _print_self_penetration(s)
     if "mean_drift_mm" in s:
         tolerance = result.config["metrics"]["drift_tolerance"] * 100
         _line(
@@ -136,6 +149,9 @@ def _print_summary(result) -> None:
                 "(before, the recorded hand reaches through where the object is placed)",
             )
     hold = result.hold
+    if hold is None and "hold_reason" in s:
+        _line("held", s["hold_reason"])
+        _line("drift", s["drift_reason"])
     if hold is not None:
         _line(
             "release",
@@ -189,6 +205,26 @@ def _thumb_rest(text: str) -> tuple[float, float]:
     if len(values) != 2 or not all(math.isfinite(v) for v in values):
         raise argparse.ArgumentTypeError(f"expected ABD,FLEX: two angles in degrees, got {text!r}")
     return values
+
+
+def _print_self_penetration(s: dict) -> None:
+    """The hand through itself (scenes without objects), simulated and at the recorded targets."""
+
+    def deepest(key: str) -> str:
+        links = s[f"{key}_links"]
+        return "" if links is None else f" ({' | '.join(links)} at {s[f'{key}_at_s']:.2f} s)"
+
+    _line(
+        "self-pen.",
+        f"max {s['max_self_penetration_mm']:.2f} mm{deepest('self_penetration')}, p95 "
+        f"{s['p95_self_penetration_mm']:.2f} mm, {s['frames_self_penetrating_over_1mm']} frames over 1 mm "
+        "(simulated hand through itself)",
+    )
+    _line(
+        "",
+        f"max {s['max_target_self_penetration_mm']:.2f} mm{deepest('target_self_penetration')} "
+        "at the recorded targets",
+    )
 
 
 def _stability_at(text: str) -> float | str:

@@ -111,7 +111,7 @@ TRIAL_COLUMNS: tuple[Column, ...] = (
         "hand (1 = only when fully closed; lower: the recording closes past the object)",
     ),
     Column(
-        "self-pen. mm",
+        "closure self-pen. mm",
         lambda r: fmt.num(r["self_penetration_at_closure_mm"], 1),
         help="glove trials: deepest penetration of the hand's own links (thumb through fingers) at closure",
     ),
@@ -121,6 +121,11 @@ TRIAL_COLUMNS: tuple[Column, ...] = (
     Column("slip mm", lambda r: fmt.num(r["max_slip_mm"], 1), help="max slip relative to the hand"),
     Column("pen. max mm", lambda r: fmt.num(r["max_penetration_mm"]), help="deepest penetration"),
     Column("pen. p95 mm", lambda r: fmt.num(r["p95_penetration_mm"]), help="95th percentile over frames"),
+    Column(
+        "self-pen. mm",
+        lambda r: fmt.num(r["max_self_penetration_mm"]),
+        help="hand-only trials: deepest simulated penetration of the hand through itself",
+    ),
     Column("drift max mm", lambda r: fmt.num(r["max_drift_mm"], 1), help="largest object drift"),
     Column(
         "track. mean °", lambda r: fmt.num(r["mean_tracking_error_deg"]), help="mean joint tracking error"
