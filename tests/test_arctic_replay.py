@@ -218,7 +218,6 @@ def test_mano_folder_from_the_environment_is_used(mano, arctic_root, monkeypatch
     assert loaded.trial.mano_dir == str(folder.resolve())
 
 
-@pytest.mark.slow
 def test_arctic_report_runs_every_sequence_with_per_hand_numbers_and_drift(mano, arctic_root, tmp_path):
     folder, _ = mano
     root, _ = arctic_root
@@ -234,3 +233,10 @@ def test_arctic_report_runs_every_sequence_with_per_hand_numbers_and_drift(mano,
         summary = record["summary"]
         assert all(f"{side}/{key}" in summary for side in HANDS for key in HAND_KEYS)
         assert summary["max_articulation_drift_deg"] is not None
+    markdown = (out / "report.md").read_text()
+    table = markdown[markdown.index("## Two-hand trials") : markdown.index("## Reproducibility")]
+    assert "| trial | right contact frames | right pen. max mm |" in table
+    assert sum(line.startswith("| [raw_seqs/s01/") for line in table.splitlines()) == 2
+    html = (out / "report.html").read_text()
+    assert "<h3>Two-hand trials</h3>" in html and "left: frames in contact" in html
+    assert "mean hinge drift °" in html

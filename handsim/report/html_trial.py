@@ -38,10 +38,27 @@ SUMMARY_FIELDS: tuple[tuple[str, str, int | None], ...] = (
     ("mean_rotation_drift_deg", "mean rotation drift °", 1),
     ("max_rotation_drift_deg", "max rotation drift °", 1),
     ("max_articulation_drift_deg", "max hinge drift °", 1),
+    ("mean_articulation_drift_deg", "mean hinge drift °", 1),
+    ("final_articulation_drift_deg", "final hinge drift °", 1),
     ("stable", "stable (6 directions)", None),
     ("simulation_displacement_mm", "simulation displacement mm", 1),
     ("diverged", "diverged", None),
     ("warnings", "MuJoCo warnings", None),
+    *(
+        (f"{hand}/{key}", f"{hand}: {label}", decimals)
+        for hand in ("right", "left")
+        for key, label, decimals in (
+            ("contact_frames", "frames in contact", None),
+            ("max_contact_links", "max links in contact", None),
+            ("max_total_normal_force_n", "max normal force N", 2),
+            ("max_penetration_mm", "max penetration mm", 2),
+            ("frames_penetrating_over_1mm", "frames > 1 mm deep", None),
+            ("mean_tracking_error_deg", "mean tracking error °", 2),
+            ("max_tracking_error_deg", "max tracking error °", 2),
+            ("mean_tip_error_mm", "mean fingertip error mm", 1),
+            ("max_tip_error_mm", "max fingertip error mm", 1),
+        )
+    ),
 )
 _QUALITY_FIELDS = (
     ("frames", "frames", None),
