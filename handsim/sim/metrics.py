@@ -177,12 +177,13 @@ def _contacts(scene: SimScene, sensors: np.ndarray) -> tuple[np.ndarray, np.ndar
     if adr.size == 0:
         empty = np.zeros((n, *adr.shape))
         return empty.astype(np.int32), empty, np.zeros(n, np.int32)
-    slots = adr[..., None] + _SLOT * np.arange(CONTACT_SLOTS)  # (links, parts, slots)
     found = sensors[:, adr].astype(np.int32)  # every slot repeats the total count
-    summed = np.minimum(found, CONTACT_SLOTS)
-    force = sensors[:, slots + 1]  # normal component of each slot (N, links, parts, slots)
-    used = np.arange(CONTACT_SLOTS) < summed[..., None]
-    normal = np.where(used, force, 0.0).sum(axis=-1)
+    normal = np.zeros(found.shape)
+    frame, link, part = np.nonzero(found)  # contacts are sparse: read the slots of touching pairs only
+    if frame.size:
+        slots = adr[link, part][:, None] + _SLOT * np.arange(CONTACT_SLOTS) + 1  # normal of each slot
+        used = np.arange(CONTACT_SLOTS) < np.minimum(found[frame, link, part], CONTACT_SLOTS)[:, None]
+        normal[frame, link, part] = np.where(used, sensors[frame[:, None], slots], 0.0).sum(axis=-1)
     truncated = (found > CONTACT_SLOTS).sum(axis=(1, 2)).astype(np.int32)
     return found, normal, truncated
 
