@@ -13,7 +13,6 @@ import math
 
 import numpy as np
 import pytest
-import trimesh
 from scipy.spatial.transform import Rotation
 
 from handsim.cli import main
@@ -27,7 +26,7 @@ from handsim.sim.stepper import Stepper
 from handsim.sim.summary import HAND_KEYS
 from handsim.skeleton import mj_name
 from handsim.trials import load_trial
-from tests.arctic_fixtures import UPRIGHT, block, template_vertices_mm, write_obj
+from tests.arctic_fixtures import UPRIGHT, block, template_vertices_mm, write_template
 from tests.mano_fixtures import (
     mano_hand_params,
     numpy_mano_fk,
@@ -53,15 +52,7 @@ def _template(folder, name: str) -> None:
     """A closed lid on a base, hinged on the canonical z axis (mm, canonical +y up, lid along −x)."""
     bottom = block((-120.0, 0.0), (-60.0, 0.0), (-80.0, 80.0))
     top = block((-120.0, 0.0), (0.0, 10.0), (-80.0, 80.0))
-    out = folder / name
-    out.mkdir(parents=True)
-    if name == "box":
-        write_obj(out / "bottom.obj", bottom)
-        write_obj(out / "top.obj", top)
-    else:
-        write_obj(out / "mesh.obj", trimesh.util.concatenate([top, bottom]))
-        labels = [0] * len(top.vertices) + [1] * len(bottom.vertices)  # ARCTIC: 0 = top, 1 = bottom
-        (out / "parts.json").write_text(json.dumps(labels))
+    write_template(folder, name, (bottom, top, "parts" if name == "box" else "mesh"))
 
 
 def _object_rows(n: int) -> np.ndarray:

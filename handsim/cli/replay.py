@@ -235,6 +235,8 @@ def _replay(args: argparse.Namespace) -> int:
     except TrialError as exc:
         return usage_error("replay", str(exc))
     _print_trial(loaded)
+    if args.stability is not None and len(loaded.scene.layout.hands) > 1:
+        return usage_error("replay", "--stability tests hold one hand; this trial has two (ARCTIC)")
     if args.stability == "grasp" and loaded.scene.setup.hold_window is None:
         return usage_error("replay", "--stability grasp is for glove trials; give a time in s")
     end = float(loaded.trajectory.times[-1])
