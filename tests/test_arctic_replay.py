@@ -16,6 +16,7 @@ import pytest
 from scipy.spatial.transform import Rotation
 
 from handsim.cli import main
+from handsim.errors import TrajectoryError
 from handsim.io.arctic_motion import HANDS
 from handsim.io.mano import MANO_DIR_ENV, MANO_JOINT_NAMES
 from handsim.runner.records import read_records
@@ -25,7 +26,8 @@ from handsim.sim.replay import replay
 from handsim.sim.stepper import Stepper
 from handsim.sim.summary import HAND_KEYS
 from handsim.skeleton import mj_name
-from handsim.trials import load_trial
+from handsim.trajectory import Trajectory
+from handsim.trials import TrialError, load_trial
 from tests.arctic_fixtures import UPRIGHT, block, template_vertices_mm, write_template
 from tests.mano_fixtures import (
     mano_hand_params,
@@ -231,3 +233,41 @@ def test_arctic_report_runs_every_sequence_with_per_hand_numbers_and_drift(mano,
     html = (out / "report.html").read_text()
     assert "<h3>Two-hand trials</h3>" in html and "left: frames in contact" in html
     assert "mean hinge drift °" in html
+
+
+def test_templates_folder_given_replaces_the_roots_object_templates(mano, arctic_root, tmp_path):
+    folder, _ = mano
+    root, _ = arctic_root
+    elsewhere = tmp_path / "templates"
+    (root / "meta" / "object_vtemplates").rename(elsewhere)
+    path = root / "raw_seqs" / "s01" / "box_grab_01.mano.npy"
+    with pytest.raises(
+        TrialError, match=r"object_vtemplates/box/ is missing \(ARCTIC meta/object_vtemplates\)"
+    ):
+        load_trial(path, mano_dir=folder)
+    loaded = load_trial(path, mano_dir=folder, templates=elsewhere)
+    assert loaded.trial.objects[0].what == str(elsewhere / "box")
+    assert loaded.objects[0].mass == pytest.approx(0.75)  # the box's default mass (docs/objects.md)
+
+
+def test_arctic_replay_refuses_the_one_hand_stability_tests(mano, arctic_root, capsys):
+    folder, _ = mano
+    root, _ = arctic_root
+    path = root / "raw_seqs" / "s01" / "box_grab_01.mano.npy"
+    assert main(["replay", str(path), "--mano-dir", str(folder), "--stability", "0.1"]) == 2
+    assert "--stability tests hold one hand; this trial has two (ARCTIC)" in capsys.readouterr().err
+
+
+def test_trajectory_hand_roots_of_the_wrong_shape_or_beside_a_root_pose_raise_error():
+    times, names = np.arange(3) / 30.0, ("right/a",)
+    targets, valid = np.zeros((3, 1)), np.ones((3, 1), bool)
+    with pytest.raises(
+        TrajectoryError, match=r"hand 'right' root pose must have shape \(3, 7\), got \(2, 7\)"
+    ):
+        Trajectory(times, names, targets, valid, hand_roots={"right": np.zeros((2, 7))})
+    with pytest.raises(
+        TrajectoryError, match="give one hand's root_pose or several hands' hand_roots, not both"
+    ):
+        Trajectory(
+            times, names, targets, valid, root_pose=np.zeros((3, 7)), hand_roots={"right": np.zeros((3, 7))}
+        )
