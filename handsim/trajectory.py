@@ -52,6 +52,9 @@ class Trajectory:
         valid: True where a target was measured and usable, shape (T, ndof).
         switch: Glove switch state per sample (CyberGlove recordings), shape (T,), or None.
         root_pose: Optional root pose per sample, shape (T, 7): position (m) and quaternion (w, x, y, z).
+        hand_roots: Several hands (two-hand recordings such as ARCTIC's): each hand's root pose per sample,
+            hand name → shape (T, 7), the hand's DoF columns named ``<hand>/<dof>``; empty for one hand
+            (then ``root_pose`` holds its root).
         channels: Recorded channels that drive no DoF (kept, not dropped), name → shape (T,) array.
         computed: Names of DoFs whose values were computed rather than measured (e.g. coupled DIPs).
         filled: True where a target was filled in by gap filling, shape (T, ndof), or None.
@@ -73,6 +76,7 @@ class Trajectory:
     filled: np.ndarray | None = None
     phases: tuple[Phase, ...] = ()
     objects: dict[str, ObjectTrack] = field(default_factory=dict)
+    hand_roots: dict[str, np.ndarray] = field(default_factory=dict)
     source: str = ""
     sha256: str = ""
     notes: tuple[str, ...] = ()
@@ -96,6 +100,13 @@ class Trajectory:
             raise TrajectoryError(f"switch must have shape ({n},), got {np.shape(self.switch)}")
         if self.root_pose is not None and np.shape(self.root_pose) != (n, 7):
             raise TrajectoryError(f"root_pose must have shape ({n}, 7), got {np.shape(self.root_pose)}")
+        for name, pose in self.hand_roots.items():
+            if np.shape(pose) != (n, 7):
+                raise TrajectoryError(
+                    f"hand {name!r} root pose must have shape ({n}, 7), got {np.shape(pose)}"
+                )
+        if self.hand_roots and self.root_pose is not None:
+            raise TrajectoryError("give one hand's root_pose or several hands' hand_roots, not both")
         for name, values in self.channels.items():
             if np.shape(values) != (n,):
                 raise TrajectoryError(f"channel {name!r} must have shape ({n},), got {np.shape(values)}")

@@ -520,6 +520,10 @@ def resample(trajectory: Trajectory, rate_hz: float, *, method: ResampleMethod =
     root = None
     if trajectory.root_pose is not None:
         root = _resample_pose(times, np.asarray(trajectory.root_pose, dtype=float), np.ones(n, bool), t)
+    hand_roots = {
+        name: _resample_pose(times, np.asarray(pose, dtype=float), np.ones(n, bool), t)
+        for name, pose in trajectory.hand_roots.items()
+    }
 
     objects: dict[str, ObjectTrack] = {}
     for name, track in trajectory.objects.items():
@@ -576,6 +580,7 @@ def resample(trajectory: Trajectory, rate_hz: float, *, method: ResampleMethod =
         valid=valid,
         switch=None if trajectory.switch is None else np.asarray(trajectory.switch)[prev].copy(),
         root_pose=root,
+        hand_roots=hand_roots,
         channels={name: np.asarray(v)[prev].copy() for name, v in trajectory.channels.items()},
         filled=filled,
         phases=phases,

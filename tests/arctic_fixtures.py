@@ -132,9 +132,15 @@ def write_obj(path: Path, mesh: trimesh.Trimesh) -> None:
     path.write_text("\n".join(lines) + "\n")
 
 
-def write_template(folder: Path, name: str) -> Path:
-    """Write ``folder/<name>/`` in its layout; returns the template folder."""
-    bottom, top, layout = template_parts()[name]
+def write_template(
+    folder: Path, name: str, parts: tuple[trimesh.Trimesh, trimesh.Trimesh, str] | None = None
+) -> Path:
+    """Write ``folder/<name>/`` in its layout; returns the template folder.
+
+    ``parts``: (bottom, top, layout) in mm, layout ``"parts"`` (top.obj + bottom.obj) or ``"mesh"``
+    (mesh.obj + parts.json); default :func:`template_parts`' of ``name``.
+    """
+    bottom, top, layout = parts or template_parts()[name]
     out = folder / name
     out.mkdir(parents=True)
     if layout == "parts":

@@ -21,6 +21,7 @@ from handsim.cli import main
 from handsim.fingers import FINGER_GROUPS, TZIONAS_FINGERS, finger_groups, finger_of
 from handsim.io import read_skeleton
 from handsim.io.graspdb import parse_graspdb_filename
+from handsim.io.mano import MANO_DIR_ENV
 from handsim.runner import execute
 from handsim.runner.execute import RunnerError, run_dataset
 from handsim.runner.png import encode_png
@@ -36,7 +37,6 @@ from handsim.runner.renders import headless_glfw
 from handsim.runner.worker import TrialOutcome, base_record, run_parameters, run_trial
 from handsim.sim.replay import ReplayConfig
 from handsim.trials import discover, select
-from handsim.trials.arctic import UNSUPPORTED as ARCTIC_UNSUPPORTED
 from handsim.trials.graspdb_names import GRASP_TYPES, graspdb_meta
 from tests.conftest import SHARED_DATA
 from tests.mano_fixtures import (
@@ -385,14 +385,16 @@ def test_discovery_of_an_arctic_layout_lists_its_sequences_and_companions(tmp_pa
     assert [u.path for u in discovery.unknown] == ["raw_seqs/s01/ketchup_use_02.object.npy"]
 
 
-def test_an_arctic_trial_records_what_it_needs_instead_of_replaying(tmp_path):
+def test_an_arctic_trial_without_mano_files_records_which_files_it_needs(tmp_path, monkeypatch):
+    monkeypatch.delenv(MANO_DIR_ENV, raising=False)
     discovery = discover(_arctic_dataset(tmp_path / "arctic"))
     summary = run_dataset(discovery, tmp_path / "out", workers=1, progress=False)
-    assert (summary.failed, summary.ok) == (1, 0)
+    assert (summary.failed, summary.ok) == (1, 0) and summary.all_failed
     (record,) = read_records(tmp_path / "out")
-    assert record["status"] == "error" and record["error"]["type"] == "TrialError"
-    assert record["error"]["message"].endswith(f"raw_seqs/s01/box_grab_01.mano.npy: {ARCTIC_UNSUPPORTED}")
-    assert "MANO_RIGHT.pkl" in record["error"]["message"]
+    assert record["status"] == "error" and record["error"]["type"] == "InputFileError"
+    message = record["error"]["message"]
+    assert message.startswith(f"no MANO folder given and {MANO_DIR_ENV} is not set")
+    assert "MANO_RIGHT.pkl and MANO_LEFT.pkl" in message and "--mano-dir DIR" in message
 
 
 # --------------------------------------------------------------------------------------------------

@@ -160,13 +160,7 @@ def build_scene(
     world.add_light(name="fill", pos=[-0.5, 0.3, 1.0], dir=[0.5, -0.3, -1.0], castshadow=False)
 
     if hand is not None:
-        child = hand.copy()
-        _apply_options(child, opts)
-        frame = world.add_frame(pos=_vector(hand_pos, 3, "hand_pos"), quat=_vector(hand_quat, 4, "hand_quat"))
-        root_name = HAND_PREFIX + child.worldbody.first_body().name
-        spec.attach(child, prefix=HAND_PREFIX, frame=frame)
-        if hand_root == "weld":
-            _weld_to_mocap(spec, root_name, hand_pos, hand_quat)
+        attach_hand(spec, hand, pos=hand_pos, quat=hand_quat, root=hand_root, options=opts)
 
     poses = _object_poses(objs, object_poses)
     for prefix, obj, pose in zip(object_prefixes(len(objs)), objs, poses, strict=True):
@@ -186,6 +180,59 @@ def build_scene(
     return spec
 
 
+def hand_prefix(name: str = "") -> str:
+    """Name prefix of a scene's hand: ``hand/`` for the only hand, ``hand/<name>/`` for one of several."""
+    return f"{HAND_PREFIX}{name}/" if name else HAND_PREFIX
+
+
+def hand_target_name(name: str = "") -> str:
+    """The mocap body a welded hand root follows: :data:`HAND_TARGET`, or ``hand_target/<name>``."""
+    return f"{HAND_TARGET}/{name}" if name else HAND_TARGET
+
+
+def hand_weld_name(name: str = "") -> str:
+    """The weld holding a hand root on its mocap body: :data:`HAND_WELD`, or ``hand_weld/<name>``."""
+    return f"{HAND_WELD}/{name}" if name else HAND_WELD
+
+
+def attach_hand(
+    spec: mujoco.MjSpec,
+    hand: mujoco.MjSpec,
+    *,
+    name: str = "",
+    pos: npt.ArrayLike = (0.0, 0.0, 0.0),
+    quat: npt.ArrayLike = (1.0, 0.0, 0.0, 0.0),
+    root: str = "fixed",
+    options: SceneOptions | None = None,
+) -> None:
+    """Attach a copy of a hand to a scene under :func:`hand_prefix` ``(name)``.
+
+    Args:
+        spec: The scene (changed in place).
+        hand: The hand spec (left unchanged).
+        name: "" for a scene's only hand; a scene with several names each (``"right"``, ``"left"``).
+        pos: Position of the hand's root frame, metres.
+        quat: Orientation of the hand's root frame (w, x, y, z).
+        root: ``"fixed"`` or ``"weld"`` (see :func:`build_scene`'s ``hand_root``): a weld frees the root body
+            and holds it on the mocap body :func:`hand_target_name` ``(name)``.
+        options: Simulation options the hand's own are replaced by (default :class:`SceneOptions`).
+
+    Raises:
+        ModelError: ``root`` is unknown, a pose is malformed, or ``"weld"`` is asked for a hand whose root
+            body has joints of its own.
+    """
+    if root not in HAND_ROOT_OPTIONS:
+        raise ModelError(f"unknown hand_root {root!r}; expected one of {list(HAND_ROOT_OPTIONS)}")
+    child = hand.copy()
+    _apply_options(child, options or SceneOptions())
+    frame = spec.worldbody.add_frame(pos=_vector(pos, 3, "hand_pos"), quat=_vector(quat, 4, "hand_quat"))
+    prefix = hand_prefix(name)
+    root_name = prefix + child.worldbody.first_body().name
+    spec.attach(child, prefix=prefix, frame=frame)
+    if root == "weld":
+        _weld_to_mocap(spec, root_name, pos, quat, name)
+
+
 _IDENTITY_WELD = [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0, 0.0]
 """Weld ``data``: anchor (3), relative position (3), relative quaternion (4), torque scale, unused.
 
@@ -197,7 +244,9 @@ at the world origin, the weld's position rows hold that point and only its soft 
 object swinging about it."""
 
 
-def _weld_to_mocap(spec: mujoco.MjSpec, root_name: str, pos: npt.ArrayLike, quat: npt.ArrayLike) -> None:
+def _weld_to_mocap(
+    spec: mujoco.MjSpec, root_name: str, pos: npt.ArrayLike, quat: npt.ArrayLike, name: str = ""
+) -> None:
     """Free the hand's root body and weld it to a mocap body at the root's initial world pose."""
     root = spec.body(root_name)
     if root.first_joint() is not None:
@@ -211,12 +260,13 @@ def _weld_to_mocap(spec: mujoco.MjSpec, root_name: str, pos: npt.ArrayLike, quat
     world_pos = frame_pos + frame_rot.reshape(3, 3) @ np.asarray(root.pos)
     world_quat = np.empty(4)
     mujoco.mju_mulQuat(world_quat, np.asarray(_vector(quat, 4, "hand_quat")), np.asarray(root.quat))
-    root.add_freejoint(name="root_free")
-    target = spec.worldbody.add_body(name=HAND_TARGET, pos=world_pos.tolist(), quat=world_quat.tolist())
+    root.add_freejoint(name=f"root_free/{name}" if name else "root_free")
+    target_name = hand_target_name(name)
+    target = spec.worldbody.add_body(name=target_name, pos=world_pos.tolist(), quat=world_quat.tolist())
     target.mocap = True
     spec.add_equality(
-        name=HAND_WELD, type=mujoco.mjtEq.mjEQ_WELD, objtype=mujoco.mjtObj.mjOBJ_BODY, name1=HAND_TARGET,
-        name2=root_name, data=_IDENTITY_WELD, solref=list(HAND_WELD_SOLREF),
+        name=hand_weld_name(name), type=mujoco.mjtEq.mjEQ_WELD, objtype=mujoco.mjtObj.mjOBJ_BODY,
+        name1=target_name, name2=root_name, data=_IDENTITY_WELD, solref=list(HAND_WELD_SOLREF),
     )  # fmt: skip
 
 

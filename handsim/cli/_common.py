@@ -223,3 +223,15 @@ def output_dir(text: str) -> Path:
 def write_text(path: str | Path, text: str) -> Path:
     """Write ``text`` (UTF-8) to ``path`` atomically, creating its folder, and return the path."""
     return write_atomic(path, text.encode("utf-8"))
+
+
+def add_arctic_options(parser: argparse.ArgumentParser) -> None:
+    """``--mano-dir`` and ``--templates``: what an ARCTIC sequence needs besides its files."""
+    parser.add_argument(
+        "--mano-dir", metavar="DIR", default=None,
+        help="ARCTIC: the folder with your MANO_RIGHT.pkl and MANO_LEFT.pkl (default: $HANDSIM_MANO_DIR)",
+    )  # fmt: skip
+    parser.add_argument(
+        "--templates", metavar="DIR", default=None,
+        help="ARCTIC: object templates folder (<object>/ inside), not the root's meta/object_vtemplates",
+    )  # fmt: skip

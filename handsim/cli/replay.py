@@ -14,6 +14,7 @@ import math
 import sys
 
 from handsim.cli._common import (
+    add_arctic_options,
     add_control_rate,
     add_force,
     add_object_mass_options,
@@ -47,6 +48,8 @@ def _print_trial(loaded) -> None:
 
 
 def _print_summary(result) -> None:
+    from handsim.sim.summary import HAND_KEYS
+
     s = result.summary
     scene = result.scene
     _line("scenario", scene["scenario"])
@@ -107,6 +110,15 @@ def _print_summary(result) -> None:
     )
     if "max_self_penetration_mm" in s:
         _print_self_penetration(s)
+    for hand in (h for h in ("right", "left") if f"{h}/contact_frames" in s):
+        h = {key: s[f"{hand}/{key}"] for key in HAND_KEYS}
+        _line(
+            hand,
+            f"contact {h['contact_frames']} frames (up to {h['max_contact_links']} links, "
+            f"{h['max_total_normal_force_n']:.2f} N); penetration max {h['max_penetration_mm']:.2f} mm; "
+            f"tracking mean {_num(h['mean_tracking_error_deg'])}°; "
+            f"tips mean {_num(h['mean_tip_error_mm'], '.1f')} mm",
+        )
     if "mean_drift_mm" in s:
         tolerance = result.config["metrics"]["drift_tolerance"] * 100
         _line(
@@ -119,6 +131,9 @@ def _print_summary(result) -> None:
         rotation = f"mean {mean}°, max {top}°"
         if s.get("max_articulation_drift_deg") is not None:
             rotation += f"; hinge max {s['max_articulation_drift_deg']:.1f}°"
+        if s.get("mean_articulation_drift_deg") is not None:
+            mean, final = s["mean_articulation_drift_deg"], s["final_articulation_drift_deg"]
+            rotation += f", mean {mean:.1f}°, final {final:.1f}°"
         _line("rotation", rotation)
     placement = scene.get("placement") or {}
     if placement:
@@ -265,10 +280,14 @@ def _replay(args: argparse.Namespace) -> int:
             collision=args.collision,
             thumb_rest=args.thumb_rest,
             force=args.force,
+            mano_dir=args.mano_dir,
+            templates=args.templates,
         )
     except TrialError as exc:
         return usage_error("replay", str(exc))
     _print_trial(loaded)
+    if args.stability is not None and len(loaded.scene.layout.hands) > 1:
+        return usage_error("replay", "--stability tests hold one hand; this trial has two (ARCTIC)")
     if args.stability == "grasp" and loaded.scene.setup.hold_window is None:
         return usage_error("replay", "--stability grasp is for glove trials; give a time in s")
     end = float(loaded.trajectory.times[-1])
@@ -328,12 +347,18 @@ def register(commands: argparse._SubParsersAction) -> None:
         "sequence's objects (Configs/NN/MODELS_INFO.txt), which follow their recorded tracks: the summary "
         "gives their drift. A GraspDB14 glove recording drives the parametric default hand (or --skeleton), "
         "fixed palm down, holding the object (--object, else the one whose id the file name carries) placed "
-        "where the grasp closes and released after it: the summary says whether it was held. "
+        "where the grasp closes and released after it: the summary says whether it was held. An ARCTIC "
+        "raw_seqs/sXX/<seq>.mano.npy drives both MANO hands (your MANO_RIGHT.pkl and MANO_LEFT.pkl: "
+        "--mano-dir or HANDSIM_MANO_DIR) with the subject's betas, the object of meta/object_vtemplates free "
+        "at its recorded pose and articulation: the summary gives each hand's numbers and the object's drift "
+        "(docs/arctic.md). "
         f"Exit codes: 0 done, 1 handsim error, 2 usage error or not a trial, {EXIT_DIVERGED} diverged, "
         f"{EXIT_NOT_VALID} not valid (a plausibility flag).",
     )
     replay.add_argument(
-        "trajectory", metavar="TRAJECTORY", help="GraspDB14 .txt or Tzionas Model_Hand_*.MOTION"
+        "trajectory",
+        metavar="TRAJECTORY",
+        help="GraspDB14 .txt, Tzionas Model_Hand_*.MOTION or ARCTIC <seq>.mano.npy",
     )
     replay.add_argument("--skeleton", metavar="SKELETON_FILE", help="GraspDB14: the hand (.xmlskel or .SKEL)")
     replay.add_argument(
@@ -351,13 +376,14 @@ def register(commands: argparse._SubParsersAction) -> None:
     )  # fmt: skip
     replay.add_argument(
         "--collision", choices=("capsules", "mesh"), default=None,
-        help="hand collision shapes (default capsules; mesh: per-bone hulls of a skinned .SKEL hand)",
+        help="hand collision shapes (default capsules; mesh: per-bone hulls of a skinned .SKEL or MANO hand)",
     )  # fmt: skip
     replay.add_argument(
         "--thumb-rest", type=_thumb_rest, metavar="ABD,FLEX",
         help="GraspDB14: hold the thumb TMC DoFs no glove sensor drives (th_tmc_abd, th_tmc_flex) at these "
         "angles in degrees (default: 0,0 as the GraspDB14 tools; see docs/cyberglove.md)",
     )  # fmt: skip
+    add_arctic_options(replay)
     add_control_rate(replay)
     replay.add_argument(
         "--stability", type=_stability_at, metavar="grasp|SECONDS",

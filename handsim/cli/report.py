@@ -16,6 +16,7 @@ from typing import TYPE_CHECKING
 
 from handsim.cli._common import (
     EXIT_INTERRUPTED,
+    add_arctic_options,
     add_control_rate,
     non_negative_int,
     output_dir,
@@ -25,7 +26,7 @@ from handsim.cli._common import (
 
 if TYPE_CHECKING:
     from handsim.sim.replay import ReplayConfig
-    from handsim.trials import Discovery
+    from handsim.trials import Discovery, TrialOptions
 
 
 def _render(out: Path) -> int:
@@ -65,6 +66,7 @@ def run_and_render(
     only: str | None = None,
     limit: int | None = None,
     command: list[str] | None = None,
+    options: TrialOptions | None = None,
 ) -> int:
     """Discover, run and report on a dataset, printing what happens; the command's exit code.
 
@@ -81,6 +83,7 @@ def run_and_render(
         only: Run only trials whose id matches this glob.
         limit: Run only the first ``limit`` trials.
         command: The command line for ``run.json``.
+        options: Options for the trials of the kinds that take them (ARCTIC's ``mano_dir``, ``templates``).
 
     Returns:
         0 done, 1 every trial failed (the errors counted on stderr), 2 no trial to run, 130 interrupted.
@@ -92,7 +95,7 @@ def run_and_render(
     from handsim.trials import Discovery, discover, select
 
     out = Path(out)
-    discovery = dataset if isinstance(dataset, Discovery) else discover(dataset)
+    discovery = dataset if isinstance(dataset, Discovery) else discover(dataset, options)
     entries = select(discovery.entries, only, limit)
     for item in discovery.unknown:
         print(f"unknown     {item.path}: {item.reason}")
@@ -145,11 +148,18 @@ def _report(args: argparse.Namespace) -> int:
         return _render_only(out)
     if args.dataset is None or args.output is None:
         return usage_error("report", "give DATASET and -o OUT (or --render-only OUT)")
+    from handsim.trials import TrialOptions
+
+    if args.mano_dir is not None:
+        from handsim.io.mano import find_mano_files
+
+        find_mano_files(args.mano_dir)  # before any work: says which files are needed and where to put them
     config = ReplayConfig(control_rate=args.rate, stability_at=None if args.stability == "none" else "grasp")
+    options = TrialOptions(mano_dir=args.mano_dir, templates=args.templates)
     return run_and_render(
         args.dataset, args.output, workers=args.workers, backend=args.backend, address=args.address,
         config=config, frames=args.frames, only=args.only, limit=args.limit,
-        command=["handsim", *sys.argv[1:]],
+        command=["handsim", *sys.argv[1:]], options=options,
     )  # fmt: skip
 
 
@@ -192,6 +202,7 @@ def register(commands: argparse._SubParsersAction) -> None:
         help="grasp stability tests at the end of the hold window of glove trials (default), or none",
     )  # fmt: skip
     add_control_rate(report)
+    add_arctic_options(report)
     report.add_argument(
         "--render-only", nargs="?", const="", metavar="OUT",
         help="render the report of OUT (or -o OUT) from its records, without simulating",

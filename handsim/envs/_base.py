@@ -43,6 +43,11 @@ class HandEnv(gym.Env[np.ndarray, np.ndarray]):
         height: int,
         camera: str | None,
     ) -> None:
+        if len(scene.layout.hands) > 1:
+            raise ValueError(
+                f"the environments drive one hand; this scene has {len(scene.layout.hands)} "
+                f"({[h.name for h in scene.layout.hands]}): replay it with handsim.sim.replay"
+            )
         if render_mode is not None and render_mode not in RENDER_MODES:
             raise ValueError(f"unknown render_mode {render_mode!r}; expected one of {[None, *RENDER_MODES]}")
         # a private model: changing one env's model (e.g. domain randomisation) leaves the others alone

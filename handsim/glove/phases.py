@@ -357,6 +357,7 @@ def cut(trajectory: Trajectory, phase: Phase | str) -> Trajectory:
         valid=trajectory.valid[sl].copy(),
         switch=part(trajectory.switch),
         root_pose=part(trajectory.root_pose),
+        hand_roots={k: np.asarray(v)[sl].copy() for k, v in trajectory.hand_roots.items()},
         channels={k: np.asarray(v)[sl].copy() for k, v in trajectory.channels.items()},
         filled=part(trajectory.filled),
         phases=phases,

@@ -337,3 +337,37 @@ def hand_side_check(
             f"only: {evidence}"
         )
     return SideCheck(verdict, right, left, message)
+
+
+def arctic_trajectory(
+    sequence: ArcticSequence, hands: Mapping[str, tuple[Skeleton, MANOModel]]
+) -> Trajectory:
+    """Both hands of an ARCTIC sequence as one trajectory for a two-hand scene.
+
+    Each hand's :func:`arctic_hand_trajectory`, its DoF columns renamed ``<side>/<dof>`` and its root pose
+    under ``hand_roots[side]``; the object track under ``sequence.object_name``.
+
+    Args:
+        sequence: The sequence.
+        hands: Side → the hand's skeleton (built with the sequence's betas for that side) and MANO model; the
+            sides given are the hands converted, in this order.
+
+    Returns:
+        The trajectory (times ``i / sequence.fps``; ``source`` the ``.mano.npy``, ``sha256`` its hash).
+
+    Raises:
+        TrajectoryError: See :func:`arctic_hand_trajectory`.
+    """
+    parts = {side: arctic_hand_trajectory(sequence, side, *hands[side]) for side in hands}
+    first = next(iter(parts.values()))
+    return Trajectory(
+        times=first.times,
+        dof_names=tuple(f"{side}/{d}" for side, t in parts.items() for d in t.dof_names),
+        targets=np.hstack([t.targets for t in parts.values()]),
+        valid=np.hstack([t.valid for t in parts.values()]),
+        hand_roots={side: t.root_pose for side, t in parts.items()},
+        objects=dict(first.objects),
+        source=first.source,
+        sha256=first.sha256,
+        notes=tuple(f"{side} hand: {note}" for side, t in parts.items() for note in t.notes),
+    )

@@ -134,6 +134,21 @@ def outcome_counts(records: Sequence[dict], key: Callable[[dict], str | None]) -
     return {k: counts[k] for k in sorted(counts, key=natural_key)}
 
 
+HANDS = ("right", "left")
+"""The hands of a two-hand (ARCTIC) record, whose summary has ``<hand>/<key>`` numbers."""
+HAND_ROW_KEYS = (
+    *(f"{h}/{k}" for h in HANDS for k in ("contact_frames", "max_penetration_mm", "mean_tracking_error_deg")),
+    "max_rotation_drift_deg",
+    "max_articulation_drift_deg",
+)
+"""What a two-hand trial's row adds: each hand's contacts, penetration and tracking, the object's drift."""
+
+
+def has_hands(record: dict) -> bool:
+    """The record is of a two-hand scene (its summary has per-hand numbers)."""
+    return f"{HANDS[0]}/contact_frames" in (record.get("summary") or {})
+
+
 def trial_row(record: dict) -> dict:
     """The key facts and metrics of one trial (JSON-ready; ``None`` where a value does not exist)."""
     error = record.get("error") or {}
@@ -168,6 +183,7 @@ def trial_row(record: dict) -> dict:
         "warnings": len(warnings),
         "diverged_at_step": count(number(diverged.get("step"))),
         "error_type": error.get("type"),
+        **({k: summary_value(record, k) for k in HAND_ROW_KEYS} if has_hands(record) else {}),
     }
 
 

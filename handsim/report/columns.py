@@ -89,6 +89,44 @@ GROUP_COLUMNS: tuple[Column, ...] = (
     ),
 )
 
+
+def _hand_columns(hand: str) -> tuple[Column, ...]:
+    return (
+        Column(
+            f"{hand} contact frames",
+            lambda r: fmt.integer(r[f"{hand}/contact_frames"]),
+            help=f"frames in which the {hand} hand touches the object",
+        ),
+        Column(
+            f"{hand} pen. max mm",
+            lambda r: fmt.num(r[f"{hand}/max_penetration_mm"]),
+            help=f"deepest penetration of the {hand} hand",
+        ),
+        Column(
+            f"{hand} track. mean °",
+            lambda r: fmt.num(r[f"{hand}/mean_tracking_error_deg"]),
+            help=f"mean joint tracking error of the {hand} hand",
+        ),
+    )
+
+
+HAND_COLUMNS: tuple[Column, ...] = (
+    *_hand_columns("right"),
+    *_hand_columns("left"),
+    Column("drift max mm", lambda r: fmt.num(r["max_drift_mm"], 1), help="largest object drift"),
+    Column(
+        "rot. drift max °",
+        lambda r: fmt.num(r["max_rotation_drift_deg"], 1),
+        help="largest rotation between the simulated and the recorded object",
+    ),
+    Column(
+        "hinge drift max °",
+        lambda r: fmt.num(r["max_articulation_drift_deg"], 1),
+        help="largest difference between the simulated and the recorded articulation",
+    ),
+)
+"""The two-hand (ARCTIC) trials' table: each hand's numbers and the object's drift."""
+
 TRIAL_COLUMNS: tuple[Column, ...] = (
     Column("kind", lambda r: fmt.text(r["kind"]), numeric=False),
     Column(

@@ -12,7 +12,7 @@ from handsim.report.aggregate import (
     outcome_counts,
 )
 from handsim.report.charts import PALETTE, histogram, stacked_bars
-from handsim.report.columns import GROUP_COLUMNS, TRIAL_COLUMNS
+from handsim.report.columns import GROUP_COLUMNS, HAND_COLUMNS, TRIAL_COLUMNS
 from handsim.report.frames import FrameBudget, load_frames
 from handsim.report.html_repro import reproducibility
 from handsim.report.html_trial import trial_section
@@ -146,7 +146,24 @@ def _index(summary: dict) -> str:
         '<p class="note">Click a trial for its curves, numbers and frames. Ordered by id.</p>'
         '<div class="scroll tall">'
         + table(TRIAL_COLUMNS, summary["trials"], first=("trial", lambda r: link(r["anchor"], r["id"])))
-        + "</div></section>"
+        + "</div>"
+        + _two_hands(summary)
+        + "</section>"
+    )
+
+
+def _two_hands(summary: dict) -> str:
+    """The table of the two-hand (ARCTIC) trials: each hand's numbers and the object's drift ("" if none)."""
+    rows = [t for t in summary["trials"] if "right/contact_frames" in t]
+    if not rows:
+        return ""
+    return (
+        "<h3>Two-hand trials</h3>"
+        "<p class=\"note\">Each hand's contacts, penetration and tracking; the object's drift in position, "
+        "rotation and articulation. Hover a header for its meaning.</p>"
+        '<div class="scroll">'
+        + table(HAND_COLUMNS, rows, first=("trial", lambda r: link(r["anchor"], r["id"])))
+        + "</div>"
     )
 
 

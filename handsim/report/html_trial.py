@@ -48,11 +48,25 @@ SUMMARY_FIELDS: tuple[tuple[str, str, int | None], ...] = (
     ("mean_rotation_drift_deg", "mean rotation drift °", 1),
     ("max_rotation_drift_deg", "max rotation drift °", 1),
     ("max_articulation_drift_deg", "max hinge drift °", 1),
+    ("mean_articulation_drift_deg", "mean hinge drift °", 1),
+    ("final_articulation_drift_deg", "final hinge drift °", 1),
     ("stable", "stable (6 directions)", None),
     ("simulation_displacement_mm", "simulation displacement mm", 1),
     ("diverged", "diverged", None),
     ("warnings", "MuJoCo warnings", None),
 )
+_PER_HAND = (
+    "max_penetration_mm", "frames_penetrating_over_1mm", "contact_frames", "max_contact_links",
+    "max_total_normal_force_n", "mean_tracking_error_deg", "max_tracking_error_deg", "mean_tip_error_mm",
+    "max_tip_error_mm",
+)  # fmt: skip
+SUMMARY_FIELDS += tuple(
+    (f"{hand}/{key}", f"{hand}: {label}", decimals)
+    for hand in ("right", "left")
+    for key, label, decimals in SUMMARY_FIELDS
+    if key in _PER_HAND
+)
+"""… and a two-hand (ARCTIC) trial's per-hand numbers, ``<hand>/<key>``, labelled ``<hand>: <label>``."""
 _QUALITY_FIELDS = (
     ("frames", "frames", None),
     ("duration_s", "duration s", 2),

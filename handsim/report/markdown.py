@@ -9,7 +9,7 @@ from urllib.parse import quote
 
 from handsim.report import fmt
 from handsim.report.aggregate import GROUP_KEYS
-from handsim.report.columns import GROUP_COLUMNS, TRIAL_COLUMNS, Column
+from handsim.report.columns import GROUP_COLUMNS, HAND_COLUMNS, TRIAL_COLUMNS, Column
 from handsim.report.records import STATUSES
 
 HTML_NAME = "report.html"
@@ -101,6 +101,16 @@ def render_markdown(summary: dict) -> str:
         ("trial", lambda r: f"[{link_text(r['id'])}]({HTML_NAME}#{r['anchor']})"),
         None,
     )
+    two_hands = [t for t in summary["trials"] if "right/contact_frames" in t]
+    if two_hands:
+        out += ["", "## Two-hand trials", ""]
+        out += [f"- **{c.label}**: {c.help}" for c in HAND_COLUMNS if c.help] + [""]
+        out += _column_table(
+            HAND_COLUMNS,
+            two_hands,
+            ("trial", lambda r: f"[{link_text(r['id'])}]({HTML_NAME}#{r['anchor']})"),
+            None,
+        )
     out += ["", "## Reproducibility", ""]
     command = summary["command"]
     if isinstance(command, list):

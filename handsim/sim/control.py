@@ -30,13 +30,16 @@ class ControlSchedule:
     Attributes:
         times: Trajectory time of each frame, s (N,).
         ctrl: Actuator targets, radians (N, nu), in actuator order.
-        root_pose: Hand root pose in the scene's world per frame (N, 7), or None (fixed root).
+        root_pose: Hand root pose in the scene's world per frame (N, 7), or None (fixed root); with several
+            hands, the first hand's.
         objects: Recorded object tracks in the scene's world, resampled to the frames, by scene object
             index (only objects with a track).
         substeps: Simulation steps per frame.
         frame_dt: Seconds per frame (``substeps · timestep``).
         held_dofs: Hand DoFs the trajectory has no column for: held at their initial target.
         notes: Decisions, for the user to see.
+        root_poses: Every welded hand root's pose in the scene's world per frame (N, H, 7), in the order of
+            the layout's hands with a mocap target, or None (no welded root).
     """
 
     times: np.ndarray
@@ -47,6 +50,7 @@ class ControlSchedule:
     frame_dt: float
     held_dofs: tuple[str, ...]
     notes: tuple[str, ...]
+    root_poses: np.ndarray | None = None
 
     @property
     def frames(self) -> int:
@@ -95,7 +99,16 @@ def control_schedule(scene: SimScene, trajectory: Trajectory, rate_hz: float) ->
             f"{trajectory.source or 'trajectory'}: DoFs {unknown} are not DoFs of the hand; the hand has "
             f"{list(layout.dof_names)}"
         )
-    if layout.mocap >= 0 and trajectory.root_pose is None:
+    welded = [h.name for h in layout.hands if h.mocap >= 0]
+    several = len(layout.hands) > 1
+    if several:
+        lacking = [name for name in welded if name not in trajectory.hand_roots]
+        if lacking:
+            raise TrajectoryError(
+                f"{trajectory.source or 'trajectory'}: the hands {lacking} follow recorded root poses but "
+                f"the trajectory has hand roots only for {list(trajectory.hand_roots)}"
+            )
+    elif layout.mocap >= 0 and trajectory.root_pose is None:
         raise TrajectoryError(
             f"{trajectory.source or 'trajectory'}: the hand follows a recorded root pose "
             "(hand_root='weld') but the trajectory has none"
@@ -124,10 +137,11 @@ def control_schedule(scene: SimScene, trajectory: Trajectory, rate_hz: float) ->
         )
 
     world = np.asarray(setup.world_from_recording, dtype=float)
-    root = None
-    if layout.mocap >= 0:
-        root = compose(world, np.asarray(traj.root_pose, dtype=float))
-        check_controls(root, f"{trajectory.source or 'trajectory'} root pose")
+    roots = None
+    if welded:
+        recorded = [traj.hand_roots[n] for n in welded] if several else [traj.root_pose]
+        roots = np.stack([compose(world, np.asarray(r, dtype=float)) for r in recorded], axis=1)
+        check_controls(roots.reshape(len(roots), -1), f"{trajectory.source or 'trajectory'} root pose")
     elif trajectory.root_pose is not None:
         notes.append("the trajectory's root pose is not followed: the scene's hand root is fixed")
     objects = {}
@@ -142,10 +156,11 @@ def control_schedule(scene: SimScene, trajectory: Trajectory, rate_hz: float) ->
     return ControlSchedule(
         times=np.asarray(traj.times, dtype=float),
         ctrl=ctrl,
-        root_pose=root,
+        root_pose=None if roots is None else roots[:, 0],
         objects=objects,
         substeps=substeps,
         frame_dt=frame_dt,
         held_dofs=held,
         notes=tuple(notes),
+        root_poses=roots,
     )

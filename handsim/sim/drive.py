@@ -69,10 +69,12 @@ class ScheduleDriver:
         model = stepper.model
         self._contype = model.geom_contype[self._geoms].copy()
         self._conaffinity = model.geom_conaffinity[self._geoms].copy()
-        root = schedule.root_pose
-        self._mocap = layout.mocap
-        self._root_pos = None if root is None else np.ascontiguousarray(root[:, :3])
-        self._root_quat = None if root is None else np.ascontiguousarray(root[:, 3:])
+        roots = schedule.root_poses
+        welded = [h for h in layout.hands if h.mocap >= 0]
+        self._mocap = np.array([h.mocap for h in welded], dtype=np.int64)
+        self._root_qpos = [h.root_free_qpos for h in welded]
+        self._root_pos = None if roots is None else np.ascontiguousarray(roots[:, :, :3])
+        self._root_quat = None if roots is None else np.ascontiguousarray(roots[:, :, 3:])
 
     def reset(self, frame: int = 0) -> None:
         """Put the scene in the recorded state of ``frame``, with the switches as they are then.
@@ -90,17 +92,31 @@ class ScheduleDriver:
         if self._root_pos is not None:
             data.mocap_pos[self._mocap] = self._root_pos[frame]
             data.mocap_quat[self._mocap] = self._root_quat[frame]
-            data.qpos[layout.root_free_qpos : layout.root_free_qpos + 7] = schedule.root_pose[frame]
+            for h, adr in enumerate(self._root_qpos):
+                data.qpos[adr : adr + 7] = schedule.root_poses[frame, h]
         for index, track in schedule.objects.items():
             obj = layout.objects[index]
             data.qpos[obj.free_qpos : obj.free_qpos + 7] = track.pose[frame]
             if track.articulation is not None and obj.hinge_qpos >= 0:
-                data.qpos[obj.hinge_qpos] = track.articulation[frame]
+                data.qpos[obj.hinge_qpos] = self._in_range(obj.hinge_qpos, track.articulation[frame])
         release = self.switches.release_frame
         data.eq_active[self._supports] = 0 if 0 <= release < frame else 1
         self._set_contacts(frame >= self.switches.contact_frame)
         mujoco.mj_forward(stepper.model, data)
         self.frame = frame
+
+    def _in_range(self, qpos_adr: int, angle: float) -> float:
+        """``angle`` clamped to the range of the limited hinge at ``qpos_adr``.
+
+        A recording may start past a hinge's stop (an ARCTIC lid fitted below its closed pose; the scene's
+        notes say so).
+        """
+        model = self.stepper.model
+        joint = int(np.flatnonzero(model.jnt_qposadr == qpos_adr)[0])
+        if not model.jnt_limited[joint]:
+            return float(angle)
+        low, high = model.jnt_range[joint]
+        return float(np.clip(angle, low, high))
 
     def advance(self, ctrl: npt.ArrayLike | None = None) -> tuple[WarningEvent, ...]:
         """Step from frame ``k`` to ``k+1``: the switches of ``k``, the root target of ``k+1``, then the step.

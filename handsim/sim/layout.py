@@ -12,7 +12,7 @@ from dataclasses import dataclass
 import mujoco
 import numpy as np
 
-from handsim.builders.scene import HAND_PREFIX, HAND_TARGET, HAND_WELD, SUPPORT_SUFFIX
+from handsim.builders.scene import HAND_PREFIX, SUPPORT_SUFFIX, hand_prefix, hand_target_name, hand_weld_name
 from handsim.errors import ModelError
 
 CONTACT_SLOTS = 8
@@ -56,6 +56,37 @@ class ObjectLayout:
 
 
 @dataclass(frozen=True)
+class HandLayout:
+    """One hand of the scene (a scene has one, or several named ones: ARCTIC's right and left).
+
+    Attributes:
+        name: "" for a scene's only hand; else its name (``"right"``), its elements prefixed
+            ``hand/<name>/`` and its DoFs, links and tips named ``<name>/…`` in :class:`SceneLayout`.
+        root_body: Body id of its root.
+        root_free_qpos: qpos address of the root's free joint (a welded root), or -1.
+        root_free_dof: qvel address of that free joint, or -1.
+        mocap: Mocap index of its target body, or -1.
+        dofs: Its DoFs: indices into :attr:`SceneLayout.dof_names` (and the actuator arrays).
+        links: Its links: indices into :attr:`SceneLayout.link_names` (rows of ``contact_adr``).
+        tips: Its fingertips: indices into :attr:`SceneLayout.tip_names`.
+        root_pose_adr: sensordata addresses of its root's world position (3) and quaternion (4).
+        penetration_adr: (parts,) sensordata address of each object part's ``mindist`` sensor against this
+            hand (its root's subtree).
+    """
+
+    name: str
+    root_body: int
+    root_free_qpos: int
+    root_free_dof: int
+    mocap: int
+    dofs: np.ndarray
+    links: np.ndarray
+    tips: np.ndarray
+    root_pose_adr: tuple[int, int]
+    penetration_adr: np.ndarray
+
+
+@dataclass(frozen=True)
 class SceneLayout:
     """Index arrays of a compiled, instrumented scene.
 
@@ -80,6 +111,8 @@ class SceneLayout:
         tip_adr: (tips,) sensordata address of each fingertip's world position (3).
         root_pose_adr: sensordata addresses of the hand root's world position (3) and quaternion (4).
         object_pose_adr: (objects, 2) addresses of each object root's world position and quaternion.
+        hands: Each hand (:class:`HandLayout`); the root, mocap and penetration fields above are the first
+            hand's.
     """
 
     dof_names: tuple[str, ...]
@@ -101,6 +134,7 @@ class SceneLayout:
     tip_adr: np.ndarray
     root_pose_adr: tuple[int, int]
     object_pose_adr: np.ndarray
+    hands: tuple[HandLayout, ...] = ()
 
     @property
     def part_labels(self) -> tuple[str, ...]:
@@ -120,9 +154,18 @@ def _object_parts(spec: mujoco.MjSpec) -> list[mujoco.MjsBody]:
     return [b for b in spec.bodies if b.name.startswith("obj") and "/" in b.name]
 
 
-def _hand_root(spec: mujoco.MjSpec) -> mujoco.MjsBody | None:
-    roots = [b for b in spec.worldbody.bodies if b.name.startswith(HAND_PREFIX)]
-    return roots[0] if roots else None
+def _hand_roots(spec: mujoco.MjSpec) -> list[mujoco.MjsBody]:
+    return [b for b in spec.worldbody.bodies if b.name.startswith(HAND_PREFIX)]
+
+
+def hand_name(root_body_name: str) -> str:
+    """The hand a root body belongs to: ``hand/right/wrist`` → ``"right"``; a scene's only hand → ""."""
+    rest = root_body_name.removeprefix(HAND_PREFIX)
+    return rest.split("/")[0] if "/" in rest else ""
+
+
+def _penetration_sensor(root: str, part: str, several: bool) -> str:
+    return f"{PENETRATION_PREFIX}{root}|{part}" if several else f"{PENETRATION_PREFIX}{part}"
 
 
 def instrument(spec: mujoco.MjSpec) -> mujoco.MjSpec:
@@ -130,9 +173,9 @@ def instrument(spec: mujoco.MjSpec) -> mujoco.MjSpec:
 
     Per hand link with collision geoms × object part: a contact sensor reporting up to
     :data:`CONTACT_SLOTS` contacts (count, force in the contact frame, distance). Per object part: a
-    contact sensor between the whole hand (the root's subtree) and the part, reduced to the minimum
+    contact sensor between each whole hand (its root's subtree) and the part, reduced to the minimum
     distance (the deepest penetration when negative). World positions of the fingertip sites, and world
-    poses of the hand's root and each object's root body. MuJoCo evaluates them inside ``mj_step`` (in
+    poses of each hand's root and each object's root body. MuJoCo evaluates them inside ``mj_step`` (in
     the forward pass of its last step, 2 ms before the state it leaves); the loop only copies
     ``sensordata``.
 
@@ -147,11 +190,11 @@ def instrument(spec: mujoco.MjSpec) -> mujoco.MjSpec:
     """
     if any(s.name.startswith((CONTACT_PREFIX, PENETRATION_PREFIX)) for s in spec.sensors):
         raise ModelError(f"scene {spec.modelname!r} is already instrumented")
-    root = _hand_root(spec)
-    if root is None:
+    roots = _hand_roots(spec)
+    if not roots:
         return spec
     body, subtree = mujoco.mjtObj.mjOBJ_BODY, mujoco.mjtObj.mjOBJ_XBODY
-    frame_bodies = [root] + [b for b in spec.worldbody.bodies if b.name.startswith("obj")]
+    frame_bodies = roots + [b for b in spec.worldbody.bodies if b.name.startswith("obj")]
     for b in frame_bodies:  # xbody: the body frame (body would be its inertial frame)
         for prefix, kind in ((POSITION_PREFIX, mujoco.mjtSensor.mjSENS_FRAMEPOS),
                              (ORIENTATION_PREFIX, mujoco.mjtSensor.mjSENS_FRAMEQUAT)):  # fmt: skip
@@ -174,15 +217,16 @@ def instrument(spec: mujoco.MjSpec) -> mujoco.MjSpec:
                 refname=part.name,
                 intprm=[_FOUND | _FORCE | _DIST, _REDUCE_NONE, CONTACT_SLOTS],
             )
-        spec.add_sensor(
-            name=f"{PENETRATION_PREFIX}{part.name}",
-            type=mujoco.mjtSensor.mjSENS_CONTACT,
-            objtype=subtree,
-            objname=root.name,
-            reftype=body,
-            refname=part.name,
-            intprm=[_FOUND | _DIST, _REDUCE_MINDIST, 1],
-        )
+        for root in roots:
+            spec.add_sensor(
+                name=_penetration_sensor(root.name, part.name, len(roots) > 1),
+                type=mujoco.mjtSensor.mjSENS_CONTACT,
+                objtype=subtree,
+                objname=root.name,
+                reftype=body,
+                refname=part.name,
+                intprm=[_FOUND | _DIST, _REDUCE_MINDIST, 1],
+            )
     return spec
 
 
@@ -213,22 +257,13 @@ def scene_layout(model: mujoco.MjModel) -> SceneLayout:
     hand_bodies = [i for i in range(model.nbody) if model.body(i).name.startswith(HAND_PREFIX)]
     if not hand_bodies:
         raise ModelError(f"the scene has no hand (no body named {HAND_PREFIX}…)")
-    root_body = min(hand_bodies)
+    roots = [b for b in hand_bodies if int(model.body_parentid[b]) == 0]
     colliding = {
         int(model.geom_bodyid[g])
         for g in range(model.ngeom)
         if model.geom_contype[g] or model.geom_conaffinity[g]
     }
     links = [b for b in hand_bodies if b in colliding]
-    root_joint = int(model.body_jntadr[root_body])
-    free = int(mujoco.mjtJoint.mjJNT_FREE)
-    is_free = root_joint >= 0 and int(model.jnt_type[root_joint]) == free
-    root_free = int(model.jnt_qposadr[root_joint]) if is_free else -1
-    root_free_dof = int(model.jnt_dofadr[root_joint]) if is_free else -1
-    target = _id(model, mujoco.mjtObj.mjOBJ_BODY, HAND_TARGET)
-    mocap = int(model.body_mocapid[target]) if target >= 0 else -1
-    if (mocap >= 0) != (_id(model, mujoco.mjtObj.mjOBJ_EQUALITY, HAND_WELD) >= 0):
-        raise ModelError(f"scene has {HAND_TARGET!r} without {HAND_WELD!r} or the reverse")
 
     tips = []
     for s in range(model.nsite):
@@ -269,12 +304,16 @@ def scene_layout(model: mujoco.MjModel) -> SceneLayout:
         parts_all.extend(model.body(c).name for c in parts)
 
     contact = np.full((len(links), len(parts_all)), -1, dtype=np.int64)
-    penetration = np.full(len(parts_all), -1, dtype=np.int64)
     for j, part in enumerate(parts_all):
         for i, link in enumerate(links):
             contact[i, j] = _sensor_adr(model, f"{CONTACT_PREFIX}{model.body(link).name}|{part}")
-        penetration[j] = _sensor_adr(model, f"{PENETRATION_PREFIX}{part}")
-    root_name = model.body(root_body).name
+    link_names = tuple(model.body(b).name.removeprefix(HAND_PREFIX) for b in links)
+    tip_names = tuple(model.site(s).name.removeprefix(HAND_PREFIX) for s in tips)
+    hands = tuple(
+        _hand_layout(model, root, parts_all, len(roots) > 1, tuple(dof_names), link_names, tip_names)
+        for root in roots
+    )
+    first = hands[0]
     pose_adr = np.array(
         [[_sensor_adr(model, POSITION_PREFIX + model.body(o.root_body).name),
           _sensor_adr(model, ORIENTATION_PREFIX + model.body(o.root_body).name)] for o in objects],
@@ -286,25 +325,67 @@ def scene_layout(model: mujoco.MjModel) -> SceneLayout:
         dof_qpos=np.asarray(dof_qpos, dtype=np.int64),
         dof_qvel=np.asarray(dof_qvel, dtype=np.int64),
         ctrl_range=np.array(model.actuator_ctrlrange, dtype=float),
-        link_names=tuple(model.body(b).name.removeprefix(HAND_PREFIX) for b in links),
+        link_names=link_names,
         link_bodies=np.asarray(links, dtype=np.int64),
-        root_body=root_body,
-        root_free_qpos=root_free,
-        root_free_dof=root_free_dof,
-        mocap=mocap,
-        tip_names=tuple(model.site(s).name.removeprefix(HAND_PREFIX) for s in tips),
+        root_body=first.root_body,
+        root_free_qpos=first.root_free_qpos,
+        root_free_dof=first.root_free_dof,
+        mocap=first.mocap,
+        tip_names=tip_names,
         tip_sites=np.asarray(tips, dtype=np.int64),
         objects=tuple(objects),
         contact_adr=contact,
-        penetration_adr=penetration,
+        penetration_adr=first.penetration_adr,
         tip_adr=np.array(
             [_sensor_adr(model, POSITION_PREFIX + model.site(s).name) for s in tips], dtype=np.int64
         ),
+        root_pose_adr=first.root_pose_adr,
+        object_pose_adr=pose_adr,
+        hands=hands,
+    )
+
+
+def _hand_layout(
+    model: mujoco.MjModel,
+    root: int,
+    parts: list[str],
+    several: bool,
+    dof_names: tuple[str, ...],
+    link_names: tuple[str, ...],
+    tip_names: tuple[str, ...],
+) -> HandLayout:
+    """The hand whose root body is ``root`` (its DoFs, links and tips found by its name prefix)."""
+    root_name = model.body(root).name
+    name = hand_name(root_name)
+    own = hand_prefix(name).removeprefix(HAND_PREFIX)
+
+    def mine(names: tuple[str, ...]) -> np.ndarray:
+        return np.array([i for i, n in enumerate(names) if n.startswith(own)], dtype=np.int64)
+
+    root_joint = int(model.body_jntadr[root])
+    is_free = root_joint >= 0 and int(model.jnt_type[root_joint]) == int(mujoco.mjtJoint.mjJNT_FREE)
+    target, weld = hand_target_name(name), hand_weld_name(name)
+    target_id = _id(model, mujoco.mjtObj.mjOBJ_BODY, target)
+    mocap = int(model.body_mocapid[target_id]) if target_id >= 0 else -1
+    if (mocap >= 0) != (_id(model, mujoco.mjtObj.mjOBJ_EQUALITY, weld) >= 0):
+        raise ModelError(f"scene has {target!r} without {weld!r} or the reverse")
+    return HandLayout(
+        name=name,
+        root_body=root,
+        root_free_qpos=int(model.jnt_qposadr[root_joint]) if is_free else -1,
+        root_free_dof=int(model.jnt_dofadr[root_joint]) if is_free else -1,
+        mocap=mocap,
+        dofs=mine(dof_names),
+        links=mine(link_names),
+        tips=mine(tip_names),
         root_pose_adr=(
             _sensor_adr(model, POSITION_PREFIX + root_name),
             _sensor_adr(model, ORIENTATION_PREFIX + root_name),
         ),
-        object_pose_adr=pose_adr,
+        penetration_adr=np.array(
+            [_sensor_adr(model, _penetration_sensor(root_name, part, several)) for part in parts],
+            dtype=np.int64,
+        ),
     )
 
 

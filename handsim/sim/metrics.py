@@ -141,6 +141,12 @@ class FrameMetrics:
             -1 where none overlap; empty with objects.
         target_self_penetration: The same for the hand put at its targets (the recording's own postures).
         target_self_penetration_pair: Its links.
+        part_object: The object of each part (parts,).
+        hand_names: The scene's hands (:attr:`~handsim.sim.layout.HandLayout.name`; ``("",)`` for one hand).
+        hand_penetration: Deepest penetration of each hand into any object part, m, ≥ 0 (N, hands).
+        link_hand: The hand (index into ``hand_names``) of each link along the ``links`` axis (links,).
+        dof_hand: The hand of each column of ``tracking_error`` (ndof,).
+        tip_hand: The hand of each column of ``tip_error`` (tips,).
     """
 
     times: np.ndarray
@@ -160,25 +166,38 @@ class FrameMetrics:
     self_penetration_pair: np.ndarray = field(default_factory=lambda: np.zeros((0, 2), dtype=np.int64))
     target_self_penetration: np.ndarray = field(default_factory=lambda: np.zeros(0))
     target_self_penetration_pair: np.ndarray = field(default_factory=lambda: np.zeros((0, 2), dtype=np.int64))
+    hand_names: tuple[str, ...] = ()
+    hand_penetration: np.ndarray | None = field(repr=False, default=None)
+    link_hand: np.ndarray | None = field(repr=False, default=None)
+    dof_hand: np.ndarray | None = field(repr=False, default=None)
+    tip_hand: np.ndarray | None = field(repr=False, default=None)
 
 
-def _contacts(scene: SimScene, sensors: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+def _penetration(scene: SimScene, sensors: np.ndarray) -> np.ndarray:
+    """Deepest penetration of each hand into any object part, m, ≥ 0 (N, hands)."""
+    adr = np.array([h.penetration_adr for h in scene.layout.hands], dtype=np.int64)  # (hands, parts)
+    n = sensors.shape[0]
+    if adr.size == 0:
+        return np.zeros((n, len(scene.layout.hands)))
+    found, dist = sensors[:, adr], sensors[:, adr + 1]
+    return np.where(found > 0, np.maximum(-dist, 0.0), 0.0).max(axis=2)
+
+
+def _contacts(scene: SimScene, sensors: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     adr = scene.layout.contact_adr
     n = sensors.shape[0]
     if adr.size == 0:
         empty = np.zeros((n, *adr.shape))
-        return empty.astype(np.int32), empty, np.zeros(n, np.int32), np.zeros(n)
-    slots = adr[..., None] + _SLOT * np.arange(CONTACT_SLOTS)  # (links, parts, slots)
+        return empty.astype(np.int32), empty, np.zeros(n, np.int32)
     found = sensors[:, adr].astype(np.int32)  # every slot repeats the total count
-    summed = np.minimum(found, CONTACT_SLOTS)
-    force = sensors[:, slots + 1]  # normal component of each slot (N, links, parts, slots)
-    used = np.arange(CONTACT_SLOTS) < summed[..., None]
-    normal = np.where(used, force, 0.0).sum(axis=-1)
+    normal = np.zeros(found.shape)
+    frame, link, part = np.nonzero(found)  # contacts are sparse: read the slots of touching pairs only
+    if frame.size:
+        slots = adr[link, part][:, None] + _SLOT * np.arange(CONTACT_SLOTS) + 1  # normal of each slot
+        used = np.arange(CONTACT_SLOTS) < np.minimum(found[frame, link, part], CONTACT_SLOTS)[:, None]
+        normal[frame, link, part] = np.where(used, sensors[frame[:, None], slots], 0.0).sum(axis=-1)
     truncated = (found > CONTACT_SLOTS).sum(axis=(1, 2)).astype(np.int32)
-    pen_found = sensors[:, scene.layout.penetration_adr]
-    pen_dist = sensors[:, scene.layout.penetration_adr + 1]
-    depth = np.where(pen_found > 0, np.maximum(-pen_dist, 0.0), 0.0)
-    return found, normal, truncated, depth.max(axis=1) if depth.shape[1] else np.zeros(n)
+    return found, normal, truncated
 
 
 def _kinematic_targets(scene: SimScene, schedule: ControlSchedule, qpos: np.ndarray) -> np.ndarray:
@@ -187,8 +206,11 @@ def _kinematic_targets(scene: SimScene, schedule: ControlSchedule, qpos: np.ndar
     n = qpos.shape[0]
     target = qpos.copy()
     target[:, layout.dof_qpos] = np.clip(schedule.ctrl[:n], layout.ctrl_range[:, 0], layout.ctrl_range[:, 1])
-    if schedule.root_pose is not None and layout.root_free_qpos >= 0:
-        target[:, layout.root_free_qpos : layout.root_free_qpos + 7] = schedule.root_pose[:n]
+    if schedule.root_poses is not None:
+        welded = [h for h in layout.hands if h.mocap >= 0]
+        for h, hand in enumerate(welded):
+            if hand.root_free_qpos >= 0:
+                target[:, hand.root_free_qpos : hand.root_free_qpos + 7] = schedule.root_poses[:n, h]
     return target
 
 
@@ -209,6 +231,14 @@ def _poses(sensors: np.ndarray, pos_adr: int, quat_adr: int) -> np.ndarray:
     return np.concatenate([sensors[:, pos_adr : pos_adr + 3], sensors[:, quat_adr : quat_adr + 4]], axis=1)
 
 
+def _owner(members: list[np.ndarray], count: int) -> np.ndarray:
+    """The index of the group each of ``count`` items belongs to (-1: none)."""
+    owner = np.full(count, -1, dtype=np.int64)
+    for index, items in enumerate(members):
+        owner[items] = index
+    return owner
+
+
 def frame_metrics(
     scene: SimScene, schedule: ControlSchedule, qpos: np.ndarray, sensors: np.ndarray
 ) -> FrameMetrics:
@@ -226,7 +256,9 @@ def frame_metrics(
     """
     layout = scene.layout
     n = qpos.shape[0]
-    count, normal, truncated, penetration = _contacts(scene, sensors)
+    count, normal, truncated = _contacts(scene, sensors)
+    hand_penetration = _penetration(scene, sensors)
+    penetration = hand_penetration.max(axis=1) if hand_penetration.shape[1] else np.zeros(n)
     targets = schedule.ctrl[:n]
     tracking = qpos[:, layout.dof_qpos] - np.clip(targets, layout.ctrl_range[:, 0], layout.ctrl_range[:, 1])
     target_qpos = _kinematic_targets(scene, schedule, qpos)
@@ -282,4 +314,9 @@ def frame_metrics(
         hand_contact=touching,
         part_object=part_object,
         **hand_only,
+        hand_names=tuple(h.name for h in layout.hands),
+        hand_penetration=hand_penetration,
+        link_hand=_owner([h.links for h in layout.hands], len(layout.link_names)),
+        dof_hand=_owner([h.dofs for h in layout.hands], len(layout.dof_names)),
+        tip_hand=_owner([h.tips for h in layout.hands], len(layout.tip_names)),
     )

@@ -196,6 +196,7 @@ def _frames_text(frames: np.ndarray) -> str:
 
 def _jump_flags(trajectory: Trajectory, limits: PlausibilitySpec) -> list[Flag]:
     tracks = [("hand root", trajectory.root_pose, None)] if trajectory.root_pose is not None else []
+    tracks += [(f"{name} hand root", pose, None) for name, pose in trajectory.hand_roots.items()]
     tracks += [(f"object {name!r}", t.pose, t.valid) for name, t in trajectory.objects.items()]
     flags = []
     for name, pose, valid in tracks:

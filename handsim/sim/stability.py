@@ -239,8 +239,8 @@ def stability_test(
         The per-direction results, the overall success, the ObMan simulation displacement and the spec.
 
     Raises:
-        ValueError: An array has the wrong shape, ``object_index`` names no object, or mocap values are
-            given for a scene without a mocap target.
+        ValueError: An array has the wrong shape, ``object_index`` names no object, mocap values are
+            given for a scene without a mocap target, or the scene has several hands (the tests hold one).
         SimulationError: ``qpos``, ``ctrl`` or a mocap value is not finite (MuJoCo would silently reset
             the state or replace the control).
     """
@@ -248,6 +248,11 @@ def stability_test(
     layout = scene.layout
     model = scene.model
     objects = layout.objects
+    if len(layout.hands) > 1:
+        raise ValueError(
+            f"the stability tests hold one hand; the scene has {len(layout.hands)} "
+            f"({[h.name for h in layout.hands]})"
+        )
     if not 0 <= object_index < len(objects):
         raise ValueError(f"object_index {object_index} names no object; the scene has {len(objects)}")
     qpos = _array(qpos, (model.nq,), "qpos")

@@ -152,34 +152,79 @@ CONTACT_KEYS = (
 """The summary's hand–object numbers: None in a scene without objects."""
 
 
+def _hand_numbers(
+    count: np.ndarray, normal: np.ndarray, penetration: np.ndarray, tracking: np.ndarray, tips: np.ndarray
+) -> dict:
+    """Penetration, contact, tracking and fingertip numbers of the hand links/DoFs/tips given.
+
+    Args:
+        count: Contacts per link × part (N, links, parts).
+        normal: Normal force per link × part, N (N, links, parts).
+        penetration: Deepest penetration per frame, m (N,).
+        tracking: Joint tracking error, rad (N, dofs).
+        tips: Fingertip error, m (N, tips).
+    """
+    mm, deg = 1000.0, 180.0 / math.pi
+    n = penetration.shape[0]
+    return {
+        "max_penetration_mm": float(penetration.max() * mm) if n else 0.0,
+        "p95_penetration_mm": float(np.percentile(penetration, 95) * mm) if n else 0.0,
+        "frames_penetrating_over_1mm": int((penetration > 0.001).sum()),
+        "contact_frames": int((count.sum(axis=(1, 2)) > 0).sum()) if count.size else 0,
+        "max_contact_links": int((count.sum(axis=2) > 0).sum(axis=1).max()) if n and count.size else 0,
+        "max_total_normal_force_n": float(normal.sum(axis=(1, 2)).max()) if n and normal.size else 0.0,
+        "mean_tracking_error_deg": _finite(np.abs(tracking) * deg, np.mean),
+        "max_tracking_error_deg": _finite(np.abs(tracking) * deg, np.max),
+        "mean_tip_error_mm": _finite(tips * mm, np.mean),
+        "max_tip_error_mm": _finite(tips * mm, np.max),
+    }
+
+
+HAND_KEYS = (
+    "max_penetration_mm",
+    "frames_penetrating_over_1mm",
+    "contact_frames",
+    "max_contact_links",
+    "max_total_normal_force_n",
+    "mean_tracking_error_deg",
+    "max_tracking_error_deg",
+    "mean_tip_error_mm",
+    "max_tip_error_mm",
+)
+"""The summary's per-hand numbers of a scene with several hands, each as ``<hand>/<key>``."""
+
+
 def summarize(frames: FrameMetrics, spec: MetricSpec) -> dict:
     """JSON-ready per-trial numbers (SI units in the key names: ``_mm``, ``_deg``, ``_n``, ``_s``).
 
     Without objects (a hand-only sequence) the hand–object numbers (:data:`CONTACT_KEYS`: penetration,
     contacts, forces) are None, never a 0 that reads as a clean result; :func:`hand_only_summary` adds why
     and the hand's self-penetration.
+
+    A scene with several hands adds each hand's :data:`HAND_KEYS` as ``<hand>/<key>`` (``right/…``,
+    ``left/…``); the whole-scene numbers cover every hand.
     """
     mm, deg = 1000.0, 180.0 / math.pi
     n = frames.times.shape[0]
-    summary = {
-        "frames": int(n),
-        "duration_s": float(frames.times[-1] - frames.times[0]) if n else 0.0,
-        "max_penetration_mm": float(frames.penetration.max() * mm) if n else 0.0,
-        "p95_penetration_mm": float(np.percentile(frames.penetration, 95) * mm) if n else 0.0,
-        "frames_penetrating_over_1mm": int((frames.penetration > 0.001).sum()),
-        "contact_frames": int(frames.hand_contact.any(axis=1).sum()) if frames.hand_contact.size else 0,
-        "max_contact_links": int((frames.contact_count.sum(axis=2) > 0).sum(axis=1).max())
-        if n and frames.contact_count.size
-        else 0,
-        "max_total_normal_force_n": float(frames.normal_force.sum(axis=(1, 2)).max())
-        if n and frames.normal_force.size
-        else 0.0,
-        "truncated_contact_pairs": int(frames.truncated_pairs.sum()),
-        "mean_tracking_error_deg": _finite(np.abs(frames.tracking_error) * deg, np.mean),
-        "max_tracking_error_deg": _finite(np.abs(frames.tracking_error) * deg, np.max),
-        "mean_tip_error_mm": _finite(frames.tip_error * mm, np.mean),
-        "max_tip_error_mm": _finite(frames.tip_error * mm, np.max),
-    }
+    whole = _hand_numbers(
+        frames.contact_count, frames.normal_force, frames.penetration, frames.tracking_error, frames.tip_error
+    )
+    summary = {"frames": int(n), "duration_s": float(frames.times[-1] - frames.times[0]) if n else 0.0}
+    for key, value in whole.items():
+        if key == "mean_tracking_error_deg":
+            summary["truncated_contact_pairs"] = int(frames.truncated_pairs.sum())
+        summary[key] = value
+    if len(frames.hand_names) > 1:
+        for h, name in enumerate(frames.hand_names):
+            links, dofs, tips = frames.link_hand == h, frames.dof_hand == h, frames.tip_hand == h
+            own = _hand_numbers(
+                frames.contact_count[:, links],
+                frames.normal_force[:, links],
+                frames.hand_penetration[:, h],
+                frames.tracking_error[:, dofs],
+                frames.tip_error[:, tips],
+            )
+            summary.update({f"{name}/{key}": own[key] for key in HAND_KEYS})
     if frames.object_in_hand.shape[1] == 0:
         summary.update(dict.fromkeys(CONTACT_KEYS))
     if np.isfinite(frames.object_position_error).any():
@@ -193,6 +238,11 @@ def summarize(frames: FrameMetrics, spec: MetricSpec) -> dict:
             max_rotation_drift_deg=_finite(frames.object_rotation_error * deg, np.max),
             max_articulation_drift_deg=_finite(np.abs(frames.articulation_error) * deg, np.max),
         )
+        if np.isfinite(frames.articulation_error).any():
+            summary.update(
+                mean_articulation_drift_deg=_finite(np.abs(frames.articulation_error) * deg, np.mean),
+                final_articulation_drift_deg=_finite(np.abs(frames.articulation_error[-1]) * deg, np.max),
+            )
     return summary
 
 

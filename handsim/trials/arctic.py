@@ -1,15 +1,28 @@
 """Trial kind ``arctic``: an ARCTIC sequence and its object.
 
 The sequence is ``raw_seqs/sXX/<seq>.mano.npy`` with its ``<seq>.object.npy`` and the object template
-``meta/object_vtemplates/<object>/`` of the same ARCTIC root.
+``meta/object_vtemplates/<object>/`` of the same ARCTIC root (or of ``--templates DIR``). Loading builds both
+MANO hands from the user's ``MANO_RIGHT.pkl`` / ``MANO_LEFT.pkl`` (``--mano-dir`` or ``$HANDSIM_MANO_DIR``)
+with the subject's betas, each wrist following its recorded ``rot``/``trans`` (``flat_hand_mean=False``), and
+the two-part object free at its recorded pose and articulation, in ARCTIC's z-up world
+(:func:`handsim.sim.arctic_scene.arctic_scene`).
 """
 
 from __future__ import annotations
 
+import os
 from pathlib import Path, PurePosixPath
 from typing import TYPE_CHECKING
 
-from handsim.trials.base import LoadedTrial, Trial, TrialError, TrialKind, TrialObject, TrialOptions
+from handsim.trials.base import (
+    LoadedTrial,
+    Trial,
+    TrialError,
+    TrialKind,
+    TrialObject,
+    TrialOptions,
+    build_objects,
+)
 from handsim.trials.discovery import Sorting, TrialEntry, group_fields, relative, trial_input
 
 if TYPE_CHECKING:
@@ -17,14 +30,6 @@ if TYPE_CHECKING:
 
 MANO_SUFFIX = ".mano.npy"
 OBJECT_SUFFIX = ".object.npy"
-UNSUPPORTED = (
-    "handsim cannot replay ARCTIC sequences yet: ARCTIC stores each hand's pose relative to MANO's mean "
-    "pose (hands_mean) and its shape as MANO betas, so the hand needs your MANO model files "
-    "(MANO_RIGHT.pkl / MANO_LEFT.pkl from mano.is.tue.mpg.de, MPI licence, not redistributable), and "
-    "handsim.trials has no 'arctic' loader that builds a two-hand MANO scene from them yet (the readers "
-    "exist: handsim.io.arctic_motion, handsim.io.arctic, handsim.builders.mano_hand)"
-)
-"""The error an ARCTIC trial records when loaded (it is discovered and listed all the same)."""
 BULK = {
     "images": "ARCTIC camera images (not read)",
     "cropped_images": "ARCTIC cropped camera images (not read)",
@@ -40,34 +45,80 @@ def _matches(path: Path) -> bool:
     return path.is_file() and path.name.endswith(MANO_SUFFIX)
 
 
-def _sequence(path: Path) -> tuple[str, Path, Path]:
+def _sequence(path: Path, templates: str | Path | None = None) -> tuple[str, Path, Path]:
     """The sequence name, its object motion file and its template folder (by the ARCTIC layout)."""
     seq = path.name.removesuffix(MANO_SUFFIX)
-    root = path.parent.parent.parent
-    return seq, path.parent / f"{seq}{OBJECT_SUFFIX}", root / "meta" / "object_vtemplates" / seq.split("_")[0]
+    default = path.parent.parent.parent / "meta" / "object_vtemplates"
+    folder = default if templates is None else Path(templates)
+    return seq, path.parent / f"{seq}{OBJECT_SUFFIX}", folder / seq.split("_")[0]
 
 
-def _find(path: Path, options: TrialOptions) -> Trial:
-    seq, motion, template = _sequence(path)
-    if not motion.is_file():
-        raise TrialError(f"{path}: an ARCTIC MANO sequence without its {motion.name} beside it")
-    if not template.is_dir():
-        raise TrialError(
-            f"{path}: its object template {template}/ is missing (ARCTIC meta/object_vtemplates)"
-        )
+def _trial(path: Path, options: TrialOptions) -> Trial:
+    """The trial of a sequence, nothing checked (``mano_dir``: the option, else ``$HANDSIM_MANO_DIR``)."""
+    from handsim.io.mano import MANO_DIR_ENV
+
+    seq, motion, template = _sequence(path, options.templates)
+    name = seq.split("_")[0]
+    mano_dir = options.mano_dir or os.environ.get(MANO_DIR_ENV) or None
     return Trial(
         kind="arctic",
         trajectory_path=str(path),
         skeleton_path=None,
-        objects=(TrialObject(str(template), "object", f"object {seq.split('_')[0]!r} in the sequence name"),),
+        objects=(TrialObject(str(template), name, f"object {name!r} in the sequence name"),),
         density=options.density,
         mass=options.mass,
+        collision=options.collision or "capsules",
         notes=(f"object motion {motion}",),
+        mano_dir=None if mano_dir is None else str(Path(mano_dir).resolve()),
     )
 
 
+def _find(path: Path, options: TrialOptions) -> Trial:
+    from handsim.io.mano import find_mano_files
+
+    find_mano_files(options.mano_dir)  # before any work: says which files are needed and where to put them
+    _, motion, template = _sequence(path, options.templates)
+    if not motion.is_file():
+        raise TrialError(f"{path}: an ARCTIC MANO sequence without its {motion.name} beside it")
+    if not template.is_dir():
+        where = "--templates" if options.templates is not None else "ARCTIC meta/object_vtemplates"
+        raise TrialError(f"{path}: its object template {template}/ is missing ({where})")
+    return _trial(path, options)
+
+
 def _load(trial: Trial, metrics: MetricSpec | None, progress: bool) -> LoadedTrial:
-    raise TrialError(f"{trial.trajectory_path}: {UNSUPPORTED}")
+    from handsim.builders.arctic_objects import arctic_object
+    from handsim.builders.mano_hand import build_mano_hands
+    from handsim.io.arctic_hands import arctic_trajectory, hand_side_check
+    from handsim.io.arctic_motion import HANDS, read_arctic_sequence
+    from handsim.sim.arctic_scene import arctic_scene
+
+    sequence = read_arctic_sequence(trial.trajectory_path)
+    hands = build_mano_hands(
+        trial.mano_dir, {side: sequence.hand(side).shape for side in HANDS}, collision=trial.collision
+    )
+    models = {side: (hand.skeleton, hand.model) for side, hand in hands.items()}
+    trajectory = arctic_trajectory(sequence, models)
+    (item,) = trial.objects
+    model = arctic_object(
+        item.what, articulation=sequence.object.articulation, mass=trial.mass, density=trial.density
+    )
+    specs, objects, notes = build_objects(trial, progress, [model])
+    scene = arctic_scene({side: hand.spec for side, hand in hands.items()}, trajectory, specs[0], item.track)
+    sides = hand_side_check(sequence, models, model)
+    return LoadedTrial(
+        trial=trial,
+        scene=scene,
+        trajectory=trajectory,
+        hand=f"MANO right + left ({Path(hands['right'].model.source).parent}, the subject's betas, "
+        f"{trial.collision})",
+        objects=objects,
+        notes=(
+            *trial.notes,
+            *notes,
+            sides.message,
+        ),
+    )
 
 
 def _template_files(template: Path) -> list[Path]:
@@ -91,7 +142,7 @@ def _sort_files(sorting: Sorting) -> None:
                 "not a trial"
             )
             continue
-        trial = _find(sorting.base / p, TrialOptions())
+        trial = _trial(sorting.base / p, sorting.options)
         parts = seq.split("_")
         meta = group_fields(
             object=parts[0], action=parts[1] if len(parts) > 2 else None, actor=p.parent.name, sequence=seq
@@ -143,8 +194,8 @@ KIND = TrialKind(
     name="arctic",
     label="an ARCTIC sequence",
     files="ARCTIC raw_seqs/sXX/<seq>.mano.npy with its <seq>.object.npy and meta/object_vtemplates/<object>/",
-    options=frozenset({"density", "mass"}),
-    brings="it brings its own hands and object (the sequence's files)",
+    options=frozenset({"density", "mass", "collision", "mano_dir", "templates"}),
+    brings="it brings its own hands (MANO, --mano-dir) and object (the sequence's files, --templates)",
     matches=_matches,
     find=_find,
     load=_load,

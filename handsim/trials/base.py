@@ -17,7 +17,7 @@ dataset discovery and the runner use.
 from __future__ import annotations
 
 import dataclasses
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from dataclasses import asdict, dataclass, field
 from pathlib import Path, PurePosixPath
 from typing import TYPE_CHECKING
@@ -26,6 +26,7 @@ from handsim.builders.default_hand import DEFAULT_HAND_LENGTH_M
 from handsim.errors import HandsimError, InputFileError
 
 if TYPE_CHECKING:
+    from handsim.object_model import ObjectModel
     from handsim.sim.compiled import SimScene
     from handsim.sim.metrics import MetricSpec
     from handsim.trajectory import Trajectory
@@ -81,6 +82,7 @@ class Trial:
         force: Accept an object density or mass outside its documented range
             (:mod:`handsim.physical_ranges`).
         notes: Decisions made while finding the files.
+        mano_dir: The folder with the user's ``MANO_RIGHT.pkl`` / ``MANO_LEFT.pkl`` (ARCTIC), or None.
     """
 
     kind: str
@@ -97,6 +99,7 @@ class Trial:
     thumb_rest: tuple[float, float] | None = None
     force: bool = False
     notes: tuple[str, ...] = ()
+    mano_dir: str | None = None
 
     def to_dict(self) -> dict:
         """JSON-ready fields (:meth:`from_dict` gives the trial back)."""
@@ -183,6 +186,9 @@ class TrialOptions:
         collision: Hand collision shapes, one of :data:`HAND_COLLISIONS`.
         thumb_rest: Glove recordings: ``(abduction, flexion)`` of the undriven thumb TMC DoFs, degrees
             (:func:`handsim.glove.thumb_rest.apply_thumb_rest`).
+        mano_dir: The folder with the user's MANO model files (ARCTIC; else ``$HANDSIM_MANO_DIR``).
+        templates: ARCTIC object templates folder (``<object>/`` inside), instead of the sequence's
+            ``meta/object_vtemplates/``.
     """
 
     skeleton: str | Path | None = None
@@ -194,6 +200,8 @@ class TrialOptions:
     hand_length: float | None = None
     collision: str | None = None
     thumb_rest: tuple[float, float] | None = None
+    mano_dir: str | Path | None = None
+    templates: str | Path | None = None
 
 
 OPTION_LABELS = {
@@ -206,6 +214,8 @@ OPTION_LABELS = {
     "hand_length": "a hand length",
     "collision": "a hand collision shape",
     "thumb_rest": "a thumb rest posture",
+    "mano_dir": "a MANO model folder",
+    "templates": "an ARCTIC templates folder",
 }
 """How messages name each :class:`TrialOptions` field."""
 
@@ -244,21 +254,27 @@ class TrialKind:
     explain_unknown: Callable[[PurePosixPath], str | None] | None = None
 
 
-def build_objects(trial: Trial, progress: bool) -> tuple[list, tuple[LoadedObject, ...], list[str]]:
+def build_objects(
+    trial: Trial, progress: bool, models: Sequence[ObjectModel] | None = None
+) -> tuple[list, tuple[LoadedObject, ...], list[str]]:
     """Build a trial's objects: their specs, what was built, and the builders' notes.
 
     Args:
         trial: The trial (its objects, units, density or mass).
         progress: Show a progress bar while an uncached convex decomposition runs.
+        models: The object models of ``trial.objects`` when the kind made them itself (e.g. an ARCTIC
+            object with its recorded hinge range); None: :func:`handsim.builders.catalog.resolve` each.
     """
     from handsim.builders.catalog import resolve
     from handsim.builders.objects import object_spec, prepare_object
 
+    if models is None:
+        models = [
+            resolve(o.what, units=trial.units, density=trial.density, mass=trial.mass, force=trial.force)
+            for o in trial.objects
+        ]
     specs, loaded, notes = [], [], []
-    for item in trial.objects:
-        model = resolve(
-            item.what, units=trial.units, density=trial.density, mass=trial.mass, force=trial.force
-        )
+    for item, model in zip(trial.objects, models, strict=True):
         prepared = prepare_object(model, progress=progress, force=trial.force)
         specs.append(object_spec(prepared))
         loaded.append(LoadedObject(model.name, model.source, item.track, item.origin, prepared.total_mass))

@@ -26,7 +26,7 @@ from fnmatch import fnmatchcase
 from pathlib import Path, PurePosixPath
 
 from handsim.errors import HandsimError, InputFileError
-from handsim.trials.base import Trial, TrialKind
+from handsim.trials.base import Trial, TrialKind, TrialOptions
 
 INPUT_ROLES = ("trajectory", "skeleton", "object", "annotation", "calibration", "models_info")
 """Roles of a trial's input files."""
@@ -145,6 +145,8 @@ class Sorting:
         companions: Companion files so far, path → reason.
         unknown: Unknown files so far, path → reason.
         claimed: Files that are inputs of a trial.
+        options: The user's options the kinds' trials take (e.g. ARCTIC's MANO folder); their ``find`` is
+            not run on them, so nothing is checked here: a trial that cannot load fails when it runs.
     """
 
     base: Path
@@ -153,6 +155,7 @@ class Sorting:
     companions: dict[str, str] = field(default_factory=dict)
     unknown: dict[str, str] = field(default_factory=dict)
     claimed: set[str] = field(default_factory=set)
+    options: TrialOptions = field(default_factory=TrialOptions)
 
     def open_files(self) -> list[str]:
         """Files not yet sorted."""
@@ -238,12 +241,15 @@ def _rest(sorting: Sorting, kinds: Sequence[TrialKind]) -> None:
             )
 
 
-def discover_with(dataset: str | Path, kinds: Sequence[TrialKind]) -> Discovery:
+def discover_with(
+    dataset: str | Path, kinds: Sequence[TrialKind], options: TrialOptions | None = None
+) -> Discovery:
     """List the trials of a dataset folder, or the one trial of a recording, with the given kinds.
 
     Args:
         dataset: A dataset folder, a trial folder (a Tzionas ``Models/NN``) or a single recording.
         kinds: The kinds of trial, each claiming its layout's files in this order.
+        options: Options the trials of a kind take (:attr:`Sorting.options`); default none.
 
     Returns:
         The trials (sorted by id) and every other file (companion or unknown, each with its reason).
@@ -259,7 +265,7 @@ def discover_with(dataset: str | Path, kinds: Sequence[TrialKind]) -> Discovery:
     base = root.parent if single else root
     companions: dict[str, str] = {}
     files = [root.relative_to(base).as_posix()] if root.is_file() else _walk(root, base, kinds, companions)
-    sorting = Sorting(base=base, files=files, companions=companions)
+    sorting = Sorting(base=base, files=files, companions=companions, options=options or TrialOptions())
     for kind in kinds:
         kind.sort_files(sorting)
     _rest(sorting, kinds)

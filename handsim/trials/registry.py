@@ -76,6 +76,8 @@ def find_trial(
     collision: str | None = None,
     thumb_rest: tuple[float, float] | None = None,
     force: bool = False,
+    mano_dir: str | Path | None = None,
+    templates: str | Path | None = None,
 ) -> Trial:
     """Find the files of a trial from its recording.
 
@@ -92,7 +94,12 @@ def find_trial(
         mass: Object mass in kg instead of the objects' own.
         hand_length: Parametric default hand's length, m (default 0.19; a scripted grasp's own); only
             without a skeleton.
-        collision: Hand collision shapes: ``"capsules"`` (default) or ``"mesh"`` (skinned skeletons only).
+        collision: Hand collision shapes: ``"capsules"`` (default) or ``"mesh"`` (skinned skeletons and
+            MANO hands).
+        mano_dir: ARCTIC: the folder with ``MANO_RIGHT.pkl`` and ``MANO_LEFT.pkl`` (default
+            ``$HANDSIM_MANO_DIR``).
+        templates: ARCTIC: a folder of object templates (``<object>/``) instead of the sequence's
+            ``meta/object_vtemplates/``.
         thumb_rest: GraspDB14: ``(abduction, flexion)`` in degrees at which to hold the thumb TMC DoFs no
             glove sensor drives (default: left at 0, as the GraspDB14 tools do).
         force: Accept an object density or mass outside its documented range (every kind's objects).
@@ -121,6 +128,8 @@ def find_trial(
         hand_length=hand_length,
         collision=collision,
         thumb_rest=None if thumb_rest is None else (float(thumb_rest[0]), float(thumb_rest[1])),
+        mano_dir=mano_dir,
+        templates=templates,
     )
     kind = kind_named(trial_kind(path))
     for option in dataclasses.fields(TrialOptions):
@@ -163,13 +172,15 @@ def load_trial(
     return kind_named(trial.kind).load(trial, metrics, progress)
 
 
-def discover(dataset: str | Path) -> Discovery:
+def discover(dataset: str | Path, options: TrialOptions | None = None) -> Discovery:
     """List the trials of a dataset folder, or the one trial of a recording (every kind of :data:`KINDS`).
 
     Args:
         dataset: A dataset folder (GraspDB14 recordings, a Tzionas root with ``Models/`` and ``Configs/``,
             an ARCTIC root with ``raw_seqs/`` and ``meta/``, or a folder holding several of them), a
             Tzionas ``Models/NN`` folder, or a single recording.
+        options: Options for the trials of the kinds that take them (``mano_dir`` for ARCTIC sequences);
+            default none.
 
     Returns:
         The trials (sorted by id) and every other file (companion or unknown, each with its reason).
@@ -177,4 +188,4 @@ def discover(dataset: str | Path) -> Discovery:
     Raises:
         InputFileError: ``dataset`` does not exist.
     """
-    return discover_with(dataset, KINDS)
+    return discover_with(dataset, KINDS, options)
