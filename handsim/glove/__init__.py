@@ -41,10 +41,14 @@ from handsim.glove.calibration import (
 from handsim.glove.coupling import CYBERGLOVE, DIP_PIP_RATIO, couple_dip, cyberglove_dip
 from handsim.glove.gaps import GAP_METHODS, fill_gaps, find_gaps
 from handsim.glove.phases import (
+    AnnotationMatch,
     PhaseAnnotation,
+    annotation_names,
     attach_phases,
+    check_annotation,
     cut,
     find_annotation_file,
+    match_annotation,
     read_phase_annotations,
     split_by_switch,
     switch_segments,
@@ -57,6 +61,7 @@ from handsim.glove.sensors import (
     discarded_sensors,
     driven_dofs,
 )
+from handsim.glove.spikes import MAX_JOINT_SPEED, Spike, find_spikes, remove_spikes
 
 __all__ = [
     "CALIBRATION_PROTOCOL",
@@ -65,16 +70,21 @@ __all__ = [
     "DEFAULT_GAINS",
     "DIP_PIP_RATIO",
     "GAP_METHODS",
+    "MAX_JOINT_SPEED",
     "SENSORS",
     "SENSOR_NAMES",
     "AbductionCoupling",
+    "AnnotationMatch",
     "CalibrationError",
     "GloveCalibration",
     "GloveSensor",
     "PhaseAnnotation",
     "ReferencePose",
+    "Spike",
+    "annotation_names",
     "apply_calibration",
     "attach_phases",
+    "check_annotation",
     "computed_dofs",
     "couple_dip",
     "cut",
@@ -85,8 +95,11 @@ __all__ = [
     "fill_gaps",
     "find_annotation_file",
     "find_gaps",
+    "find_spikes",
     "load_calibration",
+    "match_annotation",
     "read_phase_annotations",
+    "remove_spikes",
     "save_calibration",
     "split_by_switch",
     "switch_segments",
