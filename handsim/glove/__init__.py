@@ -20,7 +20,13 @@ Gap filling (:mod:`handsim.glove.gaps`): :func:`fill_gaps` by the thesis' five m
 interpolation (:data:`GAP_METHODS`), :func:`find_gaps`.
 
 Phases (:mod:`handsim.glove.phases`): :func:`split_by_switch`, :func:`read_phase_annotations`,
-:func:`find_annotation_file`, :func:`attach_phases`, :func:`cut`.
+:func:`find_annotation_file` (the recording's own annotation only: :func:`annotation_names`),
+:func:`match_annotation` / :func:`check_annotation` (used only when it covers the recording's frames),
+:func:`attach_phases`, :func:`cut`.
+
+Spikes (:mod:`handsim.glove.spikes`): :func:`find_spikes`, :func:`remove_spikes` (single-sample jumps beyond
+:data:`MAX_JOINT_SPEED` that revert, marked invalid and filled); :mod:`handsim.glove.checks` runs the
+annotation and spike checks on a recording.
 """
 
 from __future__ import annotations

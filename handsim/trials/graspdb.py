@@ -192,8 +192,9 @@ def _sort_files(sorting: Sorting) -> None:
     for f in annotations:
         if f not in sorting.claimed:
             sorting.unknown[f] = (
-                "a GraspDB14 phase annotation file, not a recording; the recording it annotates is not in "
-                "the dataset"
+                "a GraspDB14 phase annotation file, not a recording; no recording of the dataset uses it "
+                "(the one it annotates is not in the dataset, or covers another number of frames: that "
+                "trial's notes say so)"
             )
 
 
