@@ -15,6 +15,7 @@ import sys
 
 from handsim.cli._common import (
     add_control_rate,
+    add_force,
     add_object_mass_options,
     output_file,
     positive_number,
@@ -199,6 +200,18 @@ def _print_summary(result) -> None:
         )
 
 
+def _thumb_rest(text: str) -> tuple[float, float]:
+    """An argparse type: ``ABD,FLEX`` in degrees, two finite numbers (the joint limits are the loader's)."""
+    parts = text.split(",")
+    try:
+        values = tuple(float(p) for p in parts)
+    except ValueError:
+        values = ()
+    if len(values) != 2 or not all(math.isfinite(v) for v in values):
+        raise argparse.ArgumentTypeError(f"expected ABD,FLEX: two angles in degrees, got {text!r}")
+    return values
+
+
 def _stability_at(text: str) -> float | str:
     if text == "grasp":
         return text
@@ -235,6 +248,8 @@ def _replay(args: argparse.Namespace) -> int:
             mass=args.mass,
             hand_length=args.hand_length,
             collision=args.collision,
+            thumb_rest=args.thumb_rest,
+            force=args.force,
         )
     except TrialError as exc:
         return usage_error("replay", str(exc))
@@ -315,7 +330,8 @@ def register(commands: argparse._SubParsersAction) -> None:
         "--calibration", metavar="JSON", help="GraspDB14: calibration of a raw-count recording"
     )
     replay.add_argument("--units", choices=("m", "mm"), help="units of a mesh file given as --object")
-    add_object_mass_options(replay, forced=False)
+    add_object_mass_options(replay, forced=True)
+    add_force(replay)
     replay.add_argument(
         "--hand-length", type=positive_number, default=None, metavar="M",
         help="GraspDB14 without --skeleton: parametric hand length, wrist crease to middle fingertip (0.19)",
@@ -323,6 +339,11 @@ def register(commands: argparse._SubParsersAction) -> None:
     replay.add_argument(
         "--collision", choices=("capsules", "mesh"), default=None,
         help="hand collision shapes (default capsules; mesh: per-bone hulls of a skinned .SKEL hand)",
+    )  # fmt: skip
+    replay.add_argument(
+        "--thumb-rest", type=_thumb_rest, metavar="ABD,FLEX",
+        help="GraspDB14: hold the thumb TMC DoFs no glove sensor drives (th_tmc_abd, th_tmc_flex) at these "
+        "angles in degrees (default: 0,0 as the GraspDB14 tools; see docs/cyberglove.md)",
     )  # fmt: skip
     add_control_rate(replay)
     replay.add_argument(

@@ -19,6 +19,9 @@ DIP coupling (:mod:`handsim.glove.coupling`): :func:`couple_dip` (``DIP = 2/3 PI
 Gap filling (:mod:`handsim.glove.gaps`): :func:`fill_gaps` by the thesis' five methods or linear
 interpolation (:data:`GAP_METHODS`), :func:`find_gaps`.
 
+Thumb rest posture (:mod:`handsim.glove.thumb_rest`): :func:`apply_thumb_rest` holds the thumb TMC DoFs
+no sensor drives (:data:`THUMB_REST_DOFS`) at a constant posture.
+
 Phases (:mod:`handsim.glove.phases`): :func:`split_by_switch`, :func:`read_phase_annotations`,
 :func:`find_annotation_file` (the recording's own annotation only: :func:`annotation_names`),
 :func:`match_annotation` / :func:`check_annotation` (used only when it covers the recording's frames),
@@ -68,6 +71,7 @@ from handsim.glove.sensors import (
     driven_dofs,
 )
 from handsim.glove.spikes import MAX_JOINT_SPEED, Spike, find_spikes, remove_spikes
+from handsim.glove.thumb_rest import THUMB_REST_DOFS, apply_thumb_rest, thumb_rest_note
 
 __all__ = [
     "CALIBRATION_PROTOCOL",
@@ -79,6 +83,7 @@ __all__ = [
     "MAX_JOINT_SPEED",
     "SENSORS",
     "SENSOR_NAMES",
+    "THUMB_REST_DOFS",
     "AbductionCoupling",
     "AnnotationMatch",
     "CalibrationError",
@@ -89,6 +94,7 @@ __all__ = [
     "Spike",
     "annotation_names",
     "apply_calibration",
+    "apply_thumb_rest",
     "attach_phases",
     "check_annotation",
     "computed_dofs",
@@ -109,4 +115,5 @@ __all__ = [
     "save_calibration",
     "split_by_switch",
     "switch_segments",
+    "thumb_rest_note",
 ]

@@ -150,6 +150,8 @@ def trial_row(record: dict) -> dict:
         "held": held(record),
         "hold_reason": (record.get("hold") or {}).get("reason"),
         "hold_robustness": summary_value(record, "hold_robustness"),
+        "fit_fraction": summary_value(record, "fit_fraction"),
+        "self_penetration_at_closure_mm": summary_value(record, "self_penetration_at_closure_mm"),
         "valid": record_valid(record),
         "flags": [str(f.get("code")) for f in record.get("flags") or [] if isinstance(f, dict)],
         "time_held_s": summary_value(record, "time_held_s"),

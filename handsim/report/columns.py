@@ -104,6 +104,17 @@ TRIAL_COLUMNS: tuple[Column, ...] = (
         help="fraction of the robustness ensemble (the top placements and the winner moved ±2 mm and turned "
         "±5°) whose object was held",
     ),
+    Column(
+        "fit at",
+        lambda r: fmt.num(r["fit_fraction"]),
+        help="glove trials: fraction of the recorded finger flexion at which the object first fits in the "
+        "hand (1 = only when fully closed; lower: the recording closes past the object)",
+    ),
+    Column(
+        "self-pen. mm",
+        lambda r: fmt.num(r["self_penetration_at_closure_mm"], 1),
+        help="glove trials: deepest penetration of the hand's own links (thumb through fingers) at closure",
+    ),
     Column("object", lambda r: fmt.text(r["object"]), numeric=False),
     Column("grasp", lambda r: fmt.text(r["grasp"]), numeric=False),
     Column("actor", lambda r: fmt.text(r["actor"]), numeric=False),

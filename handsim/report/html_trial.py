@@ -221,7 +221,24 @@ def _hold(record: dict) -> str:
             fmt.integer(number((record.get("summary") or {}).get("release_directions_held"))),
         ),
     ]
-    return "<h4>Hold outcome</h4>" + numbers(items)
+    return "<h4>Hold outcome</h4>" + numbers(items) + _closure(record.get("summary") or {})
+
+
+def _closure(summary: dict) -> str:
+    """How far the recorded closing passes the object: recording-quality numbers of a glove trial."""
+    items = [
+        ("flexion fraction where the object fits", fmt.num(number(summary.get("fit_fraction")))),
+        ("grip normal force N", fmt.num(number(summary.get("grip_normal_force_n")), 1)),
+        ("grip servo torque N·m", fmt.num(number(summary.get("grip_servo_torque_nm")))),
+        ("gravity directions the grip resists", fmt.integer(number(summary.get("grip_directions_held")))),
+        (
+            "hand self-penetration at closure mm",
+            fmt.num(number(summary.get("self_penetration_at_closure_mm")), 1),
+        ),
+    ]
+    if all(value == fmt.MISSING for _, value in items):
+        return ""
+    return "<h4>Recorded closure</h4>" + numbers(items)
 
 
 def _stability(record: dict) -> str:

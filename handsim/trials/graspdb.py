@@ -84,13 +84,14 @@ def _find(path: Path, options: TrialOptions) -> Trial:
         mass=options.mass,
         hand_length=DEFAULT_HAND_LENGTH_M if options.hand_length is None else float(options.hand_length),
         collision=options.collision or "capsules",
+        thumb_rest=options.thumb_rest,
         notes=tuple(notes),
     )
 
 
 def _load(trial: Trial, metrics: MetricSpec | None, progress: bool) -> LoadedTrial:
     from handsim.builders import build_hand
-    from handsim.glove import load_calibration
+    from handsim.glove import apply_thumb_rest, load_calibration, thumb_rest_note
     from handsim.glove.checks import check_recording
     from handsim.glove.phases import check_annotation
     from handsim.io import read_skeleton, read_trajectory
@@ -113,6 +114,9 @@ def _load(trial: Trial, metrics: MetricSpec | None, progress: bool) -> LoadedTri
         notes.append(given.note)
     if checks.spikes:
         notes.append(f"recording checks: {checks.spike_text()}")
+    if trial.thumb_rest is not None:
+        trajectory = apply_thumb_rest(trajectory, skeleton, *trial.thumb_rest)
+        notes.append(thumb_rest_note(*trial.thumb_rest))
     return glove_loaded(trial, hand, hand_text, trajectory, metrics, progress, tuple(notes), checks)
 
 
@@ -212,7 +216,17 @@ KIND = TrialKind(
     label="a GraspDB14 recording",
     files="GraspDB14 CyberGlove recording .txt (radians; raw counts with a calibration)",
     options=frozenset(
-        {"skeleton", "obj", "calibration", "units", "density", "mass", "hand_length", "collision"}
+        {
+            "skeleton",
+            "obj",
+            "calibration",
+            "units",
+            "density",
+            "mass",
+            "hand_length",
+            "collision",
+            "thumb_rest",
+        }
     ),
     brings="a glove recording takes the hand's skeleton, the object and the glove calibration",
     matches=_matches,
