@@ -119,7 +119,7 @@ GRASPDB_FILES = (
     "01_ex01-raw-002-grasp-su01.txt",  # its raw twin
     "01_ex01-rad-002-grasp-su01_annot-.txt",  # its phases: an input of the trial
     "02_ex01-raw-003-grasp-su01.txt",  # raw counts alone
-    "02_ex01-rad-003-grasp-su01_annot-.txt",  # the phases of that raw recording
+    "02_ex01-raw-003-grasp-su01_annot-.txt",  # the phases of that raw recording
     "03_ex01-rad-004-grasp-su01_annot-.txt",  # phases of a recording that is not here
     "99_ex01-rad-001-grasp-su01.txt",  # an object id GraspDB14 does not have
     "su04_calib-raw-1.txt",
@@ -138,6 +138,8 @@ def test_every_graspdb_file_kind_is_a_trial_input_or_has_its_exact_reason(tmp_pa
     for name in GRASPDB_FILES:
         (tmp_path / name).parent.mkdir(exist_ok=True)
         (tmp_path / name).write_text("x\n")
+    # the trial's own annotation must cover its frames (one row here) to be one of its inputs
+    (tmp_path / "01_ex01-rad-002-grasp-su01_annot-.txt").write_text("1 1 .grasp\n")
     discovery = discover(tmp_path)
     (entry,) = discovery.entries
     assert entry.id == "01_ex01-rad-002-grasp-su01.txt"
@@ -154,7 +156,7 @@ def test_every_graspdb_file_kind_is_a_trial_input_or_has_its_exact_reason(tmp_pa
         "02_ex01-raw-003-grasp-su01.txt": "raw sensor counts without their -rad- twin: a dataset run has no "
         "glove calibration to turn them into angles; replay it alone with handsim replay FILE "
         "--calibration CAL.json",
-        "02_ex01-rad-003-grasp-su01_annot-.txt": "GraspDB14 phase annotation of "
+        "02_ex01-raw-003-grasp-su01_annot-.txt": "GraspDB14 phase annotation of "
         "02_ex01-raw-003-grasp-su01.txt, which is not replayed (its entry says why)",
         "su04_calib-raw-1.txt": (
             "CyberGlove calibration sequence (raw counts): estimate a calibration from it to replay -raw- "
@@ -179,7 +181,8 @@ def test_every_graspdb_file_kind_is_a_trial_input_or_has_its_exact_reason(tmp_pa
     }
     assert set(unknown) == {"03_ex01-rad-004-grasp-su01_annot-.txt", "99_ex01-rad-001-grasp-su01.txt"}
     assert unknown["03_ex01-rad-004-grasp-su01_annot-.txt"] == (
-        "a GraspDB14 phase annotation file, not a recording; the recording it annotates is not in the dataset"
+        "a GraspDB14 phase annotation file, not a recording; no recording of the dataset uses it (the one it "
+        "annotates is not in the dataset, or covers another number of frames: that trial's notes say so)"
     )
     assert unknown["99_ex01-rad-001-grasp-su01.txt"].startswith(
         "a GraspDB14 recording name, but not a trial: unknown GraspDB object id 99; catalogue ids are: "

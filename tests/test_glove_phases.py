@@ -14,10 +14,13 @@ from hypothesis import strategies as st
 
 from handsim.errors import FormatError, InputFileError, TrajectoryError
 from handsim.glove import (
+    AnnotationMatch,
     PhaseAnnotation,
+    annotation_names,
     attach_phases,
     cut,
     find_annotation_file,
+    match_annotation,
     read_phase_annotations,
     split_by_switch,
     switch_segments,
@@ -156,19 +159,76 @@ def test_motion_without_annotation_finds_none(graspdb_dir: Path, name: str) -> N
 @pytest.mark.parametrize(
     "motion",
     [
-        "01_11_ex03-rad-004-grasp-su04.txt",  # without prefix
-        "r_01_11_ex03-raw-004-grasp-su04.txt",  # the raw twin
-        "01_11_ex03-rad-004-grasp-su04",  # no extension
+        "01_11_ex03-rad-004-grasp-su04.txt",  # the exact stem
+        "01_11_ex03-rad-004-grasp-su04",  # the exact stem, no extension
     ],
 )
-def test_annotation_file_is_found_for_name_variants(tmp_path: Path, motion: str) -> None:
+def test_annotation_file_is_found_for_its_exact_stem(tmp_path: Path, motion: str) -> None:
     annotation = _write(tmp_path, "1 2 .rest\n", ANNOTATION)
     assert find_annotation_file(tmp_path / motion) == annotation
+
+
+@pytest.mark.parametrize(
+    "motion",
+    [
+        "h_01_11_ex03-rad-004-grasp-su04.txt",  # another prefix
+        "VIShand_01_11_ex03-rad-004-grasp-su04.txt",  # another prefix, upper case
+        "R_01_11_ex03-rad-004-grasp-su04.txt",  # not the documented r_
+        "r_01_11_ex03-raw-004-grasp-su04.txt",  # another stem (the raw twin)
+        "01_11_ex03-rad-004-grasp-su04.txt.bak",  # another stem
+    ],
+)
+def test_annotation_file_is_not_found_for_another_recordings_name(tmp_path: Path, motion: str) -> None:
+    _write(tmp_path, "1 2 .rest\n", ANNOTATION)
+    assert find_annotation_file(tmp_path / motion) is None
 
 
 def test_annotation_with_prefix_kept_is_found(tmp_path: Path) -> None:
     annotation = _write(tmp_path, "1 2 .rest\n", "r_01_11_ex03-rad-004-grasp-su04_annot-.txt")
     assert find_annotation_file(tmp_path / MOTION) == annotation
+
+
+def test_annotation_names_drop_only_the_r_prefix() -> None:
+    assert annotation_names("x/r_01_11_ex03-rad-004-grasp-su04.txt") == (
+        "r_01_11_ex03-rad-004-grasp-su04_annot-.txt",
+        "01_11_ex03-rad-004-grasp-su04_annot-.txt",
+    )
+    assert annotation_names("h_01_ex01-rad-002-grasp-su01.txt") == (
+        "h_01_ex01-rad-002-grasp-su01_annot-.txt",
+    )
+
+
+def test_match_annotation_uses_an_annotation_covering_the_recordings_frames(graspdb_dir: Path) -> None:
+    match = match_annotation(graspdb_dir / MOTION, 282)
+    assert match == AnnotationMatch(
+        graspdb_dir / ANNOTATION,
+        f"phase annotation {ANNOTATION}: 282 frames, as many as {MOTION} has",
+    )
+    assert not match.warning
+
+
+@pytest.mark.parametrize("frames", [276, 10000])
+def test_match_annotation_warns_and_uses_none_when_the_frame_counts_differ(
+    tmp_path: Path, frames: int
+) -> None:
+    annotation = _write(tmp_path, "1 24 .rest\n25 282 .grasp\n", ANNOTATION)
+    match = match_annotation(tmp_path / MOTION, frames)
+    assert match.path is None and match.warning
+    assert match.note == (
+        f"warning: phase annotation {annotation} is not used: its intervals end at frame 282, but the "
+        f"recording {tmp_path / MOTION} has {frames} frames (an annotation covers exactly the frames of the "
+        "recording it belongs to; is it another recording's?); the grasp phase is found from the finger "
+        "flexion"
+    )
+
+
+def test_match_annotation_says_which_names_were_looked_for(tmp_path: Path) -> None:
+    match = match_annotation(tmp_path / MOTION, 282)
+    assert match == AnnotationMatch(
+        None,
+        f"no phase annotation (r_01_11_ex03-rad-004-grasp-su04_annot-.txt or {ANNOTATION}) beside {MOTION}: "
+        "the grasp phase is found from the finger flexion",
+    )
 
 
 def test_attach_real_annotation_sets_named_phases(graspdb_dir: Path) -> None:

@@ -316,7 +316,10 @@ def test_discovery_lists_unknown_and_companion_files_with_their_reasons(tmp_path
         "a GraspDB14 recording name, but not a trial: unknown GraspDB object id 99; catalogue ids are: "
         "1 (tennis_ball)"
     )
-    assert "recording it annotates is not in the dataset" in unknown["02_ex01-rad-001-grasp-su02_annot-.txt"]
+    assert unknown["02_ex01-rad-001-grasp-su02_annot-.txt"] == (
+        "a GraspDB14 phase annotation file, not a recording; no recording of the dataset uses it (the one it "
+        "annotates is not in the dataset, or covers another number of frames: that trial's notes say so)"
+    )
     assert "not a GraspDB14 motion file name" in unknown["notes.txt"]
     assert "file type '.csv'" in unknown["table.csv"]
     companions = {c.path: c.reason for c in discovery.companions}

@@ -119,7 +119,10 @@ def test_find_trial_takes_the_graspdb_object_from_the_file_name(tmp_path):
     assert trial.objects == (TrialObject("cylinder_25mm", "", "object id 13 in the file name"),)
     assert trial.skeleton_path is None and trial.hand_length == 0.19
     assert trial.annotation_path is None
-    assert any("grasp frame is the peak flexion" in n for n in trial.notes)
+    assert trial.notes[-1] == (
+        "no phase annotation (13_ex01-rad-002-grasp-su01_annot-.txt) beside 13_ex01-rad-002-grasp-su01.txt: "
+        "the grasp phase is found from the finger flexion"
+    )
 
 
 def test_find_trial_prefers_the_given_object_to_the_file_name(tmp_path):

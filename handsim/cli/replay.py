@@ -45,6 +45,27 @@ def _print_trial(loaded) -> None:
     for obj in loaded.objects:
         track = f", follows track {obj.track!r}" if obj.track else ""
         _line("object", f"{obj.name} ({obj.origin}{track}), {obj.mass * 1000:.1f} g")
+    _print_checks(loaded)
+
+
+PHASE_SOURCES = {
+    "phase": "the annotated 'grasp' phase",
+    "peak flexion": "the finger flexion (no annotation used: the frames around peak flexion)",
+}
+"""How the replay summary names a glove trial's phase source (:attr:`GraspFrame.source`)."""
+
+
+def _print_checks(loaded) -> None:
+    """Which annotation and phase source a glove trial used, and the spikes filled in its recording."""
+    from handsim.runner.trial_record import recording_checks
+
+    found = recording_checks(loaded.checks, loaded.scene)
+    if loaded.checks is not None:
+        _line("annotation", loaded.checks.annotation.note)
+    if found["phase_source"] is not None:
+        _line("phases", f"grasp from {PHASE_SOURCES.get(found['phase_source'], found['phase_source'])}")
+    if loaded.checks is not None:
+        _line("spikes", loaded.checks.spike_text())
 
 
 def _print_summary(result) -> None:
@@ -304,10 +325,12 @@ def _replay(args: argparse.Namespace) -> int:
         _line("note", note)
     if args.json:
         from handsim.replay_plots import replay_curves
+        from handsim.runner.trial_record import recording_checks
 
         record = {
             **result.to_dict(),
             "trial": loaded.trial.to_dict(),
+            "recording": recording_checks(loaded.checks, loaded.scene),
             "curves": replay_curves(result).to_dict(),
         }
         text = json.dumps(json_ready(record), indent=1, allow_nan=False)

@@ -9,8 +9,14 @@ from handsim.cli._common import output_file
 
 
 def load_trajectory(path: str, skeleton_path: str | None, calibration_path: str | None):
-    """Read a recording (with its skeleton and calibration when given) and attach annotated phases."""
-    from handsim.glove import attach_phases, find_annotation_file, load_calibration
+    """Read a recording (with its skeleton and calibration when given) and check it.
+
+    A GraspDB14 glove recording gets the phases of its own annotation and its single-sample spikes filled
+    (:func:`handsim.glove.checks.check_recording`); the checks' result is None for other recordings.
+    """
+    from handsim.glove import load_calibration
+    from handsim.glove.checks import check_recording
+    from handsim.glove.phases import match_annotation
     from handsim.io import read_skeleton, read_trajectory
     from handsim.io._text import require_file
 
@@ -20,10 +26,10 @@ def load_trajectory(path: str, skeleton_path: str | None, calibration_path: str 
     skeleton = read_skeleton(skeleton_path) if skeleton_path else None
     calibration = load_calibration(calibration_path) if calibration_path else None
     trajectory = read_trajectory(path, skeleton=skeleton, calibration=calibration)
-    annotation = find_annotation_file(path)
-    if annotation is not None and not trajectory.phases:
-        trajectory = attach_phases(trajectory, annotation)
-    return trajectory, skeleton
+    if trajectory.switch is None:  # not a CyberGlove recording
+        return trajectory, skeleton, None
+    trajectory, checks = check_recording(trajectory, match_annotation(path, trajectory.nframes))
+    return trajectory, skeleton, checks
 
 
 def _inspect_arctic(args: argparse.Namespace) -> int:
@@ -47,9 +53,14 @@ def _inspect(args: argparse.Namespace) -> int:
 
     if args.trajectory.endswith(".mano.npy"):
         return _inspect_arctic(args)
-    trajectory, skeleton = load_trajectory(args.trajectory, args.skeleton, args.calibration)
+    trajectory, skeleton, checks = load_trajectory(args.trajectory, args.skeleton, args.calibration)
     for line in describe(trajectory, skeleton).lines():
         print(line)
+    if checks is not None:
+        print(f"annotation {checks.annotation.note}")
+        print(f"spikes     {checks.spike_text()}")
+        for spike in checks.spikes:
+            print(f"spike      {spike.describe()}")
     if args.plot:
         from handsim.plotting import plot_trajectory
 

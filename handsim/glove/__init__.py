@@ -23,7 +23,13 @@ Thumb rest posture (:mod:`handsim.glove.thumb_rest`): :func:`apply_thumb_rest` h
 no sensor drives (:data:`THUMB_REST_DOFS`) at a constant posture.
 
 Phases (:mod:`handsim.glove.phases`): :func:`split_by_switch`, :func:`read_phase_annotations`,
-:func:`find_annotation_file`, :func:`attach_phases`, :func:`cut`.
+:func:`find_annotation_file` (the recording's own annotation only: :func:`annotation_names`),
+:func:`match_annotation` / :func:`check_annotation` (used only when it covers the recording's frames),
+:func:`attach_phases`, :func:`cut`.
+
+Spikes (:mod:`handsim.glove.spikes`): :func:`find_spikes`, :func:`remove_spikes` (single-sample jumps beyond
+:data:`MAX_JOINT_SPEED` that revert, marked invalid and filled); :mod:`handsim.glove.checks` runs the
+annotation and spike checks on a recording.
 """
 
 from __future__ import annotations
@@ -44,10 +50,14 @@ from handsim.glove.calibration import (
 from handsim.glove.coupling import CYBERGLOVE, DIP_PIP_RATIO, couple_dip, cyberglove_dip
 from handsim.glove.gaps import GAP_METHODS, fill_gaps, find_gaps
 from handsim.glove.phases import (
+    AnnotationMatch,
     PhaseAnnotation,
+    annotation_names,
     attach_phases,
+    check_annotation,
     cut,
     find_annotation_file,
+    match_annotation,
     read_phase_annotations,
     split_by_switch,
     switch_segments,
@@ -60,6 +70,7 @@ from handsim.glove.sensors import (
     discarded_sensors,
     driven_dofs,
 )
+from handsim.glove.spikes import MAX_JOINT_SPEED, Spike, find_spikes, remove_spikes
 from handsim.glove.thumb_rest import THUMB_REST_DOFS, apply_thumb_rest, thumb_rest_note
 
 __all__ = [
@@ -69,18 +80,23 @@ __all__ = [
     "DEFAULT_GAINS",
     "DIP_PIP_RATIO",
     "GAP_METHODS",
+    "MAX_JOINT_SPEED",
     "SENSORS",
     "SENSOR_NAMES",
     "THUMB_REST_DOFS",
     "AbductionCoupling",
+    "AnnotationMatch",
     "CalibrationError",
     "GloveCalibration",
     "GloveSensor",
     "PhaseAnnotation",
     "ReferencePose",
+    "Spike",
+    "annotation_names",
     "apply_calibration",
     "apply_thumb_rest",
     "attach_phases",
+    "check_annotation",
     "computed_dofs",
     "couple_dip",
     "cut",
@@ -91,8 +107,11 @@ __all__ = [
     "fill_gaps",
     "find_annotation_file",
     "find_gaps",
+    "find_spikes",
     "load_calibration",
+    "match_annotation",
     "read_phase_annotations",
+    "remove_spikes",
     "save_calibration",
     "split_by_switch",
     "switch_segments",

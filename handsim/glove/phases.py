@@ -223,41 +223,142 @@ def _frame(path: Path, line: int, token: str, field: str) -> int:
     return int(token)
 
 
+ANNOTATED_PREFIX = "r_"
+"""The one motion-file prefix an annotation name leaves out: GraspDB14's sample pair is
+``r_01_11_ex03-rad-004-grasp-su04.txt`` ↔ ``01_11_ex03-rad-004-grasp-su04_annot-.txt``."""
+
+
+def _motion_stem(path: Path) -> str:
+    return path.name[:-4] if path.name.lower().endswith(".txt") else path.name
+
+
+def annotation_names(motion_path: str | Path) -> tuple[str, ...]:
+    """The names a motion file's phase annotation may have, in the order they are looked for.
+
+    The motion's exact stem (its name without ``.txt``) followed by ``_annot-.txt``, then, for a name
+    starting with ``r_``, the same without that prefix (the GraspDB14 sample pair). No other prefix is
+    dropped and no other name is tried: an annotation belongs to one recording only.
+
+    Args:
+        motion_path: A motion file (it need not exist).
+
+    Returns:
+        One or two file names.
+    """
+    stem = _motion_stem(Path(motion_path))
+    names = [f"{stem}{ANNOTATION_SUFFIX}"]
+    if stem.startswith(ANNOTATED_PREFIX) and len(stem) > len(ANNOTATED_PREFIX):
+        names.append(f"{stem[len(ANNOTATED_PREFIX) :]}{ANNOTATION_SUFFIX}")
+    return tuple(names)
+
+
 def find_annotation_file(motion_path: str | Path) -> Path | None:
     """The phase annotation file of a GraspDB14 motion file, if it lies beside it.
 
-    The annotation's name is the motion file's name without ``.txt``, without a prefix such as ``r_``
-    before the object id, followed by ``_annot-.txt``: ``r_01_11_ex03-rad-004-grasp-su04.txt`` →
-    ``01_11_ex03-rad-004-grasp-su04_annot-.txt`` (the GraspDB14 sample pair). The name with the prefix
-    kept, and the ``-rad-``/``-raw-`` twin names, are tried too, in this order.
+    Only the names of :func:`annotation_names` count: ``r_01_11_ex03-rad-004-grasp-su04.txt`` →
+    ``r_01_11_ex03-rad-004-grasp-su04_annot-.txt`` or ``01_11_ex03-rad-004-grasp-su04_annot-.txt``;
+    ``h_01_11_…`` or ``VIShand_01_11_…`` find neither. Whether the file found agrees with the recording's
+    frame count is :func:`match_annotation`'s job.
 
     Args:
         motion_path: A motion file (``rad`` or ``raw``; it need not exist).
 
     Returns:
-        The first candidate that exists in the motion file's folder, or None.
+        The first candidate that exists in the motion file's folder, or None. An annotation file given as
+        the motion is itself.
     """
-    from handsim.io.graspdb import parse_graspdb_filename  # lazy: handsim.io imports handsim.glove
-
     p = Path(motion_path)
-    stem = p.name[:-4] if p.name.lower().endswith(".txt") else p.name
-    if stem.endswith("_annot-"):
+    if _motion_stem(p).endswith("_annot-"):
         return p if p.exists() else None
-    stems = []
-    parsed = parse_graspdb_filename(p)
-    if parsed is not None and parsed.prefix:
-        stems.append(stem[len(parsed.prefix) + 1 :])
-    stems.append(stem)
-    for s in list(stems):
-        for a, b in (("-rad-", "-raw-"), ("-raw-", "-rad-")):
-            if a in s:
-                stems.append(s.replace(a, b, 1))
-                break
-    for s in stems:
-        candidate = p.parent / f"{s}{ANNOTATION_SUFFIX}"
+    for name in annotation_names(p):
+        candidate = p.parent / name
         if candidate.is_file():
             return candidate
     return None
+
+
+@dataclass(frozen=True)
+class AnnotationMatch:
+    """Which phase annotation a recording uses, and why (or why none).
+
+    Attributes:
+        path: The annotation file used, or None.
+        note: For people: the file and the frames it covers, or why no annotation is used. A file that lies
+            beside the recording but is not used gives a note starting with ``warning:``.
+    """
+
+    path: Path | None
+    note: str
+
+    @property
+    def warning(self) -> bool:
+        """An annotation lies beside the recording but is not used."""
+        return self.note.startswith("warning:")
+
+
+def annotation_frames(path: str | Path) -> int:
+    """How many frames an annotation file covers: its last interval's last frame (1-based, inclusive).
+
+    Raises:
+        InputFileError: The file is missing or unreadable.
+        FormatError: The file is malformed (see :func:`read_phase_annotations`).
+    """
+    return read_phase_annotations(path)[-1].stop
+
+
+def check_annotation(annotation: str | Path, motion: str | Path, frames: int) -> AnnotationMatch:
+    """Use an annotation file for a recording only when it covers exactly the recording's frames.
+
+    Args:
+        annotation: The annotation file.
+        motion: The recording, for the note.
+        frames: The recording's frame count.
+
+    Returns:
+        The annotation with a note, or None with a ``warning:`` note naming both files and both counts.
+
+    Raises:
+        InputFileError: The annotation is missing or unreadable.
+        FormatError: The annotation is malformed.
+    """
+    a, m = Path(annotation), Path(motion)
+    covered = annotation_frames(a)
+    if covered != frames:
+        return AnnotationMatch(
+            None,
+            f"warning: phase annotation {a} is not used: its intervals end at frame {covered}, but the "
+            f"recording {m} has {frames} frames (an annotation covers exactly the frames of the recording it "
+            "belongs to; is it another recording's?); the grasp phase is found from the finger flexion",
+        )
+    return AnnotationMatch(a, f"phase annotation {a.name}: {covered} frames, as many as {m.name} has")
+
+
+def match_annotation(motion_path: str | Path, frames: int) -> AnnotationMatch:
+    """The phase annotation a recording uses: the one beside it by name, if it agrees with its frames.
+
+    Args:
+        motion_path: The recording.
+        frames: Its frame count.
+
+    Returns:
+        The annotation (:func:`find_annotation_file`) and a note; None with the reason when no file of
+        :func:`annotation_names` lies beside it, or with a ``warning:`` when the one there covers another
+        number of frames (:func:`check_annotation`).
+
+    Raises:
+        InputFileError: The annotation is unreadable.
+        FormatError: The annotation is malformed.
+    """
+    p = Path(motion_path)
+    found = find_annotation_file(p)
+    if found is None:
+        names = " or ".join(annotation_names(p))
+        return AnnotationMatch(
+            None,
+            f"no phase annotation ({names}) beside {p.name}: the grasp phase is found from the finger "
+            "flexion",
+        )
+    return check_annotation(found, p, frames)
 
 
 # --------------------------------------------------------------------------------------------------
@@ -376,13 +477,19 @@ def cut(trajectory: Trajectory, phase: Phase | str) -> Trajectory:
 
 
 __all__ = [
+    "ANNOTATED_PREFIX",
     "ANNOTATION_SUFFIX",
     "SWITCH_OFF",
     "SWITCH_ON",
+    "AnnotationMatch",
     "PhaseAnnotation",
+    "annotation_frames",
+    "annotation_names",
     "attach_phases",
+    "check_annotation",
     "cut",
     "find_annotation_file",
+    "match_annotation",
     "read_phase_annotations",
     "split_by_switch",
     "switch_segments",

@@ -214,6 +214,21 @@ class RawGloveRecording(NamedTuple):
     counts: np.ndarray
 
 
+def graspdb_row_count(path: str | Path) -> int:
+    """How many rows (non-blank lines) a GraspDB14 motion file holds: its frame count once it reads.
+
+    Args:
+        path: The file.
+
+    Returns:
+        The number of rows, without parsing them.
+
+    Raises:
+        InputFileError: The file is missing or unreadable.
+    """
+    return len(_split_rows(decode_text(read_bytes(Path(path))))[1])
+
+
 def read_graspdb_raw(path: str | Path) -> RawGloveRecording:
     """Read a raw-count CyberGlove file: a ``*-raw-*`` motion or a recorded calibration sequence.
 

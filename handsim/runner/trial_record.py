@@ -15,6 +15,7 @@ from pathlib import Path
 import numpy as np
 
 from handsim.fingers import finger_groups
+from handsim.glove.checks import CHECK_FIELDS, RecordingChecks
 from handsim.sim.compiled import SimScene
 from handsim.sim.plausibility import limit_violations
 from handsim.sim.replay import ReplayResult
@@ -117,18 +118,41 @@ def curves(result: ReplayResult) -> dict:
     }
 
 
-def trajectory_quality(trajectory: Trajectory, scene: SimScene) -> dict:
+def recording_checks(checks: RecordingChecks | None, scene: SimScene) -> dict:
+    """Which phase annotation and phase source a trial used, and the spikes its recording's checks filled.
+
+    Args:
+        checks: The recording's checks (:attr:`handsim.trials.LoadedTrial.checks`), or None when its kind
+            is not checked.
+        scene: The trial's scene; a glove scene's placement names the grasp frames' source.
+
+    Returns:
+        ``annotation`` (the annotation file used, or None), ``annotation_note`` (which file and why, or why
+        none), ``phase_source`` (``"phase"``: the annotated grasp phase; ``"peak flexion"``: found from the
+        finger flexion, :func:`handsim.sim.grasp_frame.grasp_frame`; None without a grasp), ``spikes``
+        (single-sample spikes filled), ``spike_frames``, ``spike_max_speed_rad_s``; the checks' keys are None
+        when the recording was not checked.
+    """
+    grasp = (scene.setup.placement or {}).get("grasp") or {}
+    found = checks.to_dict() if checks is not None else dict.fromkeys(CHECK_FIELDS)
+    return {**found, "phase_source": grasp.get("source")}
+
+
+def trajectory_quality(
+    trajectory: Trajectory, scene: SimScene, checks: RecordingChecks | None = None
+) -> dict:
     """How good the recording is as joint targets for the scene's hand.
 
     Args:
         trajectory: The recording as loaded.
         scene: The scene its hand is in; its actuators' control ranges are the hand's joint ranges.
+        checks: The recording's checks (annotation, spikes), or None when its kind is not checked.
 
     Returns:
         ``frames``, ``duration_s``, ``limit_violations`` (valid target samples outside their joint's
         range), ``limit_violation_max_deg`` (the largest excess, 0 without violations), ``gaps_filled``
         (samples filled in by gap filling), ``filled_fraction`` (of all samples), ``invalid_samples``
-        (samples still invalid, not filled).
+        (samples still invalid, not filled), and :func:`recording_checks`' keys.
     """
     violations = limit_violations(trajectory, scene.layout).values()
     count = sum(n for n, _ in violations)
@@ -144,4 +168,5 @@ def trajectory_quality(trajectory: Trajectory, scene: SimScene) -> dict:
         "gaps_filled": filled,
         "filled_fraction": filled / valid.size if valid.size else 0.0,
         "invalid_samples": int((~valid).sum()),
+        **recording_checks(checks, scene),
     }

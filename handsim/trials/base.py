@@ -3,8 +3,9 @@
 A trial is loaded in two steps, so that a dataset runner can list trials cheaply and load them in worker
 processes:
 
-* ``find`` looks at the recording's name and the files beside it (no parsing of motion data) and returns a
-  :class:`Trial`: plain paths and names, picklable.
+* ``find`` looks at the recording's name and the files beside it (no parsing of motion data; a GraspDB14
+  recording's rows are counted when a phase annotation lies beside it) and returns a :class:`Trial`: plain
+  paths and names, picklable.
 * ``load`` reads the files, builds the hand and the objects and compiles the scenario's scene; its
   :class:`LoadedTrial` (scene + trajectory) is what :func:`handsim.sim.replay.replay` takes, and is picklable
   too.
@@ -26,6 +27,7 @@ from handsim.builders.default_hand import DEFAULT_HAND_LENGTH_M
 from handsim.errors import HandsimError, InputFileError
 
 if TYPE_CHECKING:
+    from handsim.glove.checks import RecordingChecks
     from handsim.object_model import ObjectModel
     from handsim.sim.compiled import SimScene
     from handsim.sim.metrics import MetricSpec
@@ -161,6 +163,9 @@ class LoadedTrial:
         objects: The objects as built.
         notes: Decisions made while loading (the scene's own are in ``scene.setup.notes``, the
             trajectory reader's in ``trajectory.notes``).
+        checks: What the recording's checks found and did (phase annotation used, spikes filled:
+            :class:`~handsim.glove.checks.RecordingChecks`), or None for a kind whose recordings are not
+            checked.
     """
 
     trial: Trial
@@ -169,6 +174,7 @@ class LoadedTrial:
     hand: str
     objects: tuple[LoadedObject, ...]
     notes: tuple[str, ...] = field(default=())
+    checks: RecordingChecks | None = None
 
 
 @dataclass(frozen=True)

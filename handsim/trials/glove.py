@@ -13,6 +13,7 @@ from handsim.trials.base import LoadedTrial, Trial, build_objects
 if TYPE_CHECKING:
     import mujoco
 
+    from handsim.glove.checks import RecordingChecks
     from handsim.sim.metrics import MetricSpec
     from handsim.skeleton import Skeleton
     from handsim.trajectory import Trajectory
@@ -35,6 +36,7 @@ def glove_loaded(
     metrics: MetricSpec | None,
     progress: bool,
     notes: tuple[str, ...] = (),
+    checks: RecordingChecks | None = None,
 ) -> LoadedTrial:
     """The trial's object placed in the hand by the glove scenario, and the loaded trial.
 
@@ -45,7 +47,8 @@ def glove_loaded(
         trajectory: The recording as joint targets, with its phases.
         metrics: Placement thresholds (default :class:`~handsim.sim.metrics.MetricSpec`).
         progress: Show a progress bar while an uncached convex decomposition runs.
-        notes: Notes of the hand's reader.
+        notes: Notes of the hand's reader (and of the recording's checks).
+        checks: What the recording's checks found (GraspDB14 recordings), or None when not checked.
     """
     from handsim.sim.scenarios import glove_scene
 
@@ -58,4 +61,5 @@ def glove_loaded(
         hand=hand_text,
         objects=objects,
         notes=(*trial.notes, *notes, *object_notes),
+        checks=checks,
     )

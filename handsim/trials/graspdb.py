@@ -3,7 +3,10 @@
 A recording is a ``.txt`` file (GraspDB14's FK-oracle files have no extension). The hand is the parametric
 default hand unless a skeleton is given; the object is the one given, else the one whose id the file name
 carries (``r_01_11_ex03-…`` → id 1, the tennis ball); phases come from the
-recording's ``_annot-`` file beside it (scenario ``glove``).
+recording's ``_annot-`` file beside it when it covers exactly the recording's frames
+(:func:`handsim.glove.phases.match_annotation`), else from the finger flexion (scenario ``glove``).
+Single-sample spikes are marked invalid and filled before the recording is judged
+(:func:`handsim.glove.checks.check_recording`).
 """
 
 from __future__ import annotations
@@ -26,6 +29,7 @@ from handsim.trials.discovery import Sorting, TrialEntry, TrialInput, trial_inpu
 from handsim.trials.glove import glove_loaded, parametric_hand
 
 if TYPE_CHECKING:
+    from handsim.glove.phases import AnnotationMatch
     from handsim.sim.metrics import MetricSpec
 
 _NAME_HELP = "spec 003 §4.1.2: <objID>[_<graspID>|_<actionID>]_ex<NN>-rad|raw-<trialID>-grasp-su<actorID>.txt"
@@ -65,8 +69,8 @@ def _matches(path: Path) -> bool:
 
 def _find(path: Path, options: TrialOptions) -> Trial:
     from handsim.builders.graspdb_objects import graspdb_object
-    from handsim.glove.phases import find_annotation_file
-    from handsim.io.graspdb import parse_graspdb_filename
+    from handsim.glove.phases import find_annotation_file, match_annotation
+    from handsim.io.graspdb import graspdb_row_count, parse_graspdb_filename
 
     if options.skeleton is not None and options.hand_length is not None:
         raise TrialError(
@@ -85,9 +89,10 @@ def _find(path: Path, options: TrialOptions) -> Trial:
         entry = graspdb_object(name.object_id)
         objects = (TrialObject(entry.name, "", f"object id {name.object_id} in the file name"),)
         notes.append(f"object {entry.name!r}: id {name.object_id} in the file name ({entry.description})")
-    annotation = find_annotation_file(path)
-    if annotation is None:
-        notes.append("no _annot- phase file beside the recording: the grasp frame is the peak flexion")
+    frames = graspdb_row_count(path) if find_annotation_file(path) is not None else 0
+    match = match_annotation(path, frames)
+    annotation = match.path
+    notes.append(match.note)
     return Trial(
         kind="graspdb",
         trajectory_path=str(path),
@@ -107,7 +112,9 @@ def _find(path: Path, options: TrialOptions) -> Trial:
 
 def _load(trial: Trial, metrics: MetricSpec | None, progress: bool) -> LoadedTrial:
     from handsim.builders import build_hand
-    from handsim.glove import apply_thumb_rest, attach_phases, load_calibration, thumb_rest_note
+    from handsim.glove import apply_thumb_rest, load_calibration, thumb_rest_note
+    from handsim.glove.checks import check_recording
+    from handsim.glove.phases import check_annotation
     from handsim.io import read_skeleton, read_trajectory
 
     if trial.skeleton_path is None:
@@ -118,13 +125,34 @@ def _load(trial: Trial, metrics: MetricSpec | None, progress: bool) -> LoadedTri
         hand_text = f"{Path(trial.skeleton_path).name} ({skeleton.ndof} DoFs, {trial.collision})"
     calibration = None if trial.calibration_path is None else load_calibration(trial.calibration_path)
     trajectory = read_trajectory(trial.trajectory_path, skeleton=skeleton, calibration=calibration)
-    if trial.annotation_path is not None and not trajectory.phases:
-        trajectory = attach_phases(trajectory, trial.annotation_path)
-    notes = skeleton.notes if trial.skeleton_path else ()
+    if trial.annotation_path is None:
+        given = _no_annotation(trial, trajectory.nframes)
+    else:
+        given = check_annotation(trial.annotation_path, trial.trajectory_path, trajectory.nframes)
+    trajectory, checks = check_recording(trajectory, given)
+    notes = [*(skeleton.notes if trial.skeleton_path else ())]
+    if given.note not in trial.notes:
+        notes.append(given.note)
+    if checks.spikes:
+        notes.append(f"recording checks: {checks.spike_text()}")
     if trial.thumb_rest is not None:
         trajectory = apply_thumb_rest(trajectory, skeleton, *trial.thumb_rest)
-        notes = (*notes, thumb_rest_note(*trial.thumb_rest))
-    return glove_loaded(trial, hand, hand_text, trajectory, metrics, progress, notes)
+        notes.append(thumb_rest_note(*trial.thumb_rest))
+    return glove_loaded(trial, hand, hand_text, trajectory, metrics, progress, tuple(notes), checks)
+
+
+def _no_annotation(trial: Trial, frames: int) -> AnnotationMatch:
+    """Why a trial that names no annotation uses none (what :func:`_find` found, or that it names none)."""
+    from handsim.glove.phases import AnnotationMatch, match_annotation
+
+    match = match_annotation(trial.trajectory_path, frames)
+    if match.path is None:
+        return match
+    return AnnotationMatch(
+        None,
+        f"no phase annotation: the trial names none (although {match.path.name} beside the recording would "
+        "fit); the grasp phase is found from the finger flexion",
+    )
 
 
 def _inputs(trial: Trial, base: Path) -> tuple[TrialInput, ...]:
@@ -196,8 +224,9 @@ def _sort_files(sorting: Sorting) -> None:
         recording = _annotated(f, open_files, sorting.base)
         if recording is None:
             sorting.unknown[f] = (
-                "a GraspDB14 phase annotation file, not a recording; the recording it annotates is not in "
-                "the dataset"
+                "a GraspDB14 phase annotation file, not a recording; no recording of the dataset uses it "
+                "(the one it annotates is not in the dataset, or covers another number of frames: that "
+                "trial's notes say so)"
             )
         else:
             sorting.companions[f] = (
