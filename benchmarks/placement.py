@@ -28,13 +28,8 @@ import handsim.sim.scenarios as scenarios
 from handsim.sim.replay import ReplayConfig, replay
 from handsim.trials import load_trial
 
-ROOT = Path(__file__).resolve().parents[1]
-DATA = ROOT.parent / "shared" / "data" / "graspdb14"
-TRIALS = (
-    "r_01_11_ex03-rad-004-grasp-su04.txt",
-    "01_ex01-rad-002-grasp-su01.txt",
-    "04_ex01-rad-045-grasp-su03.txt",
-)
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "scripts"))
+from recordings_table import DATA, TRIALS  # the shared recordings, listed once
 
 
 def _timed_placement(store: list[float]):

@@ -23,13 +23,8 @@ import math
 from concurrent.futures import ProcessPoolExecutor
 from pathlib import Path
 
-ROOT = Path(__file__).resolve().parents[1]
-DATA = ROOT.parent / "shared" / "data" / "graspdb14"
-TRIALS = (
-    "r_01_11_ex03-rad-004-grasp-su04.txt",
-    "01_ex01-rad-002-grasp-su01.txt",
-    "04_ex01-rad-045-grasp-su03.txt",
-)
+from recordings_table import DATA, OUTCOMES, TRIALS, verdict
+
 HANDS = ("default", "xmlskel")
 FRICTIONS = (0.5, 0.8, 1.0, 1.2)
 STIFFNESS = (0.5, 1.0, 2.0)
@@ -74,15 +69,12 @@ def run_case(data: Path, name: str, hand: str, mu: float, stiffness: float, gain
         "mu": mu,
         "stiffness": stiffness,
         "gain": gain,
-        "held": summary.get("held"),
-        "reason": summary.get("hold_reason"),
-        "robustness": summary.get("hold_robustness"),
-        "directions": summary.get("grip_directions_held"),
+        **verdict(summary),
     }
 
 
 def _cell(case: dict) -> str:
-    held = {True: "held", False: "not held", None: "not judged"}[case["held"]]
+    held = OUTCOMES[case["held"]]
     robustness = case["robustness"]
     return held if robustness is None else f"{held} {robustness:.2f}"
 

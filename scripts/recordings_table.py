@@ -30,7 +30,26 @@ RECORDINGS = (
     "fk_oracle/01_11_ex03-rad-004-grasp-su04.txt",
     "fk_oracle/16_14_ex01-rad-004-grasp-su06",
 )
+TRIALS = RECORDINGS[:3]
+"""The three GraspDB14 trials (the ``fk_oracle`` motions are not GraspDB14 recordings)."""
 ROBUST = 0.8
+OUTCOMES = {True: "held", False: "not held", None: "not judged"}
+"""A replay summary's ``held`` in words."""
+
+
+def verdict(summary: dict) -> dict:
+    """A glove replay summary's verdict: held, reason, robustness, grip directions, fit fraction.
+
+    Args:
+        summary: ``ReplayResult.summary`` of a glove replay.
+    """
+    return {
+        "held": summary.get("held"),
+        "reason": summary.get("hold_reason"),
+        "robustness": summary.get("hold_robustness"),
+        "directions": summary.get("grip_directions_held"),
+        "fit_fraction": summary.get("fit_fraction"),
+    }
 
 
 def replay_json(data: Path, name: str, skeleton: bool, out: Path) -> dict:
@@ -52,7 +71,7 @@ def row(name: str, hand: str, record: dict) -> tuple[str, bool | None, float | N
     """One table row and the record's held and robustness."""
     s = record["summary"]
     held = s.get("held")
-    outcome = {True: "**held**", False: "not held", None: "not judged"}[held]
+    outcome = f"**{OUTCOMES[held]}**" if held else OUTCOMES[held]
     reason = s.get("hold_reason")
     if reason:
         outcome += f": {reason.removeprefix('not judged: ')}"

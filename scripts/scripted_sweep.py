@@ -21,6 +21,8 @@ import tempfile
 from concurrent.futures import ProcessPoolExecutor
 from pathlib import Path
 
+from recordings_table import OUTCOMES, verdict
+
 ROOT = Path(__file__).resolve().parents[1]
 DEMO = ROOT / "handsim" / "assets" / "demo"
 GRASPS = ("cube.grasp.json", "cylinder_25mm.grasp.json", "tennis_ball.grasp.json")
@@ -59,16 +61,12 @@ def run_cell(grasp: str, level: float, closure: float) -> dict:
         "grasp": grasp,
         "level": level,
         "closure": closure,
-        "held": summary.get("held"),
-        "reason": summary.get("hold_reason"),
-        "robustness": summary.get("hold_robustness"),
-        "directions": summary.get("grip_directions_held"),
-        "fit_fraction": summary.get("fit_fraction"),
+        **verdict(summary),
     }
 
 
 def _cell(result: dict) -> str:
-    held = {True: "held", False: "not held", None: "not judged"}[result["held"]]
+    held = OUTCOMES[result["held"]]
     robustness = "–" if result["robustness"] is None else f"{result['robustness']:.2f}"
     fit = "–" if result["fit_fraction"] is None else f"{result['fit_fraction']:.2f}"
     return f"{held} {robustness} ({result['directions']}/6, fit {fit})"
