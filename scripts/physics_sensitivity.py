@@ -1,14 +1,15 @@
-"""Sensitivity of the glove scenario's verdicts to skin friction and finger-pad stiffness.
+"""Sensitivity of the glove scenario's verdicts to skin friction, finger-pad stiffness, gains, torsion.
 
 Runs the three shared GraspDB14 trials (``../shared/data/graspdb14``) on both hands (the parametric default
 hand and the GraspDB14 ``default.xmlskel``) with the skin's sliding friction μ ∈ {0.5, 0.8, 1.0, 1.2} and
-the pad's stiffness scaled ×0.5, ×1, ×2 (``--part gains``: the servos' ``kp`` ×0.5 and ×2 instead), and
-prints a Markdown table of ``held`` and ``hold_robustness``
-(the table in ``docs/physics.md``). Each setting replaces :data:`handsim.builders.surfaces.SKIN` where the
-hand builder reads it, for the whole trial (placement search, grip tests, replay, robustness ensemble), so
-the verdict is the one a user would get with that skin. MuJoCo's contact stiffness is ``1 / (dmax² ·
-timeconst² · dampratio²)`` (``docs/physics.md``), so stiffness ×s is the pad's solref time constant
-÷ √s. Deterministic: no randomness; 72 replays, a few minutes on one core.
+the pad's stiffness scaled ×0.5, ×1, ×2, and prints a Markdown table of ``held`` and ``hold_robustness``
+(the table in ``docs/physics.md``); ``--part gains`` scales the servos' ``kp`` ×0.5 and ×2 instead,
+``--part torsional`` the skin's torsional friction ×0 and ×2. Each setting replaces
+:data:`handsim.builders.surfaces.SKIN` (and ``JOINT_CLASSES``) where the hand builder reads them, for the
+whole trial (placement search, grip tests, replay, robustness ensemble), so the verdict is the one a user
+would get with that hand. MuJoCo's contact stiffness is ``1 / (dmax² · timeconst² · dampratio²)``
+(``docs/physics.md``), so stiffness ×s is the pad's solref time constant ÷ √s. Deterministic: no
+randomness; 72 replays for the skin table, a few minutes on one core.
 
 Usage::
 
@@ -28,11 +29,14 @@ from recordings_table import DATA, OUTCOMES, TRIALS, verdict
 HANDS = ("default", "xmlskel")
 FRICTIONS = (0.5, 0.8, 1.0, 1.2)
 STIFFNESS = (0.5, 1.0, 2.0)
-GAINS = (0.5, 2.0)
+FACTORS = {"gains": ("kp", (0.5, 2.0)), "torsional": ("torsional friction", (0.0, 2.0))}
+"""The one-factor parts: what is scaled, by which factors (×1 is the skin table's μ 1.0, ×1 cell)."""
 
 
-def run_case(data: Path, name: str, hand: str, mu: float, stiffness: float, gain: float = 1.0) -> dict:
-    """Replay one trial with the skin's friction, pad stiffness and servo gains set; its verdict.
+def run_case(
+    data: Path, name: str, hand: str, mu: float, stiffness: float, gain: float = 1.0, torsion: float = 1.0
+) -> dict:
+    """Replay one trial with the skin's friction, pad stiffness, servo gains and torsional friction set.
 
     Args:
         data: The GraspDB14 folder.
@@ -41,6 +45,7 @@ def run_case(data: Path, name: str, hand: str, mu: float, stiffness: float, gain
         mu: Skin sliding friction.
         stiffness: Factor on the pad's contact stiffness.
         gain: Factor on every position servo's stiffness ``kp`` (force ranges unchanged).
+        torsion: Factor on the skin's torsional friction.
 
     Returns:
         The case and its ``held``, ``hold_reason``, ``hold_robustness``, ``grip_directions_held``.
@@ -53,7 +58,10 @@ def run_case(data: Path, name: str, hand: str, mu: float, stiffness: float, gain
     timeconst, ratio = SKIN.solref
     classes = hand_builder.JOINT_CLASSES
     hand_builder.SKIN = dataclasses.replace(
-        SKIN, sliding=mu, solref=(timeconst / math.sqrt(stiffness), ratio)
+        SKIN,
+        sliding=mu,
+        torsional=SKIN.torsional * torsion,
+        solref=(timeconst / math.sqrt(stiffness), ratio),
     )
     hand_builder.JOINT_CLASSES = {k: dataclasses.replace(c, kp=c.kp * gain) for k, c in classes.items()}
     try:
@@ -69,6 +77,7 @@ def run_case(data: Path, name: str, hand: str, mu: float, stiffness: float, gain
         "mu": mu,
         "stiffness": stiffness,
         "gain": gain,
+        "torsion": torsion,
         **verdict(summary),
     }
 
@@ -86,16 +95,22 @@ def main() -> None:
     parser.add_argument("--jobs", type=int, default=1, help="worker processes")
     parser.add_argument(
         "--part",
-        choices=("skin", "gains"),
+        choices=("skin", *FACTORS),
         default="skin",
-        help="skin friction × pad stiffness, or the gains",
+        help="skin friction × pad stiffness, or one factor alone (servo gains, torsional friction)",
     )
     args = parser.parse_args()
-    if args.part == "gains":
-        cases = [(args.data, n, h, 1.0, 1.0, g) for n in TRIALS for h in HANDS for g in GAINS]
+    if args.part in FACTORS:
+        gains = args.part == "gains"
+        cases = [
+            (args.data, n, h, 1.0, 1.0, f if gains else 1.0, 1.0 if gains else f)
+            for n in TRIALS
+            for h in HANDS
+            for f in FACTORS[args.part][1]
+        ]
     else:
         cases = [
-            (args.data, n, h, mu, k, 1.0)
+            (args.data, n, h, mu, k, 1.0, 1.0)
             for n in TRIALS
             for h in HANDS
             for mu in FRICTIONS
@@ -103,13 +118,15 @@ def main() -> None:
         ]
     with ProcessPoolExecutor(max_workers=args.jobs) as pool:
         results = list(pool.map(run_case, *zip(*cases, strict=True)))
-    if args.part == "gains":
-        print("| trial | hand | " + " | ".join(f"kp ×{g:g}" for g in GAINS) + " |")
-        print("|---|---|" + "---|" * len(GAINS))
-        by_gain = {(r["trial"], r["hand"], r["gain"]): r for r in results}
+    if args.part in FACTORS:
+        label, factors = FACTORS[args.part]
+        key = "gain" if args.part == "gains" else "torsion"
+        print("| trial | hand | " + " | ".join(f"{label} ×{f:g}" for f in factors) + " |")
+        print("|---|---|" + "---|" * len(factors))
+        by_factor = {(r["trial"], r["hand"], r[key]): r for r in results}
         for name in TRIALS:
             for hand in HANDS:
-                cells = [_cell(by_gain[(name, hand, g)]) for g in GAINS]
+                cells = [_cell(by_factor[(name, hand, f)]) for f in factors]
                 print(f"| {name[:14]}… | {hand} | " + " | ".join(cells) + " |")
         return
     by_key = {(r["trial"], r["hand"], r["mu"], r["stiffness"]): r for r in results}
