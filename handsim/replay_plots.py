@@ -25,8 +25,8 @@ class ReplayCurves:
 
     Attributes:
         times: Trajectory time of each frame, s (N,).
-        penetration: Deepest hand–object penetration, m (N,).
-        links: Hand links with collision geometry.
+        penetration: Deepest hand–object penetration, m (N,); NaN without objects (not judged).
+        links: Hand links with collision geometry (none without objects: no hand–object contact to count).
         link_contacts: Contacts per hand link with any object part (N, links).
         tracking_error_norm: Euclidean norm over the hand's DoFs of achieved minus target angle, rad (N,).
         tips: Fingertip sites.
@@ -40,6 +40,8 @@ class ReplayCurves:
         hold_window: The hold window (start, stop), s, or None.
         lost_at: Time the object was lost, s, or None.
         diverged_at: Time of the last frame before the divergence, s, or None.
+        self_penetration: Without objects (a hand-only sequence): the simulated hand through itself, m (N,);
+            else None.
     """
 
     times: np.ndarray
@@ -57,6 +59,7 @@ class ReplayCurves:
     hold_window: tuple[float, float] | None
     lost_at: float | None
     diverged_at: float | None
+    self_penetration: np.ndarray | None = None
 
     def to_dict(self) -> dict:
         """JSON-ready curves in the units their keys name (``_s``, ``_mm``, ``_deg``); NaN is None."""
@@ -80,6 +83,7 @@ class ReplayCurves:
             "hold_window_s": None if self.hold_window is None else list(self.hold_window),
             "lost_at_s": self.lost_at,
             "diverged_at_s": self.diverged_at,
+            "self_penetration_mm": None if self.self_penetration is None else col(self.self_penetration, MM),
         }
         if self.drift is not None and self.rotation_drift is not None:
             out["drift_mm"] = {n: col(self.drift[:, i], MM) for i, n in enumerate(self.objects)}
@@ -130,11 +134,12 @@ def replay_curves(result: ReplayResult) -> ReplayCurves:
     diverged_at = None
     if result.diverged is not None and n:
         diverged_at = float(f.times[-1])
+    touching = nobj and f.contact_count.size
     return ReplayCurves(
         times=f.times,
-        penetration=f.penetration,
-        links=tuple(result.scene.get("links", ())),
-        link_contacts=f.contact_count.sum(axis=2) if f.contact_count.size else np.zeros((n, 0), int),
+        penetration=f.penetration if nobj else np.full(n, np.nan),
+        links=tuple(result.scene.get("links", ())) if nobj else (),
+        link_contacts=f.contact_count.sum(axis=2) if touching else np.zeros((n, 0), int),
         tracking_error_norm=np.linalg.norm(f.tracking_error, axis=1),
         tips=tuple(result.scene.get("tips", ())),
         tip_error=f.tip_error,
@@ -146,6 +151,7 @@ def replay_curves(result: ReplayResult) -> ReplayCurves:
         hold_window=None if hold is None else tuple(hold.window),
         lost_at=None if hold is None else hold.lost_at,
         diverged_at=diverged_at,
+        self_penetration=None if nobj else f.self_penetration,
     )
 
 
@@ -185,9 +191,10 @@ def plot_replay(result: ReplayResult, path: str | Path, *, title: str | None = N
     fig, axes = plt.subplots(4, 1, figsize=(9, 2.0 * sum(heights)), sharex=True, height_ratios=heights)
     ax_pen, ax_con, ax_err, ax_obj = axes
 
-    ax_pen.plot(t, c.penetration * MM, lw=1.0, color="#1f4e8c")
+    hand_only = c.self_penetration is not None
+    ax_pen.plot(t, (c.self_penetration if hand_only else c.penetration) * MM, lw=1.0, color="#1f4e8c")
     ax_pen.axhline(1.0, lw=0.7, ls="--", color="#7f8c8d")
-    ax_pen.set_ylabel("penetration\n(mm)", fontsize=8)
+    ax_pen.set_ylabel("hand through\nitself (mm)" if hand_only else "penetration\n(mm)", fontsize=8)
 
     if nlinks and t.size:
         dt = float(t[1] - t[0]) if t.size > 1 else 1.0

@@ -258,6 +258,9 @@ def test_every_trial_failing_exits_1_with_the_errors_counted(capsys, tmp_path):
     assert (code, first) == (1, "handsim report: error: every trial failed (2 of 2): 2 FormatError")
     assert "2 trials: 0 ok, 0 diverged, 2 failed" in out
     assert (tmp_path / "out" / "report.html").is_file()  # the report still shows the errors
+    code, first, out = cli(["report", "--render-only", str(tmp_path / "out")], capsys)
+    assert (code, first) == (1, "handsim report: error: every trial failed (2 of 2): 2 FormatError")
+    assert "2 trials: 0 ok, 0 diverged, 2 failed" in out
 
 
 @linux_only

@@ -234,3 +234,19 @@ def test_a_diverging_replay_prints_the_divergence_and_exits_3(capsys, monkeypatc
     out = capsys.readouterr().out
     assert "DIVERGED    mjWARN_BADQACC at step " in out
     assert "diverged    no" not in out
+
+
+def test_write_video_leaves_no_partial_file_when_rendering_is_interrupted(monkeypatch, tmp_path):
+    pytest.importorskip("PIL.Image", reason="GIF videos need Pillow")
+    import numpy as np
+
+    from handsim.sim import render
+
+    def interrupted(*args: object, **kwargs: object):
+        yield np.zeros((8, 8, 3), dtype=np.uint8)
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(render, "render_states", interrupted)
+    with pytest.raises(KeyboardInterrupt):
+        render.write_video(None, np.zeros((2, 1)), 0.01, tmp_path / "v.gif", width=8, height=8)
+    assert list(tmp_path.iterdir()) == []

@@ -9,6 +9,7 @@ from pathlib import Path
 import pytest
 import trimesh
 
+from handsim.assets import TZIONAS_DIR
 from handsim.builders import build_hand, catalog, default_hand, default_skeleton
 from handsim.builders.objects import build_object, prepare_object
 from handsim.cli import main
@@ -175,7 +176,7 @@ def _first_line_of_error(capsys) -> str:
         (
             ["replay", "no-such-trial.txt", "--density", "1e-6"],
             "handsim replay: error: argument --density: density 1e-06 kg/m³ is outside the plausible 10 to "
-            f"11400 kg/m³ (expanded polystyrene foam to lead), {RANGES}",
+            f"11400 kg/m³ (expanded polystyrene foam to lead), {RANGES}; give --force to use it anyway",
         ),
         (
             ["build", "object", "mug", "--mass", "-1", "--force"],
@@ -195,6 +196,17 @@ def test_cli_force_builds_an_object_outside_the_range_and_prints_its_mass(capsys
     assert main(["build", "object", "cube", "--mass", "30", "--force", "-o", str(out)]) == 0
     assert "mass       30000.0 g" in capsys.readouterr().out
     assert out.exists()
+
+
+def test_cli_replay_force_loads_a_trial_whose_object_mass_is_outside_the_range(tmp_path: Path) -> None:
+    from handsim.trials import find_trial, load_trial
+
+    motion = TZIONAS_DIR / "Models" / "20" / "Model_Hand_R.MOTION"
+    with pytest.raises(OutOfRangeError, match="mass 30 kg is outside the plausible"):
+        load_trial(motion, mass=30.0)
+    trial = find_trial(motion, mass=30.0, force=True)
+    assert trial.force
+    assert sum(o.mass for o in load_trial(trial).objects) == pytest.approx(30.0 * len(trial.objects))
 
 
 def test_cli_prints_a_mass_below_one_gram_without_rounding_it_to_zero(capsys) -> None:

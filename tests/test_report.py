@@ -232,6 +232,11 @@ def _records(out: Path) -> list[dict]:
                 "time_held_s": 0.6,
                 "max_slip_mm": 4.0,
                 "drop_mm": 1.0,
+                "fit_fraction": 0.71,
+                "grip_normal_force_n": 19.4,
+                "grip_servo_torque_nm": 1.94,
+                "grip_directions_held": 6,
+                "self_penetration_at_closure_mm": 4.9,
             },
             hold=_hold(True),
             renders=_renders(out, "r_01_11_ex03-rad-004-grasp-su04.txt", 10),
@@ -703,6 +708,26 @@ def test_html_shows_curves_frames_traceback_and_reproducibility(run_dir):
     assert hashlib.sha256(b"Models/20").hexdigest() in html  # an input hash
     assert hashlib.sha256(b"model Models/20").hexdigest() in html  # a model hash
     assert "&quot;slip_limit&quot;: 0.02" in html  # the metric spec
+
+
+def test_glove_trial_shows_how_far_the_recorded_closure_passes_the_object(run_dir):
+    html = render_report(run_dir).html.read_text()
+    assert html.count("<h4>Recorded closure</h4>") == 1  # only the trial whose record has the numbers
+    closure = html.split("<h4>Recorded closure</h4>", 1)[1].split("</table>", 1)[0]
+    for label, value in [
+        ("flexion fraction where the object fits", "0.71"),
+        ("grip normal force N", "19.4"),
+        ("grip servo torque N·m", "1.94"),
+        ("gravity directions the grip resists", "6"),
+        ("hand self-penetration at closure mm", "4.9"),
+    ]:
+        assert label in closure and f">{value}<" in closure, label
+    md = render_report(run_dir).markdown.read_text()
+    header = next(line for line in md.splitlines() if "| fit at |" in line)
+    row = next(line for line in md.splitlines() if "r_01_11_ex03" in line and "| 0.71 |" in line)
+    column = header.split(" | ").index("fit at")
+    assert row.split(" | ")[column] == "0.71"
+    assert row.split(" | ")[header.split(" | ").index("closure self-pen. mm")] == "4.9"
 
 
 def test_missing_values_show_as_a_dash(run_dir):

@@ -51,6 +51,7 @@ def test_find_trial_accepts_the_tzionas_motions_own_skeleton():
         ("obj", "mug", "an object"),
         ("calibration", "c.json", "a calibration"),
         ("hand_length", 0.18, "a hand length"),
+        ("thumb_rest", (20.0, 10.0), "a thumb rest posture"),
     ],
 )
 def test_find_trial_raises_error_if_a_glove_option_is_given_for_a_tzionas_motion(option, value, what):

@@ -15,6 +15,7 @@ import sys
 
 from handsim.cli._common import (
     add_control_rate,
+    add_force,
     add_object_mass_options,
     output_file,
     positive_number,
@@ -76,16 +77,19 @@ def _print_summary(result) -> None:
     _line("valid", f"no ({', '.join(invalid)}): the numbers below judge nothing" if invalid else "yes")
     for flag in result.flags:
         _line("flag", f"{flag.code}{'' if flag.invalid else ' (a note)'}: {flag.reason}")
-    _line(
-        "penetration",
-        f"max {s['max_penetration_mm']:.2f} mm, p95 {s['p95_penetration_mm']:.2f} mm, "
-        f"{s['frames_penetrating_over_1mm']} frames over 1 mm",
-    )
-    _line(
-        "contact",
-        f"{s['contact_frames']} of {s['frames']} frames; up to {s['max_contact_links']} links at once; "
-        f"peak total normal force {s['max_total_normal_force_n']:.2f} N",
-    )
+    if s["max_penetration_mm"] is None:
+        _line("penetration", s.get("hold_reason") or "not judged: no object")
+    else:
+        _line(
+            "penetration",
+            f"max {s['max_penetration_mm']:.2f} mm, p95 {s['p95_penetration_mm']:.2f} mm, "
+            f"{s['frames_penetrating_over_1mm']} frames over 1 mm",
+        )
+        _line(
+            "contact",
+            f"{s['contact_frames']} of {s['frames']} frames; up to {s['max_contact_links']} links at once; "
+            f"peak total normal force {s['max_total_normal_force_n']:.2f} N",
+        )
     _line(
         "tracking",
         f"mean {_num(s['mean_tracking_error_deg'])}°, max {_num(s['max_tracking_error_deg'])}° (joint angle)",
@@ -93,6 +97,16 @@ def _print_summary(result) -> None:
     _line(
         "tips", f"mean {_num(s['mean_tip_error_mm'], '.1f')} mm, max {_num(s['max_tip_error_mm'], '.1f')} mm"
     )
+    limits = next((f for f in result.flags if f.code == "joint_limits"), None)
+    _line(
+        "limits",
+        "no target beyond the joint limits"
+        if limits is None
+        else f"{limits.values['samples']} target samples beyond the joint limits in "
+        f"{len(limits.values['dofs'])} DoFs (flag joint_limits above)",
+    )
+    if "max_self_penetration_mm" in s:
+        _print_self_penetration(s)
     if "mean_drift_mm" in s:
         tolerance = result.config["metrics"]["drift_tolerance"] * 100
         _line(
@@ -135,6 +149,9 @@ def _print_summary(result) -> None:
                 "(before, the recorded hand reaches through where the object is placed)",
             )
     hold = result.hold
+    if hold is None and "hold_reason" in s:
+        _line("held", s["hold_reason"])
+        _line("drift", s["drift_reason"])
     if hold is not None:
         _line(
             "release",
@@ -183,6 +200,38 @@ def _print_summary(result) -> None:
         )
 
 
+def _thumb_rest(text: str) -> tuple[float, float]:
+    """An argparse type: ``ABD,FLEX`` in degrees, two finite numbers (the joint limits are the loader's)."""
+    parts = text.split(",")
+    try:
+        values = tuple(float(p) for p in parts)
+    except ValueError:
+        values = ()
+    if len(values) != 2 or not all(math.isfinite(v) for v in values):
+        raise argparse.ArgumentTypeError(f"expected ABD,FLEX: two angles in degrees, got {text!r}")
+    return values
+
+
+def _print_self_penetration(s: dict) -> None:
+    """The hand through itself (scenes without objects), simulated and at the recorded targets."""
+
+    def deepest(key: str) -> str:
+        links = s[f"{key}_links"]
+        return "" if links is None else f" ({' | '.join(links)} at {s[f'{key}_at_s']:.2f} s)"
+
+    _line(
+        "self-pen.",
+        f"max {s['max_self_penetration_mm']:.2f} mm{deepest('self_penetration')}, p95 "
+        f"{s['p95_self_penetration_mm']:.2f} mm, {s['frames_self_penetrating_over_1mm']} frames over 1 mm "
+        "(simulated hand through itself)",
+    )
+    _line(
+        "",
+        f"max {s['max_target_self_penetration_mm']:.2f} mm{deepest('target_self_penetration')} "
+        "at the recorded targets",
+    )
+
+
 def _stability_at(text: str) -> float | str:
     if text == "grasp":
         return text
@@ -219,6 +268,8 @@ def _replay(args: argparse.Namespace) -> int:
             mass=args.mass,
             hand_length=args.hand_length,
             collision=args.collision,
+            thumb_rest=args.thumb_rest,
+            force=args.force,
         )
     except TrialError as exc:
         return usage_error("replay", str(exc))
@@ -297,7 +348,8 @@ def register(commands: argparse._SubParsersAction) -> None:
         "--calibration", metavar="JSON", help="GraspDB14: calibration of a raw-count recording"
     )
     replay.add_argument("--units", choices=("m", "mm"), help="units of a mesh file given as --object")
-    add_object_mass_options(replay, forced=False)
+    add_object_mass_options(replay, forced=True)
+    add_force(replay)
     replay.add_argument(
         "--hand-length", type=positive_number, default=None, metavar="M",
         help="GraspDB14 without --skeleton: parametric hand length, wrist crease to middle fingertip (0.19)",
@@ -305,6 +357,11 @@ def register(commands: argparse._SubParsersAction) -> None:
     replay.add_argument(
         "--collision", choices=("capsules", "mesh"), default=None,
         help="hand collision shapes (default capsules; mesh: per-bone hulls of a skinned .SKEL hand)",
+    )  # fmt: skip
+    replay.add_argument(
+        "--thumb-rest", type=_thumb_rest, metavar="ABD,FLEX",
+        help="GraspDB14: hold the thumb TMC DoFs no glove sensor drives (th_tmc_abd, th_tmc_flex) at these "
+        "angles in degrees (default: 0,0 as the GraspDB14 tools; see docs/cyberglove.md)",
     )  # fmt: skip
     add_control_rate(replay)
     replay.add_argument(

@@ -24,7 +24,6 @@ from handsim.cli._common import (
 )
 
 if TYPE_CHECKING:
-    from handsim.runner.execute import RunSummary
     from handsim.sim.replay import ReplayConfig
     from handsim.trials import Discovery
 
@@ -40,11 +39,18 @@ def _render(out: Path) -> int:
     return 0
 
 
-def _summary_line(out: Path) -> str:
-    from handsim.runner.execute import records_line
+def _render_only(out: Path) -> int:
+    """Render the report of a run's records and print its line; exit 1 if every recorded trial failed."""
+    from handsim.runner.execute import failure_counts, records_line
     from handsim.runner.records import read_records
 
-    return records_line(read_records(out))
+    code = _render(out)
+    records = read_records(out)
+    print(records_line(records))
+    failed = sum(r["status"] == "error" for r in records)
+    if records and failed == len(records):
+        return _all_failed(failed, len(records), failure_counts(records))
+    return code
 
 
 def run_and_render(
@@ -116,18 +122,15 @@ def run_and_render(
     code = _render(out)
     print(summary.line())
     if summary.all_failed:
-        return _all_failed(summary)
+        return _all_failed(summary.failed, summary.trials, summary.failures)
     return code
 
 
-def _all_failed(summary: RunSummary) -> int:
-    """Say that every trial failed, with the errors counted by type; exit code 1."""
-    counts = ", ".join(f"{n} {kind}" for kind, n, _ in summary.failures)
-    print(
-        f"handsim report: error: every trial failed ({summary.failed} of {summary.trials}): {counts}",
-        file=sys.stderr,
-    )
-    for kind, n, first in summary.failures:
+def _all_failed(failed: int, trials: int, failures: tuple[tuple[str, int, str], ...]) -> int:
+    """Say that every trial failed, with the errors counted by type (:func:`failure_counts`); exit code 1."""
+    counts = ", ".join(f"{n} {kind}" for kind, n, _ in failures)
+    print(f"handsim report: error: every trial failed ({failed} of {trials}): {counts}", file=sys.stderr)
+    for kind, n, first in failures:
         print(f"  {kind} ×{n}, first: {first}", file=sys.stderr)
     return 1
 
@@ -139,9 +142,7 @@ def _report(args: argparse.Namespace) -> int:
         out = Path(args.render_only or args.output or "")
         if not str(out) or not (out / "records.jsonl").is_file():
             return usage_error("report", f"--render-only needs a run's folder with records.jsonl, got {out}")
-        code = _render(out)
-        print(_summary_line(out))
-        return code
+        return _render_only(out)
     if args.dataset is None or args.output is None:
         return usage_error("report", "give DATASET and -o OUT (or --render-only OUT)")
     config = ReplayConfig(control_rate=args.rate, stability_at=None if args.stability == "none" else "grasp")

@@ -19,6 +19,9 @@ DIP coupling (:mod:`handsim.glove.coupling`): :func:`couple_dip` (``DIP = 2/3 PI
 Gap filling (:mod:`handsim.glove.gaps`): :func:`fill_gaps` by the thesis' five methods or linear
 interpolation (:data:`GAP_METHODS`), :func:`find_gaps`.
 
+Thumb rest posture (:mod:`handsim.glove.thumb_rest`): :func:`apply_thumb_rest` holds the thumb TMC DoFs
+no sensor drives (:data:`THUMB_REST_DOFS`) at a constant posture.
+
 Phases (:mod:`handsim.glove.phases`): :func:`split_by_switch`, :func:`read_phase_annotations`,
 :func:`find_annotation_file`, :func:`attach_phases`, :func:`cut`.
 """
@@ -57,6 +60,7 @@ from handsim.glove.sensors import (
     discarded_sensors,
     driven_dofs,
 )
+from handsim.glove.thumb_rest import THUMB_REST_DOFS, apply_thumb_rest, thumb_rest_note
 
 __all__ = [
     "CALIBRATION_PROTOCOL",
@@ -67,6 +71,7 @@ __all__ = [
     "GAP_METHODS",
     "SENSORS",
     "SENSOR_NAMES",
+    "THUMB_REST_DOFS",
     "AbductionCoupling",
     "CalibrationError",
     "GloveCalibration",
@@ -74,6 +79,7 @@ __all__ = [
     "PhaseAnnotation",
     "ReferencePose",
     "apply_calibration",
+    "apply_thumb_rest",
     "attach_phases",
     "computed_dofs",
     "couple_dip",
@@ -90,4 +96,5 @@ __all__ = [
     "save_calibration",
     "split_by_switch",
     "switch_segments",
+    "thumb_rest_note",
 ]

@@ -150,12 +150,15 @@ def trial_row(record: dict) -> dict:
         "held": held(record),
         "hold_reason": (record.get("hold") or {}).get("reason"),
         "hold_robustness": summary_value(record, "hold_robustness"),
+        "fit_fraction": summary_value(record, "fit_fraction"),
+        "self_penetration_at_closure_mm": summary_value(record, "self_penetration_at_closure_mm"),
         "valid": record_valid(record),
         "flags": [str(f.get("code")) for f in record.get("flags") or [] if isinstance(f, dict)],
         "time_held_s": summary_value(record, "time_held_s"),
         "max_slip_mm": summary_value(record, "max_slip_mm"),
         "max_penetration_mm": summary_value(record, "max_penetration_mm"),
         "p95_penetration_mm": summary_value(record, "p95_penetration_mm"),
+        "max_self_penetration_mm": summary_value(record, "max_self_penetration_mm"),
         "mean_drift_mm": summary_value(record, "mean_drift_mm"),
         "max_drift_mm": summary_value(record, "max_drift_mm"),
         "mean_tracking_error_deg": summary_value(record, "mean_tracking_error_deg"),
@@ -283,9 +286,15 @@ def _reason(record: dict) -> str:
         parts.append(f"object lost: {reason}" if reason else "object not held")
     if tier == 4:
         parts.append(str((record.get("hold") or {}).get("reason") or "hold not judged"))
+    no_object = (record.get("summary") or {}).get("hold_reason") if not has_hold(record) else None
+    if no_object:  # a hand-only trial: why its hold and drift are not judged
+        parts.append(str(no_object))
     penetration = summary_value(record, "max_penetration_mm")
     if penetration is not None:
         parts.append(f"max penetration {penetration:.2f} mm")
+    self_penetration = summary_value(record, "max_self_penetration_mm")
+    if self_penetration is not None:
+        parts.append(f"max self-penetration {self_penetration:.2f} mm")
     drift = summary_value(record, "max_drift_mm")
     if drift is not None:
         parts.append(f"max drift {drift:.1f} mm")

@@ -104,12 +104,28 @@ TRIAL_COLUMNS: tuple[Column, ...] = (
         help="fraction of the robustness ensemble (the top placements and the winner moved ±2 mm and turned "
         "±5°) whose object was held",
     ),
+    Column(
+        "fit at",
+        lambda r: fmt.num(r["fit_fraction"]),
+        help="glove trials: fraction of the recorded finger flexion at which the object first fits in the "
+        "hand (1 = only when fully closed; lower: the recording closes past the object)",
+    ),
+    Column(
+        "closure self-pen. mm",
+        lambda r: fmt.num(r["self_penetration_at_closure_mm"], 1),
+        help="glove trials: deepest penetration of the hand's own links (thumb through fingers) at closure",
+    ),
     Column("object", lambda r: fmt.text(r["object"]), numeric=False),
     Column("grasp", lambda r: fmt.text(r["grasp"]), numeric=False),
     Column("actor", lambda r: fmt.text(r["actor"]), numeric=False),
     Column("slip mm", lambda r: fmt.num(r["max_slip_mm"], 1), help="max slip relative to the hand"),
     Column("pen. max mm", lambda r: fmt.num(r["max_penetration_mm"]), help="deepest penetration"),
     Column("pen. p95 mm", lambda r: fmt.num(r["p95_penetration_mm"]), help="95th percentile over frames"),
+    Column(
+        "self-pen. mm",
+        lambda r: fmt.num(r["max_self_penetration_mm"]),
+        help="hand-only trials: deepest simulated penetration of the hand through itself",
+    ),
     Column("drift max mm", lambda r: fmt.num(r["max_drift_mm"], 1), help="largest object drift"),
     Column(
         "track. mean °", lambda r: fmt.num(r["mean_tracking_error_deg"]), help="mean joint tracking error"

@@ -27,6 +27,16 @@ SUMMARY_FIELDS: tuple[tuple[str, str, int | None], ...] = (
     ("max_tracking_error_deg", "max tracking error °", 2),
     ("mean_tip_error_mm", "mean fingertip error mm", 1),
     ("max_tip_error_mm", "max fingertip error mm", 1),
+    ("max_self_penetration_mm", "max self-penetration mm (hand through itself)", 2),
+    ("p95_self_penetration_mm", "p95 self-penetration mm", 2),
+    ("frames_self_penetrating_over_1mm", "frames self-penetrating > 1 mm", None),
+    ("self_penetration_links", "deepest self-penetration between", None),
+    ("self_penetration_at_s", "deepest self-penetration at s", 2),
+    ("max_target_self_penetration_mm", "max self-penetration at the recorded targets mm", 2),
+    ("target_self_penetration_links", "… between", None),
+    ("target_self_penetration_at_s", "… at s", 2),
+    ("hold_reason", "hold", None),
+    ("drift_reason", "drift", None),
     ("held", "held", None),
     ("time_held_s", "time held s", 2),
     ("max_slip_mm", "max slip mm", 1),
@@ -57,6 +67,8 @@ _QUALITY_FIELDS = (
 def _value(key: str, value: object, decimals: int | None) -> str:
     if isinstance(value, bool) or value is None:
         return fmt.yes_no(value)
+    if isinstance(value, list):
+        return fmt.text(" | ".join(map(str, value)))
     if key in ("within_tolerance", "filled_fraction"):
         x = number(value)
         return fmt.MISSING if x is None else f"{100 * x:.1f}"
@@ -80,7 +92,7 @@ def _checked_curves(curves: dict) -> tuple[dict, list[str]]:
     """The curves whose length matches ``time_s`` (others left out, with a note)."""
     n = len(curves.get("time_s") or [])
     kept, problems = {"time_s": curves.get("time_s") or []}, []
-    for key in ("penetration_mm", "drift_mm", "tracking_error_deg"):
+    for key in ("penetration_mm", "drift_mm", "tracking_error_deg", "self_penetration_mm"):
         values = curves.get(key)
         if values is not None and len(values) != n:
             problems.append(f"{key} has {len(values)} values for {n} times: not drawn")
@@ -117,10 +129,19 @@ def _curves(record: dict) -> str:
         events.append((float(t[min(int(diverged_at) // stride, len(t) - 1)]), "diverged"))
     marks = Markers(vlines=events, vspans=spans)
     time = "time (s)"
+    self_penetration = curves.get("self_penetration_mm")  # a hand-only trial: no hand–object penetration
+    depth, title = (
+        (Series("self-penetration", t, self_penetration), "The hand through itself (deepest, simulated)")
+        if self_penetration
+        else (
+            Series("penetration", t, curves.get("penetration_mm") or [None] * len(t)),
+            "Deepest hand–object penetration",
+        )
+    )
     charts = [
         line_chart(
-            [Series("penetration", t, curves.get("penetration_mm") or [None] * len(t))],
-            title="Deepest hand–object penetration",
+            [depth],
+            title=title,
             x_label=time,
             y_label="mm",
             y_min=0.0,
@@ -129,16 +150,17 @@ def _curves(record: dict) -> str:
     ]
     per_finger = curves.get("contacts_per_finger") or {}
     names = [f for f in FINGER_GROUPS if f in per_finger] + sorted(set(per_finger) - set(FINGER_GROUPS))
-    charts.append(
-        area_chart(
-            t,
-            [(name, per_finger[name]) for name in names],
-            title="Contacts per finger (stacked)",
-            x_label=time,
-            y_label="contacts",
-            markers=marks,
+    if names or not self_penetration:
+        charts.append(
+            area_chart(
+                t,
+                [(name, per_finger[name]) for name in names],
+                title="Contacts per finger (stacked)",
+                x_label=time,
+                y_label="contacts",
+                markers=marks,
+            )
         )
-    )
     drift = curves.get("drift_mm")
     metrics = ((record.get("parameters") or {}).get("replay") or {}).get("metrics") or {}
     tolerance = number(metrics.get("drift_tolerance"))
@@ -164,7 +186,11 @@ def _curves(record: dict) -> str:
             markers=marks,
         )
     )
-    note = "" if drift else '<p class="note">No object track to drift from (glove scenario).</p>'
+    if self_penetration:
+        reason = (record.get("summary") or {}).get("hold_reason") or "not judged: no object"
+        note = f'<p class="note">Hand–object penetration, contacts, hold and drift: {esc(reason)}.</p>'
+    else:
+        note = "" if drift else '<p class="note">No object track to drift from (glove scenario).</p>'
     note += "".join(f'<p class="problem">{esc(p)}</p>' for p in problems)
     return '<div class="grid2">' + "".join(f"<div>{c}</div>" for c in charts) + "</div>" + note
 
@@ -221,7 +247,24 @@ def _hold(record: dict) -> str:
             fmt.integer(number((record.get("summary") or {}).get("release_directions_held"))),
         ),
     ]
-    return "<h4>Hold outcome</h4>" + numbers(items)
+    return "<h4>Hold outcome</h4>" + numbers(items) + _closure(record.get("summary") or {})
+
+
+def _closure(summary: dict) -> str:
+    """How far the recorded closing passes the object: recording-quality numbers of a glove trial."""
+    items = [
+        ("flexion fraction where the object fits", fmt.num(number(summary.get("fit_fraction")))),
+        ("grip normal force N", fmt.num(number(summary.get("grip_normal_force_n")), 1)),
+        ("grip servo torque N·m", fmt.num(number(summary.get("grip_servo_torque_nm")))),
+        ("gravity directions the grip resists", fmt.integer(number(summary.get("grip_directions_held")))),
+        (
+            "hand self-penetration at closure mm",
+            fmt.num(number(summary.get("self_penetration_at_closure_mm")), 1),
+        ),
+    ]
+    if all(value == fmt.MISSING for _, value in items):
+        return ""
+    return "<h4>Recorded closure</h4>" + numbers(items)
 
 
 def _stability(record: dict) -> str:

@@ -85,16 +85,19 @@ def curves(result: ReplayResult) -> dict:
     """The record's per-frame curves, strided to at most :data:`MAX_CURVE_POINTS` points.
 
     Returns:
-        ``time_s``; ``penetration_mm``; ``contacts_per_finger`` (thumb, index, middle, ring, little, palm:
-        how many of the group's links touch an object); ``drift_mm`` (recorded scenario: the largest object
+        ``time_s``; ``penetration_mm`` (None without objects: not judged); ``contacts_per_finger`` (thumb,
+        index, middle, ring, little, palm: how many of the group's links touch an object; empty without
+        objects); ``drift_mm`` (recorded scenario: the largest object
         position error over the objects, else None); ``tracking_error_deg`` (RMS over the hand's DoFs of
-        achieved minus target angle); ``stride`` (frames per point).
+        achieved minus target angle); ``self_penetration_mm`` (without objects: the simulated hand through
+        itself, else None); ``stride`` (frames per point).
     """
     f = result.frames
     n = f.times.shape[0]
     idx = curve_indices(n)
+    objects = f.object_in_hand.shape[1] > 0
     touching = touching_links(result)[idx]
-    groups = finger_groups(result.scene["links"])
+    groups = finger_groups(result.scene["links"]) if objects else {}
     contacts = {g: touching[:, links].sum(axis=1).astype(int).tolist() for g, links in groups.items()}
     drift = None
     if result.scene["scenario"] == "recorded" and f.object_position_error.shape[1]:
@@ -105,10 +108,11 @@ def curves(result: ReplayResult) -> dict:
     rms = np.sqrt(np.mean(tracking**2, axis=1)) if tracking.shape[1] else np.full(idx.shape, np.nan)
     return {
         "time_s": rounded(f.times[idx]),
-        "penetration_mm": rounded(f.penetration[idx], MM),
+        "penetration_mm": rounded(f.penetration[idx], MM) if objects else None,
         "contacts_per_finger": contacts,
         "drift_mm": drift,
         "tracking_error_deg": rounded(rms, DEG),
+        "self_penetration_mm": None if objects else rounded(f.self_penetration[idx], MM),
         "stride": int(idx[1] - idx[0]) if idx.size > 1 else 1,
     }
 

@@ -21,6 +21,7 @@ from handsim.sim.compiled import SimScene
 from handsim.sim.control import ControlSchedule
 from handsim.sim.layout import _SLOT, CONTACT_SLOTS
 from handsim.sim.placement import PlacementSpec
+from handsim.sim.self_contact import self_penetration_track
 from handsim.sim.stability import StabilitySpec
 
 METRIC_SPEC_VERSION = "2"
@@ -133,6 +134,13 @@ class FrameMetrics:
         articulation_error: Hinge angle minus recorded angle, rad (N, objects); NaN without a hinge.
         object_in_hand: Position of each object's origin in the hand root's frame, m (N, objects, 3).
         hand_contact: Some hand link touches the object (N, objects).
+        self_penetration: Scenes without objects (hand-only sequences): the simulated hand's deepest
+            penetration of itself at each frame, m (N,) (:mod:`handsim.sim.self_contact`); empty (not
+            measured) in a scene with objects.
+        self_penetration_pair: Its two links per frame, indices into the layout's ``link_names`` (N, 2),
+            -1 where none overlap; empty with objects.
+        target_self_penetration: The same for the hand put at its targets (the recording's own postures).
+        target_self_penetration_pair: Its links.
     """
 
     times: np.ndarray
@@ -148,6 +156,10 @@ class FrameMetrics:
     object_in_hand: np.ndarray
     hand_contact: np.ndarray
     part_object: np.ndarray = field(repr=False, default_factory=lambda: np.zeros(0, dtype=np.int64))
+    self_penetration: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    self_penetration_pair: np.ndarray = field(default_factory=lambda: np.zeros((0, 2), dtype=np.int64))
+    target_self_penetration: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    target_self_penetration_pair: np.ndarray = field(default_factory=lambda: np.zeros((0, 2), dtype=np.int64))
 
 
 def _contacts(scene: SimScene, sensors: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
@@ -209,14 +221,16 @@ def frame_metrics(
         sensors: Sensor data at each frame time (n, nsensordata).
 
     Returns:
-        The metrics of the n recorded frames.
+        The metrics of the n recorded frames; in a scene without objects also the hand's self-penetration
+        (simulated and at the targets).
     """
     layout = scene.layout
     n = qpos.shape[0]
     count, normal, truncated, penetration = _contacts(scene, sensors)
     targets = schedule.ctrl[:n]
     tracking = qpos[:, layout.dof_qpos] - np.clip(targets, layout.ctrl_range[:, 0], layout.ctrl_range[:, 1])
-    target_tips = _target_tips(scene, _kinematic_targets(scene, schedule, qpos))
+    target_qpos = _kinematic_targets(scene, schedule, qpos)
+    target_tips = _target_tips(scene, target_qpos)
     tips = sensors[:, layout.tip_adr[:, None] + np.arange(3)]
     tip_error = np.linalg.norm(tips - target_tips, axis=-1)
 
@@ -243,6 +257,16 @@ def frame_metrics(
         rot_err[:, i] = quat_angle(pose[:, 3:], track.pose[:n, 3:])
         if track.articulation is not None and obj.hinge_qpos >= 0:
             art_err[:, i] = qpos[:, obj.hinge_qpos] - track.articulation[:n]
+    hand_only = {}
+    if not nobj:
+        depth, pair = self_penetration_track(scene, qpos)
+        target_depth, target_pair = self_penetration_track(scene, target_qpos)
+        hand_only = {
+            "self_penetration": depth,
+            "self_penetration_pair": pair,
+            "target_self_penetration": target_depth,
+            "target_self_penetration_pair": target_pair,
+        }
     return FrameMetrics(
         times=schedule.times[:n],
         contact_count=count,
@@ -257,4 +281,5 @@ def frame_metrics(
         object_in_hand=in_hand,
         hand_contact=touching,
         part_object=part_object,
+        **hand_only,
     )

@@ -17,6 +17,8 @@ software EGL) or ``MUJOCO_GL=osmesa`` before ``mujoco`` is imported (the ``hands
 
 from __future__ import annotations
 
+import contextlib
+import os
 from collections.abc import Iterator
 from dataclasses import dataclass
 from fractions import Fraction
@@ -172,7 +174,8 @@ def write_video(
         scene: The replayed scene.
         states: ``qpos`` per frame (N, nq): ``ReplayResult.states`` of a replay with ``keep_states=True``.
         frame_dt: Seconds per replay frame (``ReplayResult.frame_dt``).
-        path: ``.mp4`` or ``.gif`` file to write (its folder is created).
+        path: ``.mp4`` or ``.gif`` file to write (its folder is created); it appears whole or not at all
+            (written under a temporary name, then renamed).
         fps: Wanted frame rate, Hz (the written rate is ``1 / (stride · frame_dt)``).
         camera: See :func:`render_states`.
         width: Image width, pixels (even, for H.264).
@@ -194,7 +197,14 @@ def write_video(
         scene, states, camera=camera, width=width, height=height, stride=stride, shadows=shadows
     )
     out.parent.mkdir(parents=True, exist_ok=True)
-    count, codec = encode(out, images, rate)
+    partial = out.with_name(f".{out.stem}.partial{os.getpid()}{out.suffix}")  # the suffix picks the format
+    try:
+        count, codec = encode(partial, images, rate)
+        os.replace(partial, out)
+    except BaseException:  # a render error, a full disk, Ctrl-C: no half-written video left behind
+        with contextlib.suppress(OSError):
+            partial.unlink(missing_ok=True)
+        raise
     return Video(out, count, float(rate), stride, width, height, camera, codec)
 
 

@@ -19,7 +19,7 @@ from handsim.sim.plausibility import Flag, check_control_rate, is_valid, replay_
 from handsim.sim.robustness import HoldRobustness, hold_robustness
 from handsim.sim.stability import StabilityResult, stability_test
 from handsim.sim.stepper import Stepper, WarningEvent
-from handsim.sim.summary import HoldOutcome, hold_outcome, not_judged, summarize
+from handsim.sim.summary import HoldOutcome, hand_only_summary, hold_outcome, not_judged, summarize
 from handsim.trajectory import Trajectory
 
 
@@ -195,6 +195,8 @@ def replay(scene: SimScene, trajectory: Trajectory, config: ReplayConfig | None 
     qpos, sensors, warnings, diverged = run_schedule(driver)
     frames = frame_metrics(scene, schedule, qpos, sensors)
     summary = summarize(frames, spec)
+    if not scene.layout.objects:
+        summary.update(hand_only_summary(frames, scene.layout.link_names))
     summary["diverged"] = diverged is not None
     summary["warnings"] = len(warnings)
     flags = replay_flags(scene, trajectory, schedule, switches, frames)

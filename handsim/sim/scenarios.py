@@ -5,7 +5,9 @@
   "up": gravity is taken as the object's face direction closest to ``gravity_hint`` at the first frame
   (where the object rests on its support), and the support plane as the plane under the object's lowest
   point along it. The scene's world puts that plane at z = 0 (the table top) with z up, the object's first
-  position above the origin.
+  position above the origin. A recording without objects (a hand-only sequence, :func:`hand_only_frame`)
+  has nothing resting on a support: gravity is the hint itself, there is no table, and the hand's first
+  root position is the origin.
 * **Glove only** (:func:`glove_scene`; GraspDB14): the hand's root is fixed, palm down, and the object is
   placed where it fits in the closing hand and the recorded closing grips it best
   (:mod:`handsim.sim.placement`), held there by a support weld that the replay switches off
@@ -86,6 +88,33 @@ def support_frame(
     return np.concatenate([shift, turn]), down, note
 
 
+def hand_only_frame(
+    root_pose: np.ndarray, gravity_hint: npt.ArrayLike = CAMERA_DOWN
+) -> tuple[np.ndarray, str]:
+    """World frame for a recording without objects: gravity along the hint, the first root at the origin.
+
+    Nothing in such a recording rests on a support, so no object face or support plane can say where "down"
+    is; the hint (image down of the camera frame for a Tzionas sequence) is taken as it is.
+
+    Args:
+        root_pose: The hand root's recorded pose at the first frame (recording frame; x, y, z, qw … qz).
+        gravity_hint: "Down" in the recording frame.
+
+    Returns:
+        ``world_from_recording`` pose (z up, gravity along the hint, the first root position at the origin)
+        and a note.
+    """
+    hint = np.asarray(gravity_hint, dtype=float)
+    hint = hint / np.linalg.norm(hint)
+    turn = _rotation_onto(hint, np.array([0.0, 0.0, -1.0]))
+    origin = quat_rotate(turn, np.asarray(root_pose, dtype=float)[:3])
+    note = (
+        f"no object: gravity along the hint {hint.round(3).tolist()} (nothing rests on a support to say "
+        "where down is); no table; the hand's root at the first frame is the world origin"
+    )
+    return np.concatenate([-origin, turn]), note
+
+
 def recorded_scene(
     hand: mujoco.MjSpec,
     trajectory: Trajectory,
@@ -96,25 +125,31 @@ def recorded_scene(
 ) -> SimScene:
     """Scene for a recording with object tracks: the hand follows its root pose, the objects are free.
 
+    Without objects (a hand-only sequence) the world comes from :func:`hand_only_frame` and there is no
+    table.
+
     Args:
         hand: The hand (root without DoFs of its own; its root body's world pose is the trajectory's
             ``root_pose``).
         trajectory: With ``root_pose`` and a track in ``objects`` for each key of ``objects``.
         objects: Object specs (:func:`handsim.builders.build_object`) by track name; the first defines the
-            support plane.
+            support plane. Empty for a hand-only sequence.
         gravity_hint: Roughly "down" in the recording frame (default: image down of a camera frame).
-        table: Add the table under the support plane.
+        table: Add the table under the support plane (never without objects).
 
     Returns:
         The compiled scene (scenario ``recorded``).
 
     Raises:
-        TrajectoryError: No root pose, no objects, or an object without a track.
+        TrajectoryError: No root pose, or an object without a track.
     """
     if trajectory.root_pose is None:
         raise TrajectoryError(f"{trajectory.source or 'trajectory'}: no root pose to follow")
     if not objects:
-        raise TrajectoryError("recorded_scene needs at least one object with a recorded track")
+        world, note = hand_only_frame(np.asarray(trajectory.root_pose[0], dtype=float), gravity_hint)
+        spec = build_scene(hand, [], hand_pos=(0.0, 0.0, 0.0), table=False, hand_root="weld")
+        setup = SceneSetup(scenario="recorded", world_from_recording=tuple(world.tolist()), notes=(note,))
+        return compile_scene(spec, setup)
     missing = [k for k in objects if k not in trajectory.objects]
     if missing:
         raise TrajectoryError(

@@ -74,3 +74,26 @@ class SelfCollider:
         geom = data.contact.geom[worst]
         a, b = (self._names.get(int(model.geom_bodyid[g]), "?") for g in geom)
         return SelfPenetration(float(-dist[worst]), (a, b))
+
+
+def self_penetration_track(scene: SimScene, qpos: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The hand's self-penetration at every posture of a replay.
+
+    Args:
+        scene: The replayed scene.
+        qpos: States (N, nq): the simulated state at each frame, or the hand put at its targets.
+
+    Returns:
+        The deepest self-penetration per posture, m (N,), 0 where no two links overlap; and its two links
+        as indices into the layout's ``link_names`` (N, 2), -1 where none overlap.
+    """
+    collider = SelfCollider(scene)
+    index = {name: i for i, name in enumerate(scene.layout.link_names)}
+    depth = np.zeros(qpos.shape[0])
+    pair = np.full((qpos.shape[0], 2), -1, dtype=np.int64)
+    for k in range(qpos.shape[0]):
+        found = collider(qpos[k])
+        depth[k] = found.depth
+        if found.links is not None:
+            pair[k] = [index[found.links[0]], index[found.links[1]]]
+    return depth, pair

@@ -9,6 +9,9 @@ import numpy as np
 
 from handsim.sim.metrics import FrameMetrics, MetricSpec
 
+NO_OBJECT = "not judged: no object (a hand-only sequence: nothing to touch, hold or drift)"
+"""Why a replay without objects judges no hand–object contact, hold or drift."""
+
 
 @dataclass(frozen=True)
 class HoldOutcome:
@@ -137,8 +140,25 @@ def _finite(x: np.ndarray, fn) -> float | None:
     return float(fn(x)) if x.size else None
 
 
+CONTACT_KEYS = (
+    "max_penetration_mm",
+    "p95_penetration_mm",
+    "frames_penetrating_over_1mm",
+    "contact_frames",
+    "max_contact_links",
+    "max_total_normal_force_n",
+    "truncated_contact_pairs",
+)
+"""The summary's hand–object numbers: None in a scene without objects."""
+
+
 def summarize(frames: FrameMetrics, spec: MetricSpec) -> dict:
-    """JSON-ready per-trial numbers (SI units in the key names: ``_mm``, ``_deg``, ``_n``, ``_s``)."""
+    """JSON-ready per-trial numbers (SI units in the key names: ``_mm``, ``_deg``, ``_n``, ``_s``).
+
+    Without objects (a hand-only sequence) the hand–object numbers (:data:`CONTACT_KEYS`: penetration,
+    contacts, forces) are None, never a 0 that reads as a clean result; :func:`hand_only_summary` adds why
+    and the hand's self-penetration.
+    """
     mm, deg = 1000.0, 180.0 / math.pi
     n = frames.times.shape[0]
     summary = {
@@ -160,6 +180,8 @@ def summarize(frames: FrameMetrics, spec: MetricSpec) -> dict:
         "mean_tip_error_mm": _finite(frames.tip_error * mm, np.mean),
         "max_tip_error_mm": _finite(frames.tip_error * mm, np.max),
     }
+    if frames.object_in_hand.shape[1] == 0:
+        summary.update(dict.fromkeys(CONTACT_KEYS))
     if np.isfinite(frames.object_position_error).any():
         pos = frames.object_position_error
         summary.update(
@@ -172,3 +194,53 @@ def summarize(frames: FrameMetrics, spec: MetricSpec) -> dict:
             max_articulation_drift_deg=_finite(np.abs(frames.articulation_error) * deg, np.max),
         )
     return summary
+
+
+def hand_only_summary(frames: FrameMetrics, links: tuple[str, ...]) -> dict:
+    """The numbers of a replay without objects: hold and drift not judged (why), the hand through itself.
+
+    Args:
+        frames: Per-frame metrics of a scene without objects (with its self-penetration).
+        links: The scene's hand links (the layout's ``link_names``), which the pairs index.
+
+    Returns:
+        ``hold_reason`` and ``drift_reason`` (:data:`NO_OBJECT`; no ``held``: a verdict is true or absent);
+        ``max_self_penetration_mm``, ``p95_self_penetration_mm`` and ``frames_self_penetrating_over_1mm``
+        of the simulated hand, ``self_penetration_links`` and ``self_penetration_at_s`` of its deepest
+        frame (None when no two links overlap); ``max_target_self_penetration_mm``,
+        ``target_self_penetration_links`` and ``target_self_penetration_at_s`` of the hand at its targets
+        (the recording's own postures).
+
+    Raises:
+        ValueError: ``frames`` hold no self-penetration (a scene with objects).
+    """
+    n = frames.times.shape[0]
+    if frames.self_penetration.shape[0] != n or frames.target_self_penetration.shape[0] != n:
+        raise ValueError("hand_only_summary needs the self-penetration of a scene without objects")
+    depth = frames.self_penetration
+    return {
+        "hold_reason": NO_OBJECT,
+        "drift_reason": NO_OBJECT,
+        "max_self_penetration_mm": float(depth.max() * 1000.0) if n else None,
+        "p95_self_penetration_mm": float(np.percentile(depth, 95) * 1000.0) if n else None,
+        "frames_self_penetrating_over_1mm": int((depth > 0.001).sum()),
+        **_deepest("self_penetration", depth, frames.self_penetration_pair, frames.times, links),
+        "max_target_self_penetration_mm": float(frames.target_self_penetration.max() * 1000.0) if n else None,
+        **_deepest(
+            "target_self_penetration",
+            frames.target_self_penetration,
+            frames.target_self_penetration_pair,
+            frames.times,
+            links,
+        ),
+    }
+
+
+def _deepest(
+    key: str, depth: np.ndarray, pair: np.ndarray, times: np.ndarray, links: tuple[str, ...]
+) -> dict:
+    """``<key>_links`` and ``<key>_at_s`` of the deepest frame (None when no two links overlap)."""
+    k = int(np.argmax(depth)) if depth.size else -1
+    if k < 0 or depth[k] <= 0.0:
+        return {f"{key}_links": None, f"{key}_at_s": None}
+    return {f"{key}_links": [links[i] for i in pair[k]], f"{key}_at_s": float(times[k])}

@@ -76,6 +76,10 @@ class Trial:
         mass: Object mass in kg replacing the objects' own, or None.
         hand_length: Parametric default hand: wrist crease to middle fingertip, m.
         collision: Hand collision shapes, one of :data:`HAND_COLLISIONS`.
+        thumb_rest: Glove recordings: ``(abduction, flexion)`` in degrees of the thumb TMC DoFs no sensor
+            drives, or None to leave them at the skeleton's rest pose (the GraspDB14 tools' choice).
+        force: Accept an object density or mass outside its documented range
+            (:mod:`handsim.physical_ranges`).
         notes: Decisions made while finding the files.
     """
 
@@ -90,6 +94,8 @@ class Trial:
     mass: float | None = None
     hand_length: float = DEFAULT_HAND_LENGTH_M
     collision: str = "capsules"
+    thumb_rest: tuple[float, float] | None = None
+    force: bool = False
     notes: tuple[str, ...] = ()
 
     def to_dict(self) -> dict:
@@ -116,6 +122,8 @@ class Trial:
         values = dict(fields)
         values["objects"] = tuple(TrialObject(**o) for o in values["objects"])
         values["notes"] = tuple(values.get("notes", ()))
+        if values.get("thumb_rest") is not None:
+            values["thumb_rest"] = tuple(values["thumb_rest"])
         return cls(**values)
 
 
@@ -173,6 +181,8 @@ class TrialOptions:
         mass: Object mass, kg.
         hand_length: Parametric default hand's length, m.
         collision: Hand collision shapes, one of :data:`HAND_COLLISIONS`.
+        thumb_rest: Glove recordings: ``(abduction, flexion)`` of the undriven thumb TMC DoFs, degrees
+            (:func:`handsim.glove.thumb_rest.apply_thumb_rest`).
     """
 
     skeleton: str | Path | None = None
@@ -183,6 +193,7 @@ class TrialOptions:
     mass: float | None = None
     hand_length: float | None = None
     collision: str | None = None
+    thumb_rest: tuple[float, float] | None = None
 
 
 OPTION_LABELS = {
@@ -194,6 +205,7 @@ OPTION_LABELS = {
     "mass": "an object mass",
     "hand_length": "a hand length",
     "collision": "a hand collision shape",
+    "thumb_rest": "a thumb rest posture",
 }
 """How messages name each :class:`TrialOptions` field."""
 
@@ -244,8 +256,10 @@ def build_objects(trial: Trial, progress: bool) -> tuple[list, tuple[LoadedObjec
 
     specs, loaded, notes = [], [], []
     for item in trial.objects:
-        model = resolve(item.what, units=trial.units, density=trial.density, mass=trial.mass)
-        prepared = prepare_object(model, progress=progress)
+        model = resolve(
+            item.what, units=trial.units, density=trial.density, mass=trial.mass, force=trial.force
+        )
+        prepared = prepare_object(model, progress=progress, force=trial.force)
         specs.append(object_spec(prepared))
         loaded.append(LoadedObject(model.name, model.source, item.track, item.origin, prepared.total_mass))
         notes.extend(f"object {model.name!r}: {n}" for n in (*model.notes, *prepared.notes))

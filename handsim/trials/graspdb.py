@@ -31,6 +31,27 @@ if TYPE_CHECKING:
 _NAME_HELP = "spec 003 §4.1.2: <objID>[_<graspID>|_<actionID>]_ex<NN>-rad|raw-<trialID>-grasp-su<actorID>.txt"
 
 
+_CALIBRATION = {
+    "raw": (
+        "CyberGlove calibration sequence (raw counts): estimate a calibration from it to replay -raw- "
+        "recordings (handsim.glove.estimate_calibration)"
+    ),
+    "rad": (
+        "CyberGlove calibration sequence in radians (joint angles, already calibrated): not read; a "
+        "calibration is estimated from the raw-count sequence, and -rad- recordings need none"
+    ),
+    None: (
+        "CyberGlove calibration sequence (its name says neither -rad- nor -raw-): estimate a calibration "
+        "from it if it holds raw counts (handsim.glove.estimate_calibration; reading it refuses angles)"
+    ),
+}
+"""What a ``_calib-`` file is, by the data type its name says (``filename_datatype``)."""
+_RAW_ALONE = (
+    "raw sensor counts without their -rad- twin: a dataset run has no glove calibration to turn them into "
+    "angles; replay it alone with handsim replay FILE --calibration CAL.json"
+)
+
+
 def _matches(path: Path) -> bool:
     if path.is_dir() or not (path.suffix.lower() == ".txt" or path.suffix == ""):
         return False
@@ -79,13 +100,14 @@ def _find(path: Path, options: TrialOptions) -> Trial:
         mass=options.mass,
         hand_length=DEFAULT_HAND_LENGTH_M if options.hand_length is None else float(options.hand_length),
         collision=options.collision or "capsules",
+        thumb_rest=options.thumb_rest,
         notes=tuple(notes),
     )
 
 
 def _load(trial: Trial, metrics: MetricSpec | None, progress: bool) -> LoadedTrial:
     from handsim.builders import build_hand
-    from handsim.glove import attach_phases, load_calibration
+    from handsim.glove import apply_thumb_rest, attach_phases, load_calibration, thumb_rest_note
     from handsim.io import read_skeleton, read_trajectory
 
     if trial.skeleton_path is None:
@@ -98,8 +120,11 @@ def _load(trial: Trial, metrics: MetricSpec | None, progress: bool) -> LoadedTri
     trajectory = read_trajectory(trial.trajectory_path, skeleton=skeleton, calibration=calibration)
     if trial.annotation_path is not None and not trajectory.phases:
         trajectory = attach_phases(trajectory, trial.annotation_path)
-    skeleton_notes = skeleton.notes if trial.skeleton_path else ()
-    return glove_loaded(trial, hand, hand_text, trajectory, metrics, progress, skeleton_notes)
+    notes = skeleton.notes if trial.skeleton_path else ()
+    if trial.thumb_rest is not None:
+        trajectory = apply_thumb_rest(trajectory, skeleton, *trial.thumb_rest)
+        notes = (*notes, thumb_rest_note(*trial.thumb_rest))
+    return glove_loaded(trial, hand, hand_text, trajectory, metrics, progress, notes)
 
 
 def _inputs(trial: Trial, base: Path) -> tuple[TrialInput, ...]:
@@ -117,7 +142,7 @@ def _inputs(trial: Trial, base: Path) -> tuple[TrialInput, ...]:
 
 def _sort_files(sorting: Sorting) -> None:
     from handsim.builders.graspdb_objects import GRASPDB_OBJECTS
-    from handsim.io.graspdb import parse_graspdb_filename
+    from handsim.io.graspdb import filename_datatype, parse_graspdb_filename
     from handsim.trials.graspdb_names import graspdb_meta
 
     names = {o.graspdb_id: o.name for o in GRASPDB_OBJECTS}
@@ -139,10 +164,11 @@ def _sort_files(sorting: Sorting) -> None:
             )
             continue
         if "_calib-" in p.name.lower():
-            sorting.companions[f] = (
-                "CyberGlove calibration sequence (raw counts): estimate a calibration from it to replay "
-                "-raw- recordings (handsim.glove.estimate_calibration)"
-            )
+            sorting.companions[f] = _CALIBRATION[filename_datatype(p.name)]
+            continue
+        image = _camera_file(p, present)
+        if image is not None:
+            sorting.companions[f] = image
             continue
         parsed = parse_graspdb_filename(p.name)
         if parsed is None:
@@ -154,6 +180,9 @@ def _sort_files(sorting: Sorting) -> None:
         if parsed.datatype == "raw" and twin in present:
             sorting.companions[f] = f"raw sensor counts of {twin}, which is replayed"
             continue
+        if parsed.datatype == "raw":
+            sorting.companions[f] = _RAW_ALONE
+            continue
         try:
             trial = _find(sorting.base / p, TrialOptions())
         except HandsimError as exc:
@@ -162,11 +191,51 @@ def _sort_files(sorting: Sorting) -> None:
         meta = graspdb_meta(parsed, names.get(parsed.object_id))
         sorting.add(TrialEntry(f, trial, meta, _inputs(trial, sorting.base)))
     for f in annotations:
-        if f not in sorting.claimed:
+        if f in sorting.claimed:
+            continue
+        recording = _annotated(f, open_files, sorting.base)
+        if recording is None:
             sorting.unknown[f] = (
                 "a GraspDB14 phase annotation file, not a recording; the recording it annotates is not in "
                 "the dataset"
             )
+        else:
+            sorting.companions[f] = (
+                f"GraspDB14 phase annotation of {recording}, which is not replayed (its entry says why)"
+            )
+
+
+def _annotated(annotation: str, files: list[str], base: Path) -> str | None:
+    """The recording among ``files`` (beside ``annotation``) whose phase annotation it is, or None."""
+    from handsim.glove.phases import find_annotation_file
+    from handsim.io.graspdb import parse_graspdb_filename
+
+    folder = PurePosixPath(annotation).parent
+    for f in files:
+        p = PurePosixPath(f)
+        parsed = parse_graspdb_filename(p.name)
+        if p.parent != folder or parsed is None or parsed.annotation:
+            continue
+        found = find_annotation_file(base / p)
+        if found is not None and found.name == PurePosixPath(annotation).name:
+            return f
+    return None
+
+
+def _camera_file(path: PurePosixPath, present: set[str]) -> str | None:
+    """What a GraspDB14 camera calibration file or hand image is (spec 003 §4.1.1, §4.2.1), or None."""
+    name = path.name.lower()
+    if name.endswith("-rect.xml"):
+        return (
+            "GraspDB14 camera calibration and hand measurements of a rectified hand image (spec 003 "
+            "§4.1.1, §4.2.1): not read"
+        )
+    if name.endswith("-rect.jpg"):
+        return "GraspDB14 rectified image of an actor's hand (spec 003 §4.1.1): not read"
+    rectified = path.with_name(f"{path.stem}-rect{path.suffix}").as_posix()
+    if path.suffix.lower() == ".jpg" and rectified in present:
+        return f"GraspDB14 image of an actor's hand, rectified as {rectified} (spec 003 §4.1.1): not read"
+    return None
 
 
 def _explain_unknown(path: PurePosixPath) -> str | None:
@@ -183,7 +252,17 @@ KIND = TrialKind(
     label="a GraspDB14 recording",
     files="GraspDB14 CyberGlove recording .txt (radians; raw counts with a calibration)",
     options=frozenset(
-        {"skeleton", "obj", "calibration", "units", "density", "mass", "hand_length", "collision"}
+        {
+            "skeleton",
+            "obj",
+            "calibration",
+            "units",
+            "density",
+            "mass",
+            "hand_length",
+            "collision",
+            "thumb_rest",
+        }
     ),
     brings="a glove recording takes the hand's skeleton, the object and the glove calibration",
     matches=_matches,

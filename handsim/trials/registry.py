@@ -74,6 +74,8 @@ def find_trial(
     mass: float | None = None,
     hand_length: float | None = None,
     collision: str | None = None,
+    thumb_rest: tuple[float, float] | None = None,
+    force: bool = False,
 ) -> Trial:
     """Find the files of a trial from its recording.
 
@@ -91,6 +93,9 @@ def find_trial(
         hand_length: Parametric default hand's length, m (default 0.19; a scripted grasp's own); only
             without a skeleton.
         collision: Hand collision shapes: ``"capsules"`` (default) or ``"mesh"`` (skinned skeletons only).
+        thumb_rest: GraspDB14: ``(abduction, flexion)`` in degrees at which to hold the thumb TMC DoFs no
+            glove sensor drives (default: left at 0, as the GraspDB14 tools do).
+        force: Accept an object density or mass outside its documented range (every kind's objects).
 
     Returns:
         The trial.
@@ -115,6 +120,7 @@ def find_trial(
         mass=mass,
         hand_length=hand_length,
         collision=collision,
+        thumb_rest=None if thumb_rest is None else (float(thumb_rest[0]), float(thumb_rest[1])),
     )
     kind = kind_named(trial_kind(path))
     for option in dataclasses.fields(TrialOptions):
@@ -122,7 +128,8 @@ def find_trial(
             raise TrialError(
                 f"{path}: {OPTION_LABELS[option.name]} does not apply to {kind.label}; {kind.brings}"
             )
-    return kind.find(Path(path), options)
+    trial = kind.find(Path(path), options)
+    return dataclasses.replace(trial, force=True) if force else trial
 
 
 def load_trial(

@@ -134,10 +134,18 @@ def _inputs(trial: Trial, base: Path) -> tuple[TrialInput, ...]:
     return tuple(inputs)
 
 
-def _sort_sequences(sorting: Sorting) -> None:
+def _sort_sequences(sorting: Sorting) -> tuple[dict[str, set[str]], dict[str, str]]:
+    """Claim each hand motion as a trial (or an unknown file, with why it is not one).
+
+    Returns:
+        Per sequence folder, the models its trials read (``Model_Hand_R``, ``Model_Object_Cube`` …); and per
+        folder whose hand motion is not a trial, that motion's path.
+    """
     folders: dict[str, list[str]] = {}
     for f in sorting.open_files():
         folders.setdefault(PurePosixPath(f).parent.as_posix(), []).append(f)
+    listed: dict[str, set[str]] = {}
+    failed: dict[str, str] = {}
     for folder, files in sorted(folders.items()):
         hands = [f for f in files if _HAND_MOTION.fullmatch(PurePosixPath(f).name)]
         for hand in hands:
@@ -145,6 +153,7 @@ def _sort_sequences(sorting: Sorting) -> None:
                 trial = _find(sorting.base / hand, TrialOptions())
             except HandsimError as exc:
                 sorting.unknown[hand] = f"a Tzionas hand motion, but not a trial: {exc}"
+                failed.setdefault(folder, hand)
                 continue
             tracks = [o.track for o in trial.objects]
             meta = group_fields(
@@ -154,6 +163,9 @@ def _sort_sequences(sorting: Sorting) -> None:
             )
             trial_id = folder if len(hands) == 1 and folder != "." else hand
             sorting.add(TrialEntry(trial_id, trial, meta, _inputs(trial, sorting.base)))
+            models = {Path(trial.trajectory_path).stem, *(Path(o.what).stem for o in trial.objects)}
+            listed.setdefault(folder, set()).update(models)
+    return listed, failed
 
 
 def _is_root(path: PurePosixPath, base: Path) -> bool:
@@ -162,41 +174,83 @@ def _is_root(path: PurePosixPath, base: Path) -> bool:
     return (folder / "Models").is_dir() and (folder / "Configs").is_dir()
 
 
-def _sort_companions(sorting: Sorting) -> None:
+def _model_reason(
+    p: PurePosixPath, base: Path, listed: dict[str, set[str]], failed: dict[str, str]
+) -> tuple[bool, str]:
+    """Why a ``Model_*`` file no trial reads is not one: ``(companion, reason)``."""
+    folder, model, ext = p.parent, p.stem, p.suffix.upper()
+    sequence = f"sequence {folder.name}"
+    if not has_hand_motion(base / folder):
+        return True, (
+            f"Tzionas/Ballan model of {sequence}, which has no hand motion here (no Model_Hand_*.MOTION): "
+            "not a trial"
+        )
+    if ext == ".ZONES":
+        return True, "Tzionas skinning zones (.ZONES; not read by handsim)"
+    if folder.as_posix() in failed:
+        return False, (
+            f"Tzionas model {model} of {sequence}, whose hand motion {failed[folder.as_posix()]} is not a "
+            "trial (its entry says why)"
+        )
+    if model in listed.get(folder.as_posix(), set()):
+        return True, (
+            f"Tzionas {ext} of {model}, which {sequence} replays: not read (handsim reads a hand's .SKEL, "
+            ".LIMITS, .MOTION, .OFF, .SKIN, .VOI and an object's .SKEL, .LIMITS, .MOTION, .OFF, .SKIN)"
+        )
+    return False, (
+        f"Tzionas model {model} beside the hand motion of {sequence}, not listed in its "
+        f"Configs/{folder.name}/MODELS_INFO.txt: not part of the trial"
+    )
+
+
+def _config_reason(p: PurePosixPath, base: Path) -> tuple[bool, str] | None:
+    """Why a file of a ``Configs/NN`` folder no trial reads is not one, or None outside such a folder."""
+    folder = p.parent
+    if folder.parent.name != "Configs" or not _is_root(folder.parent.parent, base):
+        return None
+    sequence = f"sequence {folder.name}"
+    if p.name not in _CONFIGS:
+        return False, (
+            f"a file of Tzionas {sequence}'s configuration folder other than {' and '.join(_CONFIGS)} (the "
+            "files handsim reads there): not read"
+        )
+    models = folder.parent.parent / "Models" / folder.name
+    if has_hand_motion(base / models):
+        return True, (
+            f"Tzionas configuration of {sequence}, whose hand motion is not a trial (the entry of its "
+            f"{models.as_posix()}/Model_Hand_*.MOTION says why)"
+        )
+    return True, f"Tzionas configuration of {sequence}, which has no hand motion here: not a trial"
+
+
+_ROOT_FOLDERS = {
+    "Calibration": (
+        "Tzionas camera calibration (not read: motion times use the sensor's 30 Hz, docs/conventions.md)"
+    ),
+    "VOIs": "Tzionas vertex-of-interest list of the dataset's models (not read; a hand's own .VOI is)",
+}
+"""Companion folders of a Tzionas dataset root, and what their files are."""
+
+
+def _sort_companions(sorting: Sorting, listed: dict[str, set[str]], failed: dict[str, str]) -> None:
     for f in sorting.open_files():
         p = PurePosixPath(f)
-        folder = p.parent
-        if _MODEL_FILE.fullmatch(p.name):
-            if has_hand_motion(sorting.base / folder) and p.suffix.lower() != ".zones":
-                sorting.unknown[f] = (
-                    "a Tzionas model file beside a hand motion, not listed in MODELS_INFO.txt"
-                )
-            elif has_hand_motion(sorting.base / folder):
-                sorting.companions[f] = "Tzionas skinning zones (.ZONES; not read by handsim)"
-            else:
-                sorting.companions[f] = (
-                    f"Tzionas/Ballan model of sequence {folder.name}, which has no hand motion here "
-                    "(no Model_Hand_*.MOTION): not a trial"
-                )
-        elif folder.parent.name == "Configs" and p.name in _CONFIGS:
-            sorting.companions[f] = (
-                f"Tzionas configuration of sequence {folder.name}, which has no hand motion here: not a trial"
-            )
-        elif len(p.parts) >= 2 and _is_root(folder.parent, sorting.base):
-            if folder.name == "Calibration":
-                sorting.companions[f] = (
-                    "Tzionas camera calibration (not read: motion times use the sensor's 30 Hz, "
-                    "docs/conventions.md)"
-                )
-            elif folder.name == "VOIs":
-                sorting.companions[f] = (
-                    "Tzionas vertex-of-interest list of the dataset's models (not read; a hand's own .VOI is)"
-                )
+        found = (
+            _model_reason(p, sorting.base, listed, failed)
+            if _MODEL_FILE.fullmatch(p.name)
+            else _config_reason(p, sorting.base)
+        )
+        if found is None and len(p.parts) >= 2 and _is_root(p.parent.parent, sorting.base):
+            what = _ROOT_FOLDERS.get(p.parent.name)
+            found = None if what is None else (True, what)
+        if found is not None:
+            companion, reason = found
+            (sorting.companions if companion else sorting.unknown)[f] = reason
 
 
 def _sort_files(sorting: Sorting) -> None:
-    _sort_sequences(sorting)
-    _sort_companions(sorting)
+    listed, failed = _sort_sequences(sorting)
+    _sort_companions(sorting, listed, failed)
 
 
 KIND = TrialKind(
