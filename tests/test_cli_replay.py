@@ -74,6 +74,10 @@ def test_replay_of_a_graspdb_trial_uses_the_object_of_its_file_name(capsys, tmp_
     assert "scenario    glove" in out
     for label in ("placement", "release", "held", "slip", "drop"):
         assert label in _labels(out)
+    assert (
+        "at release  6 of 6 gravity directions held (+x, -x, +y, -y, +z, -z); "
+        "the hold itself is judged palm down\n" in out
+    )
     record = json.loads(out_json.read_text())
     hold = record["hold"]
     assert set(hold) >= {"held", "time_held", "max_slip", "drop", "window", "released_at"}
@@ -81,6 +85,17 @@ def test_replay_of_a_graspdb_trial_uses_the_object_of_its_file_name(capsys, tmp_
     assert record["scene"]["placement"]["grasp"]["source"] == "phase"
     assert _numbers_or_none(record["curves"]["slip_mm"])
     assert record["curves"]["release_s"] == hold["released_at"]
+
+
+@pytest.mark.slow
+def test_replay_says_along_which_grip_direction_a_turned_hand_is_judged(capsys, graspdb_dir):
+    assert main(["replay", str(graspdb_dir / "04_ex01-rad-045-grasp-su03.txt")]) == 0
+    out = capsys.readouterr().out
+    assert "hand turned so that gravity pulls along the grip's -y" in out
+    assert (
+        "at release  0 of 6 gravity directions held (none); "
+        "the hold itself is judged with gravity along the grip's -y (hand turned)\n" in out
+    )
 
 
 def test_replay_of_a_graspdb_trial_takes_the_given_object(capsys, graspdb_dir):

@@ -214,10 +214,15 @@ def _print_summary(result) -> None:
     if result.release_stability is not None:
         directions = result.release_stability.directions
         held = [d.direction for d in directions if d.success]
+        down = (result.scene.get("placement") or {}).get("gravity_along", "-z")
         _line(
             "at release",
             f"{len(held)} of {len(directions)} gravity directions held ({', '.join(held) or 'none'}); "
-            "the hold itself is judged palm down",
+            + (
+                "the hold itself is judged palm down"
+                if down == "-z"
+                else f"the hold itself is judged with gravity along the grip's {down} (hand turned)"
+            ),
         )
     stability = result.stability
     if stability is not None:

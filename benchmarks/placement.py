@@ -1,0 +1,108 @@
+"""Benchmark: the glove placement search against the replay, per trial, on the shared GraspDB14 recordings.
+
+Run: python benchmarks/placement.py [--repeats N] [--data ../shared/data/graspdb14]
+
+For each of the three shared GraspDB14 trials on both hands (the parametric default hand and the GraspDB14
+``default.xmlskel``), in one process (median of ``--repeats``):
+
+* placement: :func:`handsim.sim.placement.place_object` as :func:`handsim.sim.scenarios.glove_scene` calls
+  it (candidates, fit frames, grip tests, the robustness perturbations' fit frames), timed by wrapping it;
+* load: the whole :func:`handsim.trials.load_trial` (read, build, compile, placement);
+* replay: one :func:`handsim.sim.replay.replay` without the robustness ensemble (the replay a user waits
+  for once the scene is built), and with it (the winner, its alternatives and perturbations, and the grip
+  test at the release; ``handsim replay``'s default).
+
+Prints a table and, last, ``placement_vs_replay=<ratio>`` (total placement time over total replay time
+without the ensemble) for tracking over time. Skips with a message when the data is absent.
+"""
+
+from __future__ import annotations
+
+import argparse
+import statistics
+import sys
+import time
+from pathlib import Path
+
+import handsim.sim.scenarios as scenarios
+from handsim.sim.replay import ReplayConfig, replay
+from handsim.trials import load_trial
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "scripts"))
+from recordings_table import DATA, TRIALS  # the shared recordings, listed once
+
+
+def _timed_placement(store: list[float]):
+    original = scenarios.place_object
+
+    def timed(*args, **kwargs):
+        start = time.perf_counter()
+        try:
+            return original(*args, **kwargs)
+        finally:
+            store.append(time.perf_counter() - start)
+
+    return original, timed
+
+
+def measure(path: Path, skeleton: Path | None, repeats: int) -> dict:
+    """Median seconds of the placement, the load, and the replay without and with the ensemble."""
+    placements: list[float] = []
+    loads, singles, ensembles = [], [], []
+    original, timed = _timed_placement(placements)
+    scenarios.place_object = timed
+    try:
+        for _ in range(repeats):
+            start = time.perf_counter()
+            loaded = load_trial(path, skeleton=None if skeleton is None else str(skeleton))
+            loads.append(time.perf_counter() - start)
+            start = time.perf_counter()
+            replay(loaded.scene, loaded.trajectory, ReplayConfig(ensemble=False))
+            singles.append(time.perf_counter() - start)
+            start = time.perf_counter()
+            result = replay(loaded.scene, loaded.trajectory)
+            ensembles.append(time.perf_counter() - start)
+    finally:
+        scenarios.place_object = original
+    placement = loaded.scene.setup.placement
+    return {
+        "placement": statistics.median(placements),
+        "load": statistics.median(loads),
+        "replay": statistics.median(singles),
+        "ensemble": statistics.median(ensembles),
+        "candidates": placement.get("candidates"),
+        "grip_tests": placement.get("grip_tests"),
+        "held": result.summary.get("held"),
+    }
+
+
+def main() -> int:
+    """Time every trial and print the table and the ratio."""
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--repeats", type=int, default=3)
+    parser.add_argument("--data", type=Path, default=DATA)
+    args = parser.parse_args()
+    if not all((args.data / name).is_file() for name in TRIALS):
+        print(f"skipped: the GraspDB14 recordings are not in {args.data}")
+        return 0
+    print(f"{'trial':<34} {'hand':<8} {'placement':>10} {'load':>7} {'replay':>7} {'+ensemble':>10} "
+          f"{'poses':>7} {'grip tests':>10}")  # fmt: skip
+    total_placement = total_replay = 0.0
+    for name in TRIALS:
+        for hand, skeleton in (("default", None), ("xmlskel", args.data / "default.xmlskel")):
+            m = measure(args.data / name, skeleton, args.repeats)
+            total_placement += m["placement"]
+            total_replay += m["replay"]
+            print(
+                f"{name:<34} {hand:<8} {m['placement']:>9.2f}s {m['load']:>6.2f}s {m['replay']:>6.2f}s "
+                f"{m['ensemble']:>9.2f}s {m['candidates']:>7} {m['grip_tests']:>10}"
+            )
+    trials = 2 * len(TRIALS)
+    per_trial = total_placement / trials, total_replay / trials
+    print(f"placement per trial {per_trial[0]:.2f} s, replay per trial {per_trial[1]:.2f} s")
+    print(f"placement_vs_replay={total_placement / total_replay:.2f}")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,50 @@
+"""The glove placement search never throws a feasible pose away: no "no pose" while one was seen.
+
+The cases the issue named, where the old search raised although thousands of coarse poses were feasible (a
+thin long pen and a bottle crate in the default hand on ``r_01_11…`` without its annotation beside it), and
+the fallback when no feasible pose touches the hand at all.
+"""
+
+from __future__ import annotations
+
+import shutil
+
+import pytest
+
+from handsim.sim.metrics import MetricSpec
+from handsim.sim.placement import PlacementSpec
+from handsim.trials import load_trial
+
+TRIAL = "r_01_11_ex03-rad-004-grasp-su04.txt"
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize(("obj", "skeleton"), [("pen", False), ("pen", True), ("bottle_crate", False)])
+def test_a_recording_without_its_annotation_places_a_hard_object_without_raising(
+    graspdb_dir, tmp_path, obj, skeleton
+):
+    shutil.copy(graspdb_dir / TRIAL, tmp_path / TRIAL)  # no _annot- file beside it: the peak-flexion window
+    loaded = load_trial(
+        tmp_path / TRIAL, obj=obj, skeleton=str(graspdb_dir / "default.xmlskel") if skeleton else None
+    )
+    placement = loaded.scene.setup.placement
+    assert placement["grasp"]["source"] == "peak flexion"
+    assert placement["feasible"] is True and placement["feasible_poses"] > 0
+    assert placement["penetration_m"] <= MetricSpec().placement.penetration
+    assert placement["links"] and placement["grip_tests"] >= 1
+    assert any(note.startswith("object placed where it fits at frame") for note in loaded.scene.setup.notes)
+
+
+def test_when_no_feasible_pose_touches_the_hand_the_one_nearest_the_fingertips_is_kept():
+    from handsim.assets import ASSETS_DIR
+
+    spec = MetricSpec(placement=PlacementSpec(penetration=1e-6, touch=1e-6))  # touching = penetrating
+    loaded = load_trial(ASSETS_DIR / "demo" / "tennis_ball.grasp.json", metrics=spec)
+    placement = loaded.scene.setup.placement
+    assert placement["feasible"] is True and placement["feasible_poses"] > 0
+    assert placement["penetration_m"] == 0.0 and placement["links"] == []
+    assert placement["grip_tests"] == 1
+    assert (
+        "no object pose within 0.001 mm of penetration touches the hand on the closing ramp: placed nearest "
+        f"the fingertips' centre without penetration ({placement['candidates']} poses tried)"
+    ) in loaded.scene.setup.notes
