@@ -109,3 +109,20 @@ def test_the_minimum_window_is_a_metric_spec_parameter():
     assert hold_outcome(_frames(101), np.zeros(101), 0.8, (0.2, 1.0), spec).held is True
     with pytest.raises(ValueError, match="min_hold_window must be a positive finite number, got 0"):
         MetricSpec(min_hold_window=0)
+
+
+def test_run_line_leaves_not_judged_holds_out_of_the_hold_rate():
+    from handsim.runner.execute import records_line
+
+    def record(trial_id: str, held: bool | None) -> dict:
+        return {"id": trial_id, "status": "ok", "summary": {"held": held, "valid": True}}
+
+    records = [record("a", True), record("b", False), record("c", None), record("d", None)]
+    assert records_line(records) == (
+        "4 trials: 4 ok, 0 diverged, 0 failed; held 1 of 2 judged glove trials (50 %); 2 glove trials not "
+        "judged (left out of the hold rate)"
+    )
+    only_short = [record("c", None)]
+    assert records_line(only_short) == (
+        "1 trials: 1 ok, 0 diverged, 0 failed; 1 glove trials not judged (left out of the hold rate)"
+    )

@@ -90,11 +90,14 @@ class RunSummary:
         failed: … ``error``.
         flagged: Of the ``ok`` and ``diverged`` ones, those flagged not valid (``summary["valid"]`` false).
         held: Valid glove trials whose object was held through the hold window.
-        hold_trials: Valid glove trials with a hold outcome.
+        hold_trials: Valid glove trials whose hold was judged (held or not held): the hold rate's
+            denominator.
         notes: What was repaired or skipped (a truncated records line …).
         wall_s: Wall-clock time of this call, s.
         failures: The failed trials' errors (:func:`failure_counts`): (error type, trials, first message),
             most frequent first.
+        not_judged: Valid glove trials whose hold was not judged (``held`` None: too short a window after
+            the release, no feasible placement …); in no rate.
     """
 
     out: str
@@ -110,6 +113,7 @@ class RunSummary:
     notes: tuple[str, ...]
     wall_s: float
     failures: tuple[tuple[str, int, str], ...] = ()
+    not_judged: int = 0
 
     @property
     def all_failed(self) -> bool:
@@ -118,7 +122,8 @@ class RunSummary:
 
     def line(self) -> str:
         """One line for people: trial counts by status and the hold rate."""
-        counts = {k: getattr(self, k) for k in ("ok", "diverged", "failed", "flagged", "held", "hold_trials")}
+        keys = ("ok", "diverged", "failed", "flagged", "held", "hold_trials", "not_judged")
+        counts = {k: getattr(self, k) for k in keys}
         return _line(self.trials, counts)
 
 
@@ -150,7 +155,9 @@ def _line(trials: int, counts: dict) -> str:
         text += f" ({counts['flagged']} flagged not valid, left out of the rates)"
     if counts["hold_trials"]:
         rate = 100.0 * counts["held"] / counts["hold_trials"]
-        text += f"; held {counts['held']} of {counts['hold_trials']} glove trials ({rate:.0f} %)"
+        text += f"; held {counts['held']} of {counts['hold_trials']} judged glove trials ({rate:.0f} %)"
+    if counts["not_judged"]:
+        text += f"; {counts['not_judged']} glove trials not judged (left out of the hold rate)"
     return text
 
 
@@ -416,7 +423,8 @@ def _gl_env() -> dict[str, str]:
 def _counts(records: Sequence[dict], ids: set[str]) -> dict:
     mine = [r for r in records if r["id"] in ids]
     valid = [r for r in mine if record_valid(r)]
-    held = [r["summary"]["held"] for r in valid if r.get("summary") and "held" in r["summary"]]
+    outcomes = [r["summary"]["held"] for r in valid if r.get("summary") and "held" in r["summary"]]
+    held = [h for h in outcomes if h is not None]
     return {
         "ok": sum(r["status"] == "ok" for r in mine),
         "diverged": sum(r["status"] == "diverged" for r in mine),
@@ -424,6 +432,7 @@ def _counts(records: Sequence[dict], ids: set[str]) -> dict:
         "flagged": len(mine) - len(valid),
         "held": sum(bool(h) for h in held),
         "hold_trials": len(held),
+        "not_judged": len(outcomes) - len(held),
     }
 
 
