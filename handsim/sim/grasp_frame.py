@@ -101,17 +101,8 @@ def grasp_frame(trajectory: Trajectory) -> GraspFrame:
     for phase in trajectory.phases:
         if phase.name.strip(".") == GRASP_PHASE and phase.stop > phase.start:
             lo, hi = phase.start, phase.stop - 1
-            closed = _closed(flex, lo, hi)
-            opened = _open(flex, times, closed)
-            return GraspFrame(
-                frame=lo,
-                closed=closed,
-                window=(lo, hi),
-                source="phase",
-                note=f"grasp frame {lo} = start of the annotated 'grasp' phase (frames {lo}–{hi}, 0-based); "
-                f"closing from frame {opened}, closed at frame {closed}",
-                open=opened,
-            )
+            why = f"grasp frame {lo} = start of the annotated 'grasp' phase (frames {lo}–{hi}, 0-based)"
+            return _grasp_frame(flex, times, lo, hi, "phase", why)
     peak = int(np.argmax(flex))
     level = flex.min() + PEAK_WINDOW * (flex[peak] - flex.min())
     lo = peak
@@ -120,17 +111,19 @@ def grasp_frame(trajectory: Trajectory) -> GraspFrame:
     hi = peak
     while hi + 1 < flex.shape[0] and flex[hi + 1] >= level:
         hi += 1
+    why = (
+        f"no 'grasp' phase: grasp frame {lo} = first of frames {lo}–{hi} above {PEAK_WINDOW:.0%} of the "
+        f"flexion range (peak at {peak})"
+    )
+    return _grasp_frame(flex, times, lo, hi, "peak flexion", why)
+
+
+def _grasp_frame(flex: np.ndarray, times: np.ndarray, lo: int, hi: int, source: str, why: str) -> GraspFrame:
+    """The grasp frame of the window ``lo..hi`` (inclusive) with its closed and open frames."""
     closed = _closed(flex, lo, hi)
     opened = _open(flex, times, closed)
-    return GraspFrame(
-        frame=lo,
-        closed=closed,
-        window=(lo, hi),
-        source="peak flexion",
-        note=f"no 'grasp' phase: grasp frame {lo} = first of frames {lo}–{hi} above {PEAK_WINDOW:.0%} of the "
-        f"flexion range (peak at {peak}); closing from frame {opened}, closed at frame {closed}",
-        open=opened,
-    )
+    note = f"{why}; closing from frame {opened}, closed at frame {closed}"
+    return GraspFrame(frame=lo, closed=closed, window=(lo, hi), source=source, note=note, open=opened)
 
 
 def _closed(flex: np.ndarray, lo: int, hi: int) -> int:
