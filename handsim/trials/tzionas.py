@@ -71,15 +71,25 @@ def _find(path: Path, options: TrialOptions) -> Trial:
     _check_skeleton(motion, [own], options)
     objects = _objects(models_dir, info, models)
     listed = [o.track for o in objects]
+    return _trial(motion, own, objects, options, (f"hand {own.name} and objects {listed} from {info}",))
+
+
+def _trial(
+    recording: Path,
+    skeleton: Path | None,
+    objects: tuple[TrialObject, ...],
+    options: TrialOptions,
+    notes: tuple[str, ...],
+) -> Trial:
     return Trial(
         kind="tzionas",
-        trajectory_path=str(motion),
-        skeleton_path=str(own),
+        trajectory_path=str(recording),
+        skeleton_path=None if skeleton is None else str(skeleton),
         objects=objects,
         density=options.density,
         mass=options.mass,
         collision=options.collision or "capsules",
-        notes=(f"hand {own.name} and objects {listed} from {info}",),
+        notes=notes,
     )
 
 
@@ -134,16 +144,7 @@ def _two_hand_trial(
             f"{path.name} given: {info.name} lists two hands, so the trial is the whole sequence "
             f"{models_dir} with both"
         )
-    return Trial(
-        kind="tzionas",
-        trajectory_path=str(models_dir),
-        skeleton_path=None,
-        objects=objects,
-        density=options.density,
-        mass=options.mass,
-        collision=options.collision or "capsules",
-        notes=tuple(notes),
-    )
+    return _trial(models_dir, None, objects, options, tuple(notes))
 
 
 def _hand_skeletons(models_dir: Path, sides: dict[str, str]) -> dict[str, Path]:
