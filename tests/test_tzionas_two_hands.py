@@ -106,6 +106,26 @@ def test_each_hand_root_starts_at_its_own_recorded_pose_in_the_scene(loaded):
     np.testing.assert_allclose(left - right, expected, atol=1e-6)  # the files' 6 digits
 
 
+def test_the_two_hands_collide_with_each_other(loaded):
+    scene = loaded.scene
+    model = scene.model
+    stepper = Stepper(scene, 1)
+    ScheduleDriver(stepper, control_schedule(scene, loaded.trajectory, 100.0), ScenarioSwitches()).reset()
+    data = stepper.data
+    right, left = scene.layout.hands
+    data.qpos[left.root_free_qpos : left.root_free_qpos + 7] = data.qpos[
+        right.root_free_qpos : right.root_free_qpos + 7
+    ]  # the left hand put onto the right one
+    mujoco.mj_forward(model, data)
+
+    def hand(geom: int) -> str:
+        name = model.body(model.geom_bodyid[geom]).name
+        return name.split("/")[1] if name.startswith("hand/") else name
+
+    between = [c for c in data.contact[: data.ncon] if {hand(c.geom1), hand(c.geom2)} == {"right", "left"}]
+    assert len(between) > 10
+
+
 def test_the_two_hand_replay_tracks_both_hands_with_zero_warnings(result, alone):
     s = result.summary
     assert result.warnings == () and result.diverged is None and s["valid"] is True
