@@ -133,11 +133,15 @@ def _print_summary(result) -> None:
         _print_self_penetration(s)
     for hand in (h for h in ("right", "left") if f"{h}/contact_frames" in s):
         h = {key: s[f"{hand}/{key}"] for key in HAND_KEYS}
+        touch = (
+            ""
+            if h["contact_frames"] is None  # no object: the penetration line says why
+            else f"contact {h['contact_frames']} frames (up to {h['max_contact_links']} links, "
+            f"{h['max_total_normal_force_n']:.2f} N); penetration max {h['max_penetration_mm']:.2f} mm; "
+        )
         _line(
             hand,
-            f"contact {h['contact_frames']} frames (up to {h['max_contact_links']} links, "
-            f"{h['max_total_normal_force_n']:.2f} N); penetration max {h['max_penetration_mm']:.2f} mm; "
-            f"tracking mean {_num(h['mean_tracking_error_deg'])}°; "
+            f"{touch}tracking mean {_num(h['mean_tracking_error_deg'])}°; "
             f"tips mean {_num(h['mean_tip_error_mm'], '.1f')} mm",
         )
     if "mean_drift_mm" in s:

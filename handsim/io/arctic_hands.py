@@ -43,6 +43,7 @@ from handsim.io.mano import (
 from handsim.object_model import ObjectModel
 from handsim.skeleton import Skeleton
 from handsim.trajectory import ObjectTrack, Trajectory
+from handsim.trajectory_ops import join_hands
 
 BETAS_TOLERANCE_M = 1e-9
 """The wrist of the hand a sequence drives must sit at the sequence's J0 (its betas) within this, metres."""
@@ -344,8 +345,9 @@ def arctic_trajectory(
 ) -> Trajectory:
     """Both hands of an ARCTIC sequence as one trajectory for a two-hand scene.
 
-    Each hand's :func:`arctic_hand_trajectory`, its DoF columns renamed ``<side>/<dof>`` and its root pose
-    under ``hand_roots[side]``; the object track under ``sequence.object_name``.
+    Each hand's :func:`arctic_hand_trajectory`, joined by :func:`handsim.trajectory_ops.join_hands`: its DoF
+    columns renamed ``<side>/<dof>`` and its root pose under ``hand_roots[side]``; the object track under
+    ``sequence.object_name``.
 
     Args:
         sequence: The sequence.
@@ -358,16 +360,4 @@ def arctic_trajectory(
     Raises:
         TrajectoryError: See :func:`arctic_hand_trajectory`.
     """
-    parts = {side: arctic_hand_trajectory(sequence, side, *hands[side]) for side in hands}
-    first = next(iter(parts.values()))
-    return Trajectory(
-        times=first.times,
-        dof_names=tuple(f"{side}/{d}" for side, t in parts.items() for d in t.dof_names),
-        targets=np.hstack([t.targets for t in parts.values()]),
-        valid=np.hstack([t.valid for t in parts.values()]),
-        hand_roots={side: t.root_pose for side, t in parts.items()},
-        objects=dict(first.objects),
-        source=first.source,
-        sha256=first.sha256,
-        notes=tuple(f"{side} hand: {note}" for side, t in parts.items() for note in t.notes),
-    )
+    return join_hands({side: arctic_hand_trajectory(sequence, side, *hands[side]) for side in hands})

@@ -135,7 +135,7 @@ def outcome_counts(records: Sequence[dict], key: Callable[[dict], str | None]) -
 
 
 HANDS = ("right", "left")
-"""The hands of a two-hand (ARCTIC) record, whose summary has ``<hand>/<key>`` numbers."""
+"""The hands of a two-hand (ARCTIC, Tzionas) record, whose summary has ``<hand>/<key>`` numbers."""
 HAND_ROW_KEYS = (
     *(f"{h}/{k}" for h in HANDS for k in ("contact_frames", "max_penetration_mm", "mean_tracking_error_deg")),
     "max_rotation_drift_deg",

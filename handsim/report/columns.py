@@ -125,7 +125,7 @@ HAND_COLUMNS: tuple[Column, ...] = (
         help="largest difference between the simulated and the recorded articulation",
     ),
 )
-"""The two-hand (ARCTIC) trials' table: each hand's numbers and the object's drift."""
+"""The two-hand (ARCTIC, Tzionas) trials' table: each hand's numbers and the object's drift."""
 
 TRIAL_COLUMNS: tuple[Column, ...] = (
     Column("kind", lambda r: fmt.text(r["kind"]), numeric=False),

@@ -153,7 +153,7 @@ def _index(summary: dict) -> str:
 
 
 def _two_hands(summary: dict) -> str:
-    """The table of the two-hand (ARCTIC) trials: each hand's numbers and the object's drift ("" if none)."""
+    """The table of the two-hand trials: each hand's numbers and the object's drift ("" if none)."""
     rows = [t for t in summary["trials"] if "right/contact_frames" in t]
     if not rows:
         return ""

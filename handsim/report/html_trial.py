@@ -66,7 +66,7 @@ SUMMARY_FIELDS += tuple(
     for key, label, decimals in SUMMARY_FIELDS
     if key in _PER_HAND
 )
-"""… and a two-hand (ARCTIC) trial's per-hand numbers, ``<hand>/<key>``, labelled ``<hand>: <label>``."""
+"""… and a two-hand trial's per-hand numbers, ``<hand>/<key>``, labelled ``<hand>: <label>``."""
 _QUALITY_FIELDS = (
     ("frames", "frames", None),
     ("duration_s", "duration s", 2),

@@ -21,11 +21,12 @@ from collections.abc import Mapping
 import mujoco
 import numpy as np
 
-from handsim.builders.scene import attach_hand, build_scene
+from handsim.builders.scene import build_scene
 from handsim.errors import TrajectoryError
 from handsim.poses import compose
 from handsim.sim.compiled import SceneSetup, SimScene, compile_scene
 from handsim.sim.model import compile_spec
+from handsim.sim.scenarios import attach_welded_hands
 from handsim.trajectory import Trajectory
 
 
@@ -91,12 +92,6 @@ def arctic_scene(
     Raises:
         TrajectoryError: A hand without a root pose, or the object's track missing.
     """
-    lacking = [name for name in hands if name not in trajectory.hand_roots]
-    if lacking:
-        raise TrajectoryError(
-            f"{trajectory.source or 'trajectory'}: no root pose for the hands {lacking}; it has "
-            f"{list(trajectory.hand_roots)}"
-        )
     if track not in trajectory.objects:
         raise TrajectoryError(
             f"{trajectory.source or 'trajectory'}: no object track {track!r}; "
@@ -108,8 +103,7 @@ def arctic_scene(
     lowest, angle = lowest_point(obj, start, first)
     world = np.array([-start[0], -start[1], -lowest, 1.0, 0.0, 0.0, 0.0])
     spec = build_scene(None, [obj], object_poses=[compose(world, start)], table=table)
-    for name, hand in hands.items():
-        attach_hand(spec, hand, name=name, root="weld")
+    attach_welded_hands(spec, hands, trajectory)
     notes = [
         "gravity = world −z (ARCTIC's world is z-up; no axis snapped); the recording is shifted by "
         f"{(world[:3] * 1000).round(1).tolist()} mm: the object's origin at frame 0 above the origin, the "

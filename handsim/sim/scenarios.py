@@ -1,13 +1,15 @@
 """Scenes for the two replay scenarios, with the choices they make written into :class:`SceneSetup`.
 
 * **Recorded object** (:func:`recorded_scene`; Tzionas, ARCTIC): the hand's root follows its recorded pose
-  through a mocap weld and each object starts at its recorded pose, free. The recording's frame has no
-  "up": gravity is taken as the object's face direction closest to ``gravity_hint`` at the first frame
-  (where the object rests on its support), and the support plane as the plane under the object's lowest
-  point along it. The scene's world puts that plane at z = 0 (the table top) with z up, the object's first
-  position above the origin. A recording without objects (a hand-only sequence, :func:`hand_only_frame`)
-  has nothing resting on a support: gravity is the hint itself, there is no table, and the hand's first
-  root position is the origin.
+  through a mocap weld and each object starts at its recorded pose, free. A recording of two hands (a
+  Tzionas sequence listing ``Model_Hand_R`` and ``Model_Hand_L``) attaches each under ``hand/<name>/``,
+  each root welded to its own mocap body following ``hand_roots[name]`` (:func:`attach_welded_hands`).
+  The recording's frame has no "up": gravity is taken as the object's face direction closest to
+  ``gravity_hint`` at the first frame (where the object rests on its support), and the support plane as
+  the plane under the object's lowest point along it. The scene's world puts that plane at z = 0 (the
+  table top) with z up, the object's first position above the origin. A recording without objects (a
+  hand-only sequence, :func:`hand_only_frame`) has nothing resting on a support: gravity is the hint
+  itself, there is no table, and the (first) hand's first root position is the origin.
 * **Glove only** (:func:`glove_scene`; GraspDB14): the hand's root is fixed, palm down, and the object is
   placed where it fits in the closing hand and the recorded closing grips it best
   (:mod:`handsim.sim.placement`), held there by a support weld that the replay switches off
@@ -23,8 +25,8 @@ import numpy as np
 import numpy.typing as npt
 
 from handsim.builders.objects import object_points
-from handsim.builders.scene import build_scene
-from handsim.errors import TrajectoryError
+from handsim.builders.scene import attach_hand, build_scene
+from handsim.errors import ModelError, TrajectoryError
 from handsim.poses import compose, quat_multiply, quat_rotate, transform_points
 from handsim.sim.compiled import SceneSetup, SimScene, compile_scene
 from handsim.sim.control import DEFAULT_CONTROL_RATE
@@ -115,8 +117,32 @@ def hand_only_frame(
     return np.concatenate([-origin, turn]), note
 
 
+def attach_welded_hands(
+    spec: mujoco.MjSpec, hands: Mapping[str, mujoco.MjSpec], trajectory: Trajectory
+) -> None:
+    """Attach several hands to a scene, each root welded to its mocap body following ``hand_roots[name]``.
+
+    Args:
+        spec: The scene (changed in place).
+        hands: Hand specs by name (``"right"``, ``"left"``), their root bodies without DoFs; attached under
+            ``hand/<name>/`` (DoFs ``<name>/<dof>``) in this order.
+        trajectory: The recording; it must hold a root pose for each hand in ``hand_roots``.
+
+    Raises:
+        TrajectoryError: A hand without a root pose.
+    """
+    lacking = [name for name in hands if name not in trajectory.hand_roots]
+    if lacking:
+        raise TrajectoryError(
+            f"{trajectory.source or 'trajectory'}: no root pose for the hands {lacking}; it has "
+            f"{list(trajectory.hand_roots)}"
+        )
+    for name, hand in hands.items():
+        attach_hand(spec, hand, name=name, root="weld")
+
+
 def recorded_scene(
-    hand: mujoco.MjSpec,
+    hand: mujoco.MjSpec | Mapping[str, mujoco.MjSpec],
     trajectory: Trajectory,
     objects: Mapping[str, mujoco.MjSpec],
     *,
@@ -130,8 +156,10 @@ def recorded_scene(
 
     Args:
         hand: The hand (root without DoFs of its own; its root body's world pose is the trajectory's
-            ``root_pose``).
-        trajectory: With ``root_pose`` and a track in ``objects`` for each key of ``objects``.
+            ``root_pose``), or several hands by name (:func:`attach_welded_hands`: each root's world pose is
+            the trajectory's ``hand_roots[name]``; a hand-only recording's world comes from the first).
+        trajectory: With ``root_pose`` (``hand_roots`` for several hands) and a track in ``objects`` for
+            each key of ``objects``.
         objects: Object specs (:func:`handsim.builders.build_object`) by track name; the first defines the
             support plane. Empty for a hand-only sequence.
         gravity_hint: Roughly "down" in the recording frame (default: image down of a camera frame).
@@ -141,13 +169,23 @@ def recorded_scene(
         The compiled scene (scenario ``recorded``).
 
     Raises:
-        TrajectoryError: No root pose, or an object without a track.
+        TrajectoryError: No root pose (for a hand), or an object without a track.
+        ModelError: ``hand`` is an empty mapping.
     """
-    if trajectory.root_pose is None:
+    several = not isinstance(hand, mujoco.MjSpec)
+    if several and not hand:
+        raise ModelError("recorded_scene needs a hand; got an empty mapping of hands")
+    if not several and trajectory.root_pose is None:
         raise TrajectoryError(f"{trajectory.source or 'trajectory'}: no root pose to follow")
     if not objects:
-        world, note = hand_only_frame(np.asarray(trajectory.root_pose[0], dtype=float), gravity_hint)
-        spec = build_scene(hand, [], hand_pos=(0.0, 0.0, 0.0), table=False, hand_root="weld")
+        if several:
+            spec = build_scene(None, [], table=False)
+            attach_welded_hands(spec, hand, trajectory)
+            root = trajectory.hand_roots[next(iter(hand))]
+        else:
+            spec = build_scene(hand, [], hand_pos=(0.0, 0.0, 0.0), table=False, hand_root="weld")
+            root = trajectory.root_pose
+        world, note = hand_only_frame(np.asarray(root[0], dtype=float), gravity_hint)
         setup = SceneSetup(scenario="recorded", world_from_recording=tuple(world.tolist()), notes=(note,))
         return compile_scene(spec, setup)
     missing = [k for k in objects if k not in trajectory.objects]
@@ -161,14 +199,14 @@ def recorded_scene(
     world, _, note = support_frame(object_points(objects[keys[0]]), first, gravity_hint)
     end_note = _end_rest_note(object_points(objects[keys[0]]), trajectory.objects[keys[0]].pose[-1], world)
     poses = [compose(world, np.asarray(trajectory.objects[k].pose[0], dtype=float)) for k in keys]
-    spec = build_scene(
-        hand,
-        [objects[k] for k in keys],
-        hand_pos=(0.0, 0.0, 0.0),
-        object_poses=poses,
-        table=table,
-        hand_root="weld",
-    )
+    specs = [objects[k] for k in keys]
+    if several:
+        spec = build_scene(None, specs, object_poses=poses, table=table)
+        attach_welded_hands(spec, hand, trajectory)
+    else:
+        spec = build_scene(
+            hand, specs, hand_pos=(0.0, 0.0, 0.0), object_poses=poses, table=table, hand_root="weld"
+        )
     setup = SceneSetup(
         scenario="recorded",
         world_from_recording=tuple(world.tolist()),

@@ -198,8 +198,8 @@ def summarize(frames: FrameMetrics, spec: MetricSpec) -> dict:
     """JSON-ready per-trial numbers (SI units in the key names: ``_mm``, ``_deg``, ``_n``, ``_s``).
 
     Without objects (a hand-only sequence) the hand–object numbers (:data:`CONTACT_KEYS`: penetration,
-    contacts, forces) are None, never a 0 that reads as a clean result; :func:`hand_only_summary` adds why
-    and the hand's self-penetration.
+    contacts, forces; each hand's too) are None, never a 0 that reads as a clean result;
+    :func:`hand_only_summary` adds why and the hand's self-penetration.
 
     A scene with several hands adds each hand's :data:`HAND_KEYS` as ``<hand>/<key>`` (``right/…``,
     ``left/…``); the whole-scene numbers cover every hand.
@@ -227,6 +227,8 @@ def summarize(frames: FrameMetrics, spec: MetricSpec) -> dict:
             summary.update({f"{name}/{key}": own[key] for key in HAND_KEYS})
     if frames.object_in_hand.shape[1] == 0:
         summary.update(dict.fromkeys(CONTACT_KEYS))
+        for name in frames.hand_names if len(frames.hand_names) > 1 else ():
+            summary.update(dict.fromkeys(f"{name}/{key}" for key in HAND_KEYS if key in CONTACT_KEYS))
     if np.isfinite(frames.object_position_error).any():
         pos = frames.object_position_error
         summary.update(

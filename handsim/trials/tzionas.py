@@ -3,6 +3,12 @@
 The hand is the motion's own ``.SKEL`` (+ ``.LIMITS``, ``.OFF``, ``.SKIN`` beside it); the objects are the
 ``Model_Object_*`` that ``Configs/NN/MODELS_INFO.txt`` lists, each following its recorded track (scenario
 ``recorded``).
+
+A sequence whose ``MODELS_INFO.txt`` lists two hands (``Model_Hand_R`` and ``Model_Hand_L``) is one trial
+whose recording is its ``Models/NN`` folder: both hands in one scene (``hand/right/``, ``hand/left/``), each
+root following its own recorded pose and its DoFs driven by its own motion
+(:func:`~handsim.io.tzionas_motion.read_tzionas_hands`), the objects as for one hand. Either hand's
+``.MOTION`` given as the recording finds the whole sequence (a note says so).
 """
 
 from __future__ import annotations
@@ -41,7 +47,7 @@ def _matches(path: Path) -> bool:
 
 
 def _find(path: Path, options: TrialOptions) -> Trial:
-    from handsim.io.tzionas_motion import config_dir_of, object_track_name, read_models_info
+    from handsim.io.tzionas_motion import config_dir_of, read_models_info
 
     models_dir = path if path.is_dir() else path.parent
     info = config_dir_of(models_dir) / "MODELS_INFO.txt"
@@ -50,56 +56,153 @@ def _find(path: Path, options: TrialOptions) -> Trial:
             f"{path}: no {info} beside the sequence's Models folder; it lists the sequence's hand and objects"
         )
     models = read_models_info(info)
+    hands = [name for name, _ in models if name.startswith("Model_Hand")]
+    if not path.is_dir() and not path.stem.startswith("Model_Hand"):
+        raise TrialError(f"{path}: not a hand motion; give the sequence's Model_Hand_*.MOTION")
+    if len(hands) > 1 and (path.is_dir() or path.stem in hands):
+        return _two_hand_trial(path, models_dir, info, models, options)
     if path.is_dir():
-        hands = [name for name, _ in models if name.startswith("Model_Hand")]
         if not hands:
             raise TrialError(f"{info}: lists no hand (Model_Hand_*); it lists {[n for n, _ in models]}")
         motion = models_dir / f"{hands[0]}.MOTION"
     else:
         motion = path
-        if not motion.stem.startswith("Model_Hand"):
-            raise TrialError(f"{motion}: not a hand motion; give the sequence's Model_Hand_*.MOTION")
     own = motion.with_suffix(".SKEL")
-    if options.skeleton is not None and Path(options.skeleton).resolve() != own.resolve():
-        raise TrialError(
-            f"{motion}: a Tzionas motion drives its own skeleton {own.name}, not {options.skeleton}; a "
-            "skeleton is given only for GraspDB14 recordings"
-        )
-    objects = tuple(
-        TrialObject(str(models_dir / f"{name}.SKEL"), object_track_name(name), f"{info.name}:{line}")
-        for name, line in models
-        if name.startswith("Model_Object")
-    )
+    _check_skeleton(motion, [own], options)
+    objects = _objects(models_dir, info, models)
     listed = [o.track for o in objects]
+    return _trial(motion, own, objects, options, (f"hand {own.name} and objects {listed} from {info}",))
+
+
+def _trial(
+    recording: Path,
+    skeleton: Path | None,
+    objects: tuple[TrialObject, ...],
+    options: TrialOptions,
+    notes: tuple[str, ...],
+) -> Trial:
     return Trial(
         kind="tzionas",
-        trajectory_path=str(motion),
-        skeleton_path=str(own),
+        trajectory_path=str(recording),
+        skeleton_path=None if skeleton is None else str(skeleton),
         objects=objects,
         density=options.density,
         mass=options.mass,
         collision=options.collision or "capsules",
-        notes=(f"hand {own.name} and objects {listed} from {info}",),
+        notes=notes,
     )
+
+
+def _check_skeleton(recording: Path, own: list[Path], options: TrialOptions) -> None:
+    """Refuse a skeleton option other than the sequence's own hand skeleton(s)."""
+    if options.skeleton is None or Path(options.skeleton).resolve() in {p.resolve() for p in own}:
+        return
+    names = " and ".join(p.name for p in own)
+    what = (
+        "a Tzionas motion drives its own skeleton"
+        if len(own) == 1
+        else "a Tzionas sequence drives its own skeletons"
+    )
+    raise TrialError(
+        f"{recording}: {what} {names}, not {options.skeleton}; a skeleton is given only for GraspDB14 "
+        "recordings"
+    )
+
+
+def _objects(models_dir: Path, info: Path, models: tuple[tuple[str, int], ...]) -> tuple[TrialObject, ...]:
+    from handsim.io.tzionas_motion import object_track_name
+
+    return tuple(
+        TrialObject(str(models_dir / f"{name}.SKEL"), object_track_name(name), f"{info.name}:{line}")
+        for name, line in models
+        if name.startswith("Model_Object")
+    )
+
+
+def _two_hand_trial(
+    path: Path, models_dir: Path, info: Path, models: tuple[tuple[str, int], ...], options: TrialOptions
+) -> Trial:
+    """The trial of a sequence listing two hands: its ``Models/NN`` folder is the recording."""
+    from handsim.io.tzionas_motion import two_hand_models
+
+    skeletons = _hand_skeletons(models_dir, two_hand_models(info, models))
+    lines = dict(models)
+    for side, skel in skeletons.items():
+        model = skel.stem
+        missing = [f"{model}.{ext}" for ext in ("SKEL", "MOTION") if not _siblings(skel, (ext,))]
+        if missing:
+            raise TrialError(
+                f"{models_dir}: {info.name}:{lines[model]} lists the {side} hand {model!r}, but "
+                f"{' and '.join(missing)} {'is' if len(missing) == 1 else 'are'} not in the folder"
+            )
+    _check_skeleton(path, list(skeletons.values()), options)
+    objects = _objects(models_dir, info, models)
+    hands = ", ".join(f"{side} {skel.name}" for side, skel in skeletons.items())
+    notes = [f"hands {hands} and objects {[o.track for o in objects]} from {info}"]
+    if not path.is_dir():
+        notes.append(
+            f"{path.name} given: {info.name} lists two hands, so the trial is the whole sequence "
+            f"{models_dir} with both"
+        )
+    return _trial(models_dir, None, objects, options, tuple(notes))
+
+
+def _hand_skeletons(models_dir: Path, sides: dict[str, str]) -> dict[str, Path]:
+    """Each hand's ``.SKEL`` by scene name, in the order of ``sides``."""
+    return {side: models_dir / f"{model}.SKEL" for side, model in sides.items()}
+
+
+def _is_two_hand(trial: Trial) -> bool:
+    """True if a ``tzionas`` trial is a two-hand sequence (its recording is the ``Models/NN`` folder)."""
+    return Path(trial.trajectory_path).is_dir()
+
+
+def _hands_of(trial: Trial) -> dict[str, tuple[Path, Path]]:
+    """The trial's hands: scene name ("" for the only one) → (its ``.MOTION``, its ``.SKEL``)."""
+    if not _is_two_hand(trial):
+        motion = Path(trial.trajectory_path)
+        return {"": (motion, Path(trial.skeleton_path or motion.with_suffix(".SKEL")))}
+    from handsim.io.tzionas_motion import config_dir_of, read_models_info, two_hand_models
+
+    folder = Path(trial.trajectory_path)
+    info = config_dir_of(folder) / "MODELS_INFO.txt"
+    skeletons = _hand_skeletons(folder, two_hand_models(info, read_models_info(info)))
+    return {
+        side: ((_siblings(skel, ("MOTION",)) or [skel.with_suffix(".MOTION")])[0], skel)
+        for side, skel in skeletons.items()
+    }
 
 
 def _load(trial: Trial, metrics: MetricSpec | None, progress: bool) -> LoadedTrial:
     from handsim.builders import build_hand
     from handsim.io import read_skeleton, read_trajectory
+    from handsim.io.tzionas_motion import read_tzionas_hands
     from handsim.sim.scenarios import recorded_scene
 
-    trajectory = read_trajectory(trial.trajectory_path)
-    skeleton = read_skeleton(trial.skeleton_path)
-    hand = build_hand(skeleton, collision=trial.collision)
+    two = _is_two_hand(trial)
+    trajectory = read_tzionas_hands(trial.trajectory_path) if two else read_trajectory(trial.trajectory_path)
+    skeletons = {side: read_skeleton(skel) for side, (_, skel) in _hands_of(trial).items()}
+    hands = {side: build_hand(skeleton, collision=trial.collision) for side, skeleton in skeletons.items()}
     specs, objects, notes = build_objects(trial, progress)
-    scene = recorded_scene(hand, trajectory, {o.track: s for o, s in zip(objects, specs, strict=True)})
+    tracks = {o.track: s for o, s in zip(objects, specs, strict=True)}
+    scene = recorded_scene(hands if two else hands[""], trajectory, tracks)
+    described = [f"{Path(sk.source).name} ({sk.ndof} DoFs" for sk in skeletons.values()]
+    if two:
+        hand = ", ".join(f"{side} {d})" for side, d in zip(skeletons, described, strict=True))
+        hand += f"; {trial.collision}"
+    else:
+        hand = f"{described[0]}, {trial.collision})"
     return LoadedTrial(
         trial=trial,
         scene=scene,
         trajectory=trajectory,
-        hand=f"{Path(skeleton.source).name} ({skeleton.ndof} DoFs, {trial.collision})",
+        hand=hand,
         objects=objects,
-        notes=(*trial.notes, *skeleton.notes, *notes),
+        notes=(
+            *trial.notes,
+            *(f"{side + ' hand: ' if side else ''}{n}" for side, sk in skeletons.items() for n in sk.notes),
+            *notes,
+        ),
     )
 
 
@@ -117,16 +220,17 @@ def _siblings(path: Path, exts: tuple[str, ...]) -> list[Path]:
 def _inputs(trial: Trial, base: Path) -> tuple[TrialInput, ...]:
     from handsim.io.tzionas_motion import config_dir_of
 
-    motion = Path(trial.trajectory_path)
+    hands = _hands_of(trial)
+    motion, _ = next(iter(hands.values()))
     configs = config_dir_of(motion.parent)
-    inputs = [trial_input("trajectory", motion, base)]
+    inputs = [trial_input("trajectory", m, base) for m, _ in hands.values()]
     if (configs / "INDEX_BOUNDS.txt").is_file():
         inputs.append(trial_input("trajectory", configs / "INDEX_BOUNDS.txt", base))
-    skeleton = Path(trial.skeleton_path or motion.with_suffix(".SKEL"))
-    inputs += [
-        trial_input("skeleton", p, base)
-        for p in _siblings(skeleton, ("SKEL", "LIMITS", "OFF", "SKIN", "VOI"))
-    ]
+    for _, skeleton in hands.values():
+        inputs += [
+            trial_input("skeleton", p, base)
+            for p in _siblings(skeleton, ("SKEL", "LIMITS", "OFF", "SKIN", "VOI"))
+        ]
     for obj in trial.objects:
         files = _siblings(Path(obj.what), ("SKEL", "LIMITS", "MOTION", "OFF", "SKIN"))
         inputs += [trial_input("object", p, base) for p in files]
@@ -148,6 +252,7 @@ def _sort_sequences(sorting: Sorting) -> tuple[dict[str, set[str]], dict[str, st
     failed: dict[str, str] = {}
     for folder, files in sorted(folders.items()):
         hands = [f for f in files if _HAND_MOTION.fullmatch(PurePosixPath(f).name)]
+        found: set[str] = set()
         for hand in hands:
             try:
                 trial = _find(sorting.base / hand, TrialOptions())
@@ -155,15 +260,22 @@ def _sort_sequences(sorting: Sorting) -> tuple[dict[str, set[str]], dict[str, st
                 sorting.unknown[hand] = f"a Tzionas hand motion, but not a trial: {exc}"
                 failed.setdefault(folder, hand)
                 continue
+            if trial.trajectory_path in found:
+                continue  # the other hand of a two-hand sequence, already its trial
+            found.add(trial.trajectory_path)
             tracks = [o.track for o in trial.objects]
             meta = group_fields(
                 object="+".join(tracks) if tracks else None,
                 sequence=PurePosixPath(folder).name,
                 objects=tracks,
             )
-            trial_id = folder if len(hands) == 1 and folder != "." else hand
+            whole = len(hands) == 1 or _is_two_hand(trial)
+            trial_id = folder if whole and folder != "." else hand
             sorting.add(TrialEntry(trial_id, trial, meta, _inputs(trial, sorting.base)))
-            models = {Path(trial.trajectory_path).stem, *(Path(o.what).stem for o in trial.objects)}
+            models = {
+                *(s.stem for _, s in _hands_of(trial).values()),
+                *(Path(o.what).stem for o in trial.objects),
+            }
             listed.setdefault(folder, set()).update(models)
     return listed, failed
 
