@@ -18,7 +18,6 @@ import trimesh
 
 from handsim.builders import decompose as dec
 from handsim.builders.decompose import (
-    FAULT_ENV,
     ConvexHull,
     Decomposition,
     DecompositionError,
@@ -45,6 +44,35 @@ def decomposed(annulus: Mesh, tmp_path_factory: pytest.TempPathFactory) -> tuple
     """The annulus decomposed once with a fresh cache (which now holds its entry)."""
     cache = tmp_path_factory.mktemp("cache")
     return decompose(annulus, PARAMS, cache_dir=cache), cache
+
+
+# Workers that fail on purpose, started by decompose() in place of _coacd_worker.py (same command line:
+# IN.npz OUT.npz). They load the real worker by path for its output format and its core-dump setting.
+_FAULTY_WORKER_HEAD = f"""
+import importlib.util, os, sys
+spec = importlib.util.spec_from_file_location("_coacd_worker", {str(dec._WORKER)!r})
+real = importlib.util.module_from_spec(spec)
+spec.loader.exec_module(real)
+out_path = sys.argv[2]
+"""
+FAULTY_WORKERS = {
+    "abort": 'real._no_core_dumps()\nprint("deliberate abort by the faulty worker", flush=True)\nos.abort()',
+    "exit 2": 'print("the faulty worker exits with status 2", file=sys.stderr)\nsys.exit(2)\n',
+    "empty": "real._save(out_path, real._pack([], 0.0))\n",
+    "garbage": 'open(out_path, "wb").write(b"this is not an npz file")\n',
+}
+
+
+@pytest.fixture
+def faulty_worker(tmp_path_factory: pytest.TempPathFactory, monkeypatch: pytest.MonkeyPatch):
+    """Make decompose() start a worker that fails in the named way (a key of FAULTY_WORKERS)."""
+
+    def use(fault: str) -> None:
+        script = tmp_path_factory.mktemp("worker") / "faulty_worker.py"
+        script.write_text(_FAULTY_WORKER_HEAD + FAULTY_WORKERS[fault])
+        monkeypatch.setattr(dec, "_WORKER", script)
+
+    return use
 
 
 def entry_path(cache: Path, key: str) -> Path:
@@ -304,53 +332,49 @@ def test_timeout_message_says_no_hull_limit(annulus: Mesh) -> None:
 
 @pytest.mark.skipif(sys.platform == "win32", reason="abort is a signal on POSIX only")
 def test_decompose_raises_error_naming_mesh_if_coacd_crashes(
-    annulus: Mesh, tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+    annulus: Mesh, tmp_path: Path, faulty_worker
 ) -> None:
-    monkeypatch.setenv(FAULT_ENV, "abort")
+    faulty_worker("abort")
     with pytest.raises(
         DecompositionError,
         match=r"(?s)^annulus: the CoACD worker was killed by signal 6 \(SIGABRT\); "
         r"last lines of its output:\n"
-        rf".*deliberate abort requested by {FAULT_ENV}.*$",
+        r".*deliberate abort by the faulty worker.*$",
     ) as info:
         decompose(annulus, PARAMS, cache_dir=tmp_path)
     assert isinstance(info.value, MeshError)
     assert files_under(tmp_path) == []
 
 
-def test_decompose_raises_error_if_worker_exits_with_error(
-    annulus: Mesh, monkeypatch: pytest.MonkeyPatch
-) -> None:
-    monkeypatch.setenv(FAULT_ENV, "no such fault")
+def test_decompose_raises_error_if_worker_exits_with_error(annulus: Mesh, faulty_worker) -> None:
+    faulty_worker("exit 2")
     with pytest.raises(
         DecompositionError,
         match=r"^annulus: the CoACD worker exited with status 2; last lines of its output:\n"
-        rf"unknown {FAULT_ENV}='no such fault'; expected abort, empty or garbage$",
+        r"the faulty worker exits with status 2$",
     ):
         decompose(annulus, PARAMS, use_cache=False)
 
 
 def test_decompose_raises_error_if_coacd_returns_no_hulls(
-    annulus: Mesh, monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
+    annulus: Mesh, faulty_worker, capsys: pytest.CaptureFixture[str]
 ) -> None:
-    monkeypatch.setenv(FAULT_ENV, "empty")
+    faulty_worker("empty")
     with pytest.raises(DecompositionError, match=r"^annulus: CoACD returned no hulls$"):
         decompose(annulus, PARAMS, use_cache=False)
     assert capsys.readouterr().err == ""  # quiet unless asked for progress
 
 
-def test_decompose_raises_error_if_worker_output_is_not_npz(
-    annulus: Mesh, monkeypatch: pytest.MonkeyPatch
-) -> None:
-    monkeypatch.setenv(FAULT_ENV, "garbage")
+def test_decompose_raises_error_if_worker_output_is_not_npz(annulus: Mesh, faulty_worker) -> None:
+    faulty_worker("garbage")
     with pytest.raises(DecompositionError, match=r"^annulus: the CoACD worker wrote invalid output \(.+\)$"):
         decompose(annulus, PARAMS, use_cache=False)
 
 
 def test_decompose_shows_progress_on_stderr_when_asked(
-    annulus: Mesh, monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
+    annulus: Mesh, faulty_worker, capsys: pytest.CaptureFixture[str]
 ) -> None:
-    monkeypatch.setenv(FAULT_ENV, "empty")
+    faulty_worker("empty")
     with pytest.raises(DecompositionError):
         decompose(annulus, PARAMS, use_cache=False, progress=True)
     err = capsys.readouterr().err

@@ -13,10 +13,6 @@ A crash here (CoACD aborts on some inputs) takes down only this process; the par
 status and the last lines of the output. This process ends with its parent, also under ``kill -9`` of it
 (:mod:`handsim.lifeline`, loaded by path: the kernel's parent-death signal on Linux, and everywhere a
 thread reading stdin, a pipe whose writing end only the parent holds, until its end).
-
-For tests, the environment variable ``HANDSIM_COACD_WORKER_FAULT`` makes the worker fail on purpose:
-``abort`` calls :func:`os.abort`, ``empty`` writes a result without hulls, ``garbage`` writes bytes that
-are not an ``.npz`` file.
 """
 
 from __future__ import annotations
@@ -34,8 +30,6 @@ import json
 import time
 
 import numpy as np
-
-FAULT_ENV = "HANDSIM_COACD_WORKER_FAULT"
 
 
 def _exit_with_parent() -> None:
@@ -102,22 +96,7 @@ def main(argv: list[str]) -> int:
     in_path, out_path = argv
     _exit_with_parent()
     _no_core_dumps()
-    fault = os.environ.get(FAULT_ENV, "")
-    if fault == "abort":
-        print("deliberate abort requested by " + FAULT_ENV, file=sys.stderr, flush=True)
-        os.abort()
-    if fault == "garbage":
-        with open(out_path, "wb") as f:
-            f.write(b"this is not an npz file")
-        return 0
-    if fault == "empty":
-        _save(out_path, _pack([], 0.0))
-        return 0
-    if fault:
-        print(f"unknown {FAULT_ENV}={fault!r}; expected abort, empty or garbage", file=sys.stderr)
-        return 2
-
-    import coacd
+    import coacd  # lazy: after the lifeline is set, so a parent killed during this slow import still ends us
 
     coacd.set_log_level("error")
     with np.load(in_path, allow_pickle=False) as data:

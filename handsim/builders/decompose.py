@@ -55,7 +55,6 @@ from handsim.mesh import FLATNESS_TOL, Mesh
 
 CACHE_FORMAT_VERSION = 1  # bump when the entry layout or the hull post-processing changes
 CONVEX_RTOL = 1e-3  # within 0.1 % of its hull's volume a mesh counts as convex (tessellation dents)
-FAULT_ENV = "HANDSIM_COACD_WORKER_FAULT"  # private test hook read by the worker (abort, empty, garbage)
 
 BUNDLED_CACHE_DIR = ASSETS_DIR / "coacd_cache"  # read-only entries for the catalogue, see bundled_entry
 
