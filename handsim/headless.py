@@ -1,17 +1,28 @@
-"""Offscreen rendering without a display: MuJoCo's OpenGL backend choice and its renderer.
+"""Offscreen rendering without a display: the OpenGL backend, chosen when a renderer is made.
 
-MuJoCo picks its OpenGL backend once, from ``MUJOCO_GL``, when ``mujoco`` is first imported. On Linux
-without a display the default (GLFW) cannot open a context, so :func:`prefer_headless_gl` (called on
-``import handsim`` and by the ``handsim`` command, before handsim imports ``mujoco``) selects EGL (GPU, or
-Mesa's software EGL) unless the user chose a backend. A process that imported ``mujoco`` first keeps the
-backend it got; :func:`offscreen_renderer` then fails with a :class:`~handsim.errors.RenderError` saying
-what to set. This module imports ``mujoco`` only inside its functions.
+MuJoCo picks its OpenGL backend once, from ``MUJOCO_GL``, when ``mujoco`` is first imported; unset, that
+is GLFW, which needs a display (and can abort the process without one). ``import handsim`` changes no
+environment variable; instead :func:`offscreen_renderer` chooses, each time it makes a renderer:
+
+* ``MUJOCO_GL`` set by the user: MuJoCo's backend, as chosen (GLFW without a display is refused with a
+  :class:`~handsim.errors.RenderError`, not tried).
+* ``MUJOCO_GL`` unset and a display (``DISPLAY`` or ``WAYLAND_DISPLAY``), or not Linux: MuJoCo's default.
+* ``MUJOCO_GL`` unset on Linux without a display: EGL (GPU, or Mesa's software EGL), for this renderer
+  only; MuJoCo's own default for other code in the process is left as it is.
+
+To override, set ``MUJOCO_GL`` (``egl``, ``osmesa``, ``glfw``…) in the environment before the process
+starts (``MUJOCO_GL=osmesa`` where EGL is missing). Importing MuJoCo's EGL module sets
+``PYOPENGL_PLATFORM=egl`` when it is unset (MuJoCo does that, on the first headless renderer; handsim sets
+nothing on import). This module imports ``mujoco`` only inside
+its functions.
 """
 
 from __future__ import annotations
 
 import os
 import sys
+import threading
+from collections.abc import Callable
 from typing import TYPE_CHECKING
 
 from handsim.errors import RenderError
@@ -20,46 +31,16 @@ if TYPE_CHECKING:
     import mujoco
 
 HEADLESS_GL = "egl"
-"""Backend selected when there is no display: EGL (GPU, or Mesa's software renderer)."""
+"""Backend used on Linux without a display when ``MUJOCO_GL`` is unset: EGL (GPU, or Mesa's software
+renderer). No fallback to OSMesa in the same process: MuJoCo's EGL module has then set
+``PYOPENGL_PLATFORM=egl``, which its OSMesa module refuses."""
+
+_SWAP_LOCK = threading.Lock()  # one renderer at a time is made with a substituted GL context class
 
 
-def prefer_headless_gl() -> str | None:
-    """Select MuJoCo's EGL backend on Linux without a display, unless ``MUJOCO_GL`` is already set.
-
-    Only effective before ``mujoco`` is first imported in the process (and in processes started later,
-    which inherit the environment).
-
-    Returns:
-        The backend this call selected, or None when it left ``MUJOCO_GL`` alone.
-    """
-    if not sys.platform.startswith("linux") or "MUJOCO_GL" in os.environ:
-        return None
-    if os.environ.get("DISPLAY") or os.environ.get("WAYLAND_DISPLAY"):
-        return None
-    os.environ["MUJOCO_GL"] = HEADLESS_GL
-    return HEADLESS_GL
-
-
-def offscreen_renderer(model: mujoco.MjModel, width: int, height: int) -> mujoco.Renderer:
-    """A :class:`mujoco.Renderer` of ``width`` × ``height`` pixels for ``model``.
-
-    Raises:
-        RenderError: The size exceeds the model's offscreen buffer, or no OpenGL context could be made
-            (the message names MuJoCo's backend and what to set).
-    """
-    import mujoco
-
-    limit = (int(model.vis.global_.offwidth), int(model.vis.global_.offheight))
-    if not (0 < width <= limit[0] and 0 < height <= limit[1]):
-        raise RenderError(f"image size {width} × {height} is outside 1 × 1 … {limit[0]} × {limit[1]} pixels")
-    try:
-        return mujoco.Renderer(model, height=height, width=width)
-    except Exception as err:  # GLFW, EGL and OSMesa fail with different types (FatalError, ImportError…)
-        raise RenderError(
-            f"cannot create an offscreen OpenGL context with MuJoCo's {gl_backend()} backend: "
-            f"{type(err).__name__}: {str(err).strip()}. Without a display, set MUJOCO_GL=egl (or osmesa) "
-            "before mujoco is first imported: import handsim before mujoco, or set it in the environment"
-        ) from err
+def has_display() -> bool:
+    """Whether a display server is named in the environment (``DISPLAY`` or ``WAYLAND_DISPLAY``)."""
+    return bool(os.environ.get("DISPLAY") or os.environ.get("WAYLAND_DISPLAY"))
 
 
 def gl_backend() -> str:
@@ -70,3 +51,92 @@ def gl_backend() -> str:
         return "unknown"
     module = getattr(getattr(gl_context, "GLContext", None), "__module__", "")
     return module.removeprefix("mujoco.").split(".")[0] or "no"
+
+
+def offscreen_backend() -> str | None:
+    """The backend :func:`offscreen_renderer` will use; None when none can work.
+
+    None only for GLFW on Linux without a display chosen by the user (``MUJOCO_GL=glfw``): that backend
+    is not tried, because it can abort the process.
+    """
+    mujoco_choice = gl_backend()
+    if not sys.platform.startswith("linux") or has_display() or mujoco_choice != "glfw":
+        return mujoco_choice
+    if os.environ.get("MUJOCO_GL", "").strip():
+        return None
+    return HEADLESS_GL
+
+
+def offscreen_renderer(model: mujoco.MjModel, width: int, height: int) -> mujoco.Renderer:
+    """A :class:`mujoco.Renderer` of ``width`` × ``height`` pixels for ``model`` on :func:`offscreen_backend`.
+
+    Raises:
+        RenderError: The size exceeds the model's offscreen buffer, or no OpenGL context could be made
+            (the message names the backend, its error and what to set).
+    """
+    import mujoco
+
+    limit = (int(model.vis.global_.offwidth), int(model.vis.global_.offheight))
+    if not (0 < width <= limit[0] and 0 < height <= limit[1]):
+        raise RenderError(f"image size {width} × {height} is outside 1 × 1 … {limit[0]} × {limit[1]} pixels")
+    backend = offscreen_backend()
+    if backend is None:
+        raise RenderError(
+            "cannot create an offscreen OpenGL context: MUJOCO_GL selects MuJoCo's GLFW backend and there is "
+            "no display (DISPLAY, WAYLAND_DISPLAY); unset MUJOCO_GL, or set it to egl or osmesa"
+        )
+    try:
+        if backend == gl_backend():
+            return mujoco.Renderer(model, height=height, width=width)
+        return _renderer_with(_context_class(backend), model, width, height)
+    except Exception as err:  # GLFW, EGL and OSMesa fail with different types (FatalError, ImportError…)
+        raise RenderError(
+            f"cannot create an offscreen OpenGL context with the {backend} backend: "
+            f"{type(err).__name__}: {str(err).strip()}. Set MUJOCO_GL to a backend that works here (egl, "
+            "osmesa, or glfw with a display) in the environment before starting Python"
+        ) from err
+
+
+def _context_class(backend: str) -> Callable[[int, int], object]:
+    """MuJoCo's OpenGL context class of ``backend`` (only ``egl`` is asked for), imported on first use."""
+    if backend != HEADLESS_GL:
+        raise ValueError(f"no headless context class for backend {backend!r}")
+    from mujoco.egl import GLContext  # lazy: needs libEGL and sets PYOPENGL_PLATFORM; only when used
+
+    return GLContext
+
+
+def _renderer_with(
+    context: Callable[[int, int], object], model: mujoco.MjModel, width: int, height: int
+) -> mujoco.Renderer:
+    """A :class:`mujoco.Renderer` whose OpenGL context is of class ``context``.
+
+    ``mujoco.Renderer`` makes its context from ``mujoco.rendering.classic.gl_context.GLContext``, the
+    class MuJoCo chose on import, and keeps the instance; that name is bound to ``context`` only while
+    this renderer is made (under a lock), then restored.
+    """
+    import mujoco
+    from mujoco.rendering.classic import gl_context
+
+    with _SWAP_LOCK:
+        chosen = gl_context.GLContext
+        gl_context.GLContext = context
+        try:
+            return mujoco.Renderer(model, height=height, width=width)
+        finally:
+            gl_context.GLContext = chosen
+
+
+def prefer_headless_gl() -> str | None:
+    """Set ``MUJOCO_GL=egl`` in this process's environment on Linux without a display, unless it is set.
+
+    Not needed by handsim's own renderers (:func:`offscreen_renderer` chooses when it renders) and never
+    called on import; it only affects ``mujoco`` imported after the call, here or in child processes.
+
+    Returns:
+        The backend this call selected, or None when it left ``MUJOCO_GL`` alone.
+    """
+    if not sys.platform.startswith("linux") or "MUJOCO_GL" in os.environ or has_display():
+        return None
+    os.environ["MUJOCO_GL"] = HEADLESS_GL
+    return HEADLESS_GL

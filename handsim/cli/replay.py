@@ -23,7 +23,6 @@ from handsim.cli._common import (
     usage_error,
     write_text,
 )
-from handsim.headless import prefer_headless_gl
 
 EXIT_DIVERGED = 3
 EXIT_NOT_VALID = 4
@@ -286,7 +285,6 @@ def _stability_at(text: str) -> float | str:
 
 def _replay(args: argparse.Namespace) -> int:
     if args.video:
-        prefer_headless_gl()
         from handsim.sim.render import check_video
 
         check_video(args.video, *args.size)  # before the replay: a missing encoder is known at once

@@ -5,20 +5,16 @@
 * ``handsim/Grasp-v0`` (:class:`~handsim.envs.grasp_env.GraspEnv`): a hand above a catalogue object; the
   action sets joint targets and moves the hand; lift the object and hold it.
 
-Importing this package is cheap: it registers entry points by name and imports neither ``mujoco`` nor
-the environment modules. On Linux without a display it first selects MuJoCo's EGL backend
-(``MUJOCO_GL=egl``) unless ``MUJOCO_GL`` is set, so that ``render()`` works headless.
+Importing this package is cheap and changes no environment variable: it registers entry points by name
+and imports neither ``mujoco`` nor the environment modules. ``render()`` chooses its OpenGL backend when it
+first renders (:mod:`handsim.headless`: EGL on Linux without a display unless ``MUJOCO_GL`` is set).
 """
 
 from __future__ import annotations
 
 from typing import Any
 
-from handsim.headless import prefer_headless_gl
-
-prefer_headless_gl()  # before anything imports mujoco
-
-import gymnasium  # noqa: E402
+import gymnasium
 
 ENVS = {
     "handsim/Replay-v0": "handsim.envs.replay_env:ReplayEnv",

@@ -3,20 +3,19 @@
 Which frames (:func:`key_frames`), in this order of choice: the frame with the most hand links touching
 the object, the grasp (glove trials: the start of the hold window; recorded trials: the first frame with
 hand–object contact), the first and the last; more frames, when asked, evenly between. Rendering needs an
-OpenGL context (``MUJOCO_GL=egl`` without a display, which ``import handsim`` selects); when there is none
-the trial gets a note and no frames, not an error.
+OpenGL context (without a display EGL, unless ``MUJOCO_GL`` says otherwise: :mod:`handsim.headless`); when
+there is none the trial gets a note and no frames, not an error.
 """
 
 from __future__ import annotations
 
 import hashlib
-import os
 import re
-import sys
 
 import numpy as np
 
 from handsim.errors import HandsimError
+from handsim.headless import offscreen_backend
 from handsim.runner.png import encode_png
 from handsim.runner.trial_record import touching_links
 from handsim.sim.compiled import SimScene
@@ -69,16 +68,12 @@ def key_frames(result: ReplayResult, count: int) -> list[int]:
 
 
 def headless_glfw() -> bool:
-    """True when MuJoCo took its GLFW backend on Linux without a display: no offscreen context can be made.
+    """True when ``MUJOCO_GL=glfw`` was chosen on Linux without a display: no offscreen context can be made.
 
-    MuJoCo picks the backend from ``MUJOCO_GL`` when first imported (``import handsim`` first selects EGL
-    without a display). Trying GLFW without a display can abort the process, so it is not tried.
+    Trying GLFW without a display can abort the process, so it is not tried; with ``MUJOCO_GL`` unset the
+    renderer takes EGL itself (:func:`handsim.headless.offscreen_backend`).
     """
-    import mujoco
-
-    backend = getattr(getattr(mujoco, "GLContext", None), "__module__", "")
-    display = os.environ.get("DISPLAY") or os.environ.get("WAYLAND_DISPLAY")
-    return sys.platform.startswith("linux") and backend.endswith("glfw") and not display
+    return offscreen_backend() is None
 
 
 def render_pngs(scene: SimScene, result: ReplayResult, frames: list[int]) -> list[bytes]:
@@ -92,8 +87,8 @@ def render_pngs(scene: SimScene, result: ReplayResult, frames: list[int]) -> lis
 
     if headless_glfw():
         raise HandsimError(
-            "MuJoCo was imported with its GLFW OpenGL backend and there is no display; set MUJOCO_GL=egl "
-            "(or osmesa) before mujoco is first imported (import handsim first, or set it in the environment)"
+            "MuJoCo was imported with its GLFW OpenGL backend (MUJOCO_GL=glfw) and there is no display; "
+            "unset MUJOCO_GL, or set it to egl or osmesa"
         )
     if result.states is None:
         raise ValueError("the replay kept no states; replay with ReplayConfig(keep_states=True)")

@@ -10,9 +10,9 @@ of the scene (``hand_cam``, ``overview``) or from a camera tracking the hand (``
   ``video`` extra: ``pip install "handsim[video]"``;
 * ``.gif`` — an animated GIF through Pillow (a dependency of matplotlib, the ``plot`` extra).
 
-Rendering needs an OpenGL context: on a machine without a display set ``MUJOCO_GL=egl`` (GPU, or Mesa's
-software EGL) or ``MUJOCO_GL=osmesa`` before ``mujoco`` is imported (the ``handsim`` command sets
-``egl`` itself when no display is set).
+Rendering needs an OpenGL context, chosen when the renderer is made (:mod:`handsim.headless`): on Linux
+without a display, EGL (GPU, or Mesa's software EGL) unless ``MUJOCO_GL`` is set; set ``MUJOCO_GL``
+(e.g. ``osmesa``) in the environment to choose another.
 """
 
 from __future__ import annotations
