@@ -4,17 +4,17 @@ MuJoCo picks its OpenGL backend once, from ``MUJOCO_GL``, when ``mujoco`` is fir
 is GLFW, which needs a display (and can abort the process without one). ``import handsim`` changes no
 environment variable; instead :func:`offscreen_renderer` chooses, each time it makes a renderer:
 
-* ``MUJOCO_GL`` set by the user: MuJoCo's backend, as chosen (GLFW without a display is refused with a
-  :class:`~handsim.errors.RenderError`, not tried).
-* ``MUJOCO_GL`` unset and a display (``DISPLAY`` or ``WAYLAND_DISPLAY``), or not Linux: MuJoCo's default.
-* ``MUJOCO_GL`` unset on Linux without a display: EGL (GPU, or Mesa's software EGL), for this renderer
-  only; MuJoCo's own default for other code in the process is left as it is.
+* A display (``DISPLAY`` or ``WAYLAND_DISPLAY``), not Linux, or a headless backend chosen when ``mujoco``
+  was imported: MuJoCo's choice.
+* Otherwise (MuJoCo took GLFW on Linux without a display): the backend ``MUJOCO_GL`` names now, ``egl``
+  or ``osmesa`` (set after ``mujoco`` was imported), or EGL (GPU, or Mesa's software EGL) when it is
+  unset, for this renderer only: MuJoCo's own default for other code in the process is left as it is.
+  ``MUJOCO_GL=glfw`` is refused with a :class:`~handsim.errors.RenderError`, not tried.
 
 To override, set ``MUJOCO_GL`` (``egl``, ``osmesa``, ``glfw``…) in the environment before the process
-starts (``MUJOCO_GL=osmesa`` where EGL is missing). Importing MuJoCo's EGL module sets
-``PYOPENGL_PLATFORM=egl`` when it is unset (MuJoCo does that, on the first headless renderer; handsim sets
-nothing on import). This module imports ``mujoco`` only inside
-its functions.
+starts (``MUJOCO_GL=osmesa`` where EGL is missing). Importing MuJoCo's EGL or OSMesa module sets
+``PYOPENGL_PLATFORM`` when it is unset (MuJoCo does that, on the first headless renderer; handsim sets
+nothing on import). This module imports ``mujoco`` only inside its functions.
 """
 
 from __future__ import annotations
@@ -34,6 +34,8 @@ HEADLESS_GL = "egl"
 """Backend used on Linux without a display when ``MUJOCO_GL`` is unset: EGL (GPU, or Mesa's software
 renderer). No fallback to OSMesa in the same process: MuJoCo's EGL module has then set
 ``PYOPENGL_PLATFORM=egl``, which its OSMesa module refuses."""
+HEADLESS_BACKENDS = ("egl", "osmesa")
+"""The backends a renderer can use without a display; ``MUJOCO_GL`` may name one after ``mujoco``'s import."""
 
 _SWAP_LOCK = threading.Lock()  # one renderer at a time is made with a substituted GL context class
 
@@ -45,7 +47,7 @@ def has_display() -> bool:
 
 def gl_backend() -> str:
     """The OpenGL backend MuJoCo chose when it was imported (``glfw``, ``egl``, ``osmesa``…)."""
-    try:
+    try:  # lazy: this module is imported where MuJoCo is not needed yet (so are the imports below)
         from mujoco.rendering.classic import gl_context
     except ImportError:
         return "unknown"
@@ -56,15 +58,16 @@ def gl_backend() -> str:
 def offscreen_backend() -> str | None:
     """The backend :func:`offscreen_renderer` will use; None when none can work.
 
-    None only for GLFW on Linux without a display chosen by the user (``MUJOCO_GL=glfw``): that backend
-    is not tried, because it can abort the process.
+    None only for GLFW on Linux without a display chosen by the user (``MUJOCO_GL=glfw``, or another
+    value naming no headless backend): that backend is not tried, because it can abort the process.
     """
     mujoco_choice = gl_backend()
     if not sys.platform.startswith("linux") or has_display() or mujoco_choice != "glfw":
         return mujoco_choice
-    if os.environ.get("MUJOCO_GL", "").strip():
-        return None
-    return HEADLESS_GL
+    requested = os.environ.get("MUJOCO_GL", "").strip().lower()
+    if not requested:
+        return HEADLESS_GL
+    return requested if requested in HEADLESS_BACKENDS else None
 
 
 def offscreen_renderer(model: mujoco.MjModel, width: int, height: int) -> mujoco.Renderer:
@@ -74,7 +77,7 @@ def offscreen_renderer(model: mujoco.MjModel, width: int, height: int) -> mujoco
         RenderError: The size exceeds the model's offscreen buffer, or no OpenGL context could be made
             (the message names the backend, its error and what to set).
     """
-    import mujoco
+    import mujoco  # lazy: see gl_backend
 
     limit = (int(model.vis.global_.offwidth), int(model.vis.global_.offheight))
     if not (0 < width <= limit[0] and 0 < height <= limit[1]):
@@ -98,11 +101,13 @@ def offscreen_renderer(model: mujoco.MjModel, width: int, height: int) -> mujoco
 
 
 def _context_class(backend: str) -> Callable[[int, int], object]:
-    """MuJoCo's OpenGL context class of ``backend`` (only ``egl`` is asked for), imported on first use."""
-    if backend != HEADLESS_GL:
+    """MuJoCo's OpenGL context class of ``backend`` (in :data:`HEADLESS_BACKENDS`), imported when used."""
+    if backend == "egl":
+        from mujoco.egl import GLContext  # lazy: needs libEGL and sets PYOPENGL_PLATFORM; only when used
+    elif backend == "osmesa":
+        from mujoco.osmesa import GLContext  # lazy: needs libOSMesa and sets PYOPENGL_PLATFORM
+    else:
         raise ValueError(f"no headless context class for backend {backend!r}")
-    from mujoco.egl import GLContext  # lazy: needs libEGL and sets PYOPENGL_PLATFORM; only when used
-
     return GLContext
 
 
@@ -115,6 +120,7 @@ def _renderer_with(
     class MuJoCo chose on import, and keeps the instance; that name is bound to ``context`` only while
     this renderer is made (under a lock), then restored.
     """
+    # lazy: see gl_backend
     import mujoco
     from mujoco.rendering.classic import gl_context
 

@@ -59,6 +59,8 @@ def test_import_handsim_sets_no_environment_variable():
         ("linux", "", "osmesa", "osmesa", "osmesa"),  # the user's choice
         ("linux", "", "egl", "egl", "egl"),
         ("linux", "", "glfw", "glfw", None),  # the user's GLFW without a display: refused, not tried
+        ("linux", "", "osmesa", "glfw", "osmesa"),  # MUJOCO_GL set after mujoco was imported (GLFW)
+        ("linux", "", "enable", "glfw", None),  # GLFW by another name
         ("darwin", "", "", "cgl", "cgl"),  # not Linux: MuJoCo's choice
     ],
 )
