@@ -274,7 +274,12 @@ def test_ctrl_c_during_a_coacd_decomposition_exits_130_leaving_no_cache_entry_or
         start_new_session=True,  # its own process group, as a terminal's foreground job
     )
     with reaped(process) as children:
-        wait_for(lambda: children.add(descendants(process.pid)), 120, "no CoACD worker")
+        # the CoACD worker itself: MuJoCo's import may start a short-lived child first (GLFW's version check)
+        wait_for(
+            lambda: children.add(_descendants_running(process.pid, b"_coacd_worker.py")),
+            120,
+            "no CoACD worker",
+        )
         os.killpg(process.pid, signal.SIGINT)  # Ctrl-C: the terminal signals the whole group
         _, err = process.communicate(timeout=60)
         assert process.returncode == 130
@@ -284,17 +289,22 @@ def test_ctrl_c_during_a_coacd_decomposition_exits_130_leaving_no_cache_entry_or
     assert [p for p in cache.rglob("*") if p.is_file()] == []
 
 
-def _spawn_workers(pid: int) -> set[int]:
-    """The pool workers below ``pid`` (processes started by multiprocessing's spawn)."""
+def _descendants_running(pid: int, marker: bytes) -> set[int]:
+    """The processes below ``pid`` whose command line contains ``marker``."""
     found = set()
     for child in descendants(pid):
         try:
             cmdline = Path(f"/proc/{child}/cmdline").read_bytes()
         except OSError:
             continue
-        if b"multiprocessing.spawn" in cmdline:
+        if marker in cmdline:
             found.add(child)
     return found
+
+
+def _spawn_workers(pid: int) -> set[int]:
+    """The pool workers below ``pid`` (processes started by multiprocessing's spawn)."""
+    return _descendants_running(pid, b"multiprocessing.spawn")
 
 
 @linux_only
@@ -331,7 +341,11 @@ def test_kill_9_during_a_coacd_decomposition_leaves_no_worker_process(tmp_path):
         env=child_env(stalling_coacd(tmp_path)),
     )
     with reaped(process) as children:
-        wait_for(lambda: children.add(descendants(process.pid)), 120, "no CoACD worker")
+        wait_for(
+            lambda: children.add(_descendants_running(process.pid, b"_coacd_worker.py")),
+            120,
+            "no CoACD worker",
+        )
         process.kill()
         process.wait(timeout=30)
         wait_for(lambda: not children.alive(), 60, "the CoACD worker stayed alive")
