@@ -6,4 +6,6 @@ Data flows one way: ``handsim.io`` readers → plain data (:class:`~handsim.skel
 
 __version__ = "0.1.0"
 
-import handsim.envs  # noqa: F401  registers handsim/Replay-v0 and handsim/Grasp-v0 (cheap: no mujoco)
+# Registers handsim/Replay-v0 and handsim/Grasp-v0: imports gymnasium and NumPy, not MuJoCo, and sets no
+# environment variable (rendering picks its OpenGL backend when it renders: handsim.headless).
+import handsim.envs  # noqa: F401

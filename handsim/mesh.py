@@ -9,12 +9,15 @@ or inverted winding, small holes), reporting each repair in :attr:`Mesh.notes`.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
 import numpy.typing as npt
-import trimesh
 
 from handsim.errors import MeshError
+
+if TYPE_CHECKING:
+    import trimesh
 
 FLATNESS_TOL = 1e-6  # smallest / largest principal extent below which a mesh is flat
 MAX_HOLE_EDGES = 64  # holes with at most this many boundary edges are "small" and filled
@@ -50,6 +53,8 @@ class Mesh:
 
     def to_trimesh(self) -> trimesh.Trimesh:
         """The mesh as a :class:`trimesh.Trimesh` (no processing)."""
+        import trimesh  # lazy: trimesh + SciPy; the Mesh type is used where no mesh operation is
+
         return trimesh.Trimesh(self.vertices, self.faces, process=False)
 
 
@@ -96,6 +101,8 @@ def validate_mesh(
     singular = np.linalg.svd(centred, compute_uv=False)
     if singular[0] <= 0 or singular[-1] / singular[0] < FLATNESS_TOL:
         raise MeshError(f"{source}: the mesh is flat or degenerate (all vertices on a plane or a line)")
+
+    import trimesh  # lazy: trimesh + SciPy; the Mesh type is used where no mesh operation is
 
     mesh = trimesh.Trimesh(v, f, process=False)
     notes: list[str] = []

@@ -55,7 +55,7 @@ def _read_to_end(fd: int = 0) -> None:
 def _no_core_dumps() -> None:
     """Keep a deliberate or real abort from writing a core file."""
     try:
-        import resource
+        import resource  # lazy: POSIX only (ImportError on Windows)
 
         resource.setrlimit(resource.RLIMIT_CORE, (0, 0))
     except (ImportError, ValueError, OSError):  # Windows, or a hard limit we may not lower

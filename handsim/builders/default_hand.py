@@ -15,14 +15,16 @@ trajectory read for the GraspDB14 skeleton drives this hand without renaming.
 from __future__ import annotations
 
 import math
+from typing import TYPE_CHECKING
 
-import mujoco
 import numpy as np
 
-from handsim.builders.hand import build_hand
 from handsim.errors import SkeletonError
 from handsim.io.xmlskel import AXIS_KINDS, AXIS_TAGS, DOF_CHAIN_ORDER, local_frame
 from handsim.skeleton import Dof, Joint, Skeleton, mj_name
+
+if TYPE_CHECKING:
+    import mujoco
 
 DEFAULT_HAND_LENGTH_M = 0.19
 DEFAULT_BREADTH_RATIO = 0.45
@@ -169,4 +171,6 @@ def default_hand(
         An uncompiled spec.
     """
     breadth = DEFAULT_BREADTH_RATIO * hand_length_m if hand_breadth_m is None else hand_breadth_m
+    from handsim.builders.hand import build_hand  # lazy: MuJoCo + SciPy; the skeleton and sizes need neither
+
     return build_hand(default_skeleton(hand_length_m, breadth), breadth=breadth, **build_options)

@@ -12,6 +12,7 @@ import sys
 from pathlib import Path
 from typing import TYPE_CHECKING, NoReturn
 
+from handsim.physical_ranges import DENSITY, OBJECT_MASS
 from handsim.runner.records import write_atomic
 
 if TYPE_CHECKING:
@@ -93,8 +94,6 @@ def add_object_mass_options(parser: argparse.ArgumentParser, *, forced: bool) ->
         parser: The command's parser.
         forced: The command also has ``--force`` (:func:`add_force`), which accepts values out of range.
     """
-    from handsim.physical_ranges import DENSITY, OBJECT_MASS
-
     group = parser.add_mutually_exclusive_group()
     unless = " without --force" if forced else ""
     add_ranged_float(
@@ -161,7 +160,7 @@ def control_rate(text: str) -> float:
 
     See :func:`handsim.sim.plausibility.min_control_rate` (20 Hz).
     """
-    # imported here: the simulation stack (MuJoCo) is slow to import, and --help must not wait for it
+    # lazy: the simulation stack (MuJoCo) is slow to import, and --help must not wait for it
     from handsim.sim.metrics import MetricSpec
     from handsim.sim.plausibility import check_control_rate
 

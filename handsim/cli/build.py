@@ -19,6 +19,7 @@ from handsim.physical_ranges import HAND_MASS
 
 
 def _hand_spec(skeleton_path: str | None, args: argparse.Namespace):
+    # lazy: the hand builder (MuJoCo, SciPy), only to build a hand
     from handsim.builders import build_hand, default_hand
     from handsim.io import read_skeleton
 
@@ -30,6 +31,7 @@ def _hand_spec(skeleton_path: str | None, args: argparse.Namespace):
 
 
 def _print_model(spec) -> None:
+    # lazy: MuJoCo, only once a model is built
     from handsim.sim import compile_spec, summarize
 
     for line in summarize(compile_spec(spec)).lines():
@@ -56,7 +58,7 @@ def _decomposition_param(name: str, convert: type) -> Callable[[str], float | in
     """An argparse type for a field of :class:`~handsim.builders.decompose.DecompositionParams`."""
 
     def parse(text: str) -> float | int:
-        # imported here: the builders (trimesh, SciPy) are slow to import, and --help must not wait
+        # lazy: the builders (trimesh, SciPy) are slow to import, and --help must not wait
         from handsim.builders.decompose import DecompositionParams
 
         try:
@@ -74,6 +76,7 @@ def _decomposition_param(name: str, convert: type) -> Callable[[str], float | in
 
 
 def _decomposition_params(args: argparse.Namespace):
+    # lazy: trimesh and SciPy (the decomposer), only to build objects
     from handsim.builders.decompose import DecompositionParams
 
     return DecompositionParams(
@@ -82,6 +85,7 @@ def _decomposition_params(args: argparse.Namespace):
 
 
 def _prepare(what: str, args: argparse.Namespace):
+    # lazy: the object builder (MuJoCo, trimesh), only to build objects
     from handsim.builders.catalog import resolve
     from handsim.builders.objects import prepare_object
 
@@ -130,6 +134,7 @@ def _grams(kg: float) -> str:
 
 
 def _build_object(args: argparse.Namespace) -> int:
+    # lazy: the object builder (MuJoCo, trimesh), only to build objects
     from handsim.builders.objects import object_spec
 
     prepared = _prepare(args.object, args)
@@ -142,6 +147,7 @@ def _build_object(args: argparse.Namespace) -> int:
 
 
 def _build_scene(args: argparse.Namespace) -> int:
+    # lazy: the object builder (MuJoCo, trimesh), only to build objects
     from handsim.builders.objects import object_spec
     from handsim.builders.scene import build_scene
 

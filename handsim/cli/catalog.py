@@ -6,6 +6,7 @@ import argparse
 
 
 def _run(args: argparse.Namespace) -> int:
+    # lazy: the catalogue table, only for this command
     from handsim.builders.catalog import entries
 
     rows = [

@@ -17,7 +17,9 @@ from dataclasses import replace
 from pathlib import Path
 from typing import TYPE_CHECKING
 
+from handsim.assets import ASSETS_DIR, TZIONAS_DIR
 from handsim.cli._common import add_hand_size, non_negative_int, output_dir, positive_int
+from handsim.cli.report import run_and_render
 
 if TYPE_CHECKING:
     from handsim.trials import Discovery
@@ -28,6 +30,7 @@ DEMO_OBJECTS = ("tennis_ball", "mug")
 
 
 def _check_default_hand(hand_length: float) -> None:
+    # lazy: MuJoCo and the builders, only when the demo runs
     import mujoco
     import numpy as np
 
@@ -66,7 +69,7 @@ def demo_discovery() -> Discovery:
     Returns:
         The combined discovery, rooted at the assets folder, entries sorted by id.
     """
-    from handsim.assets import ASSETS_DIR, TZIONAS_DIR
+    # lazy: the trial loaders, only when the demo runs
     from handsim.trials import CompanionFile, Discovery, UnknownFile, discover
 
     entries, companions, unknown = [], [], []
@@ -87,9 +90,6 @@ def demo_discovery() -> Discovery:
 
 
 def _run(args: argparse.Namespace) -> int:
-    from handsim.assets import ASSETS_DIR, TZIONAS_DIR
-    from handsim.cli.report import run_and_render
-
     print("handsim demo: on data bundled with handsim (no downloads)")
     _check_default_hand(args.hand_length)
     print(f"  dataset: the Tzionas/Ballan sample in {TZIONAS_DIR}")

@@ -13,6 +13,7 @@ from handsim.cli._common import positive_int
 
 
 def _run_minari(args: argparse.Namespace) -> int:
+    # lazy: MuJoCo and Minari (an optional extra), only for the export
     from handsim.export import export_minari
     from handsim.runner.execute import default_workers
 

@@ -23,6 +23,7 @@ from handsim.cli._common import (
     usage_error,
     write_text,
 )
+from handsim.runner.records import json_ready
 
 EXIT_DIVERGED = 3
 EXIT_NOT_VALID = 4
@@ -56,6 +57,7 @@ PHASE_SOURCES = {
 
 def _print_checks(loaded) -> None:
     """Which annotation and phase source a glove trial used, and the spikes filled in its recording."""
+    # lazy: the record stack (MuJoCo), only after a replay
     from handsim.runner.trial_record import recording_checks
 
     found = recording_checks(loaded.checks, loaded.scene)
@@ -68,6 +70,7 @@ def _print_checks(loaded) -> None:
 
 
 def _print_summary(result) -> None:
+    # lazy: the simulation stack (MuJoCo), only after a replay
     from handsim.sim.summary import HAND_KEYS
 
     s = result.summary
@@ -285,10 +288,11 @@ def _stability_at(text: str) -> float | str:
 
 def _replay(args: argparse.Namespace) -> int:
     if args.video:
+        # lazy: MuJoCo and the video encoders, only with --video
         from handsim.sim.render import check_video
 
         check_video(args.video, *args.size)  # before the replay: a missing encoder is known at once
-    from handsim.runner.records import json_ready
+    # lazy: the simulation stack (MuJoCo, trimesh), only when replaying
     from handsim.sim.replay import ReplayConfig, replay
     from handsim.trials import TrialError, load_trial
 
@@ -331,6 +335,7 @@ def _replay(args: argparse.Namespace) -> int:
     for note in notes:
         _line("note", note)
     if args.json:
+        # lazy: the record stack, only with --json
         from handsim.replay_plots import replay_curves
         from handsim.runner.trial_record import recording_checks
 
@@ -343,10 +348,12 @@ def _replay(args: argparse.Namespace) -> int:
         text = json.dumps(json_ready(record), indent=1, allow_nan=False)
         _line("wrote", str(write_text(args.json, text + "\n")))
     if args.plot:
+        # lazy: matplotlib (an optional extra), only with --plot
         from handsim.replay_plots import plot_replay
 
         _line("plot", str(plot_replay(result, args.plot)))
     if args.video:
+        # lazy: the renderer and encoders, only with --video
         from handsim.sim.render import write_video
 
         width, height = args.size

@@ -23,6 +23,7 @@ from handsim.cli._common import (
     positive_int,
     usage_error,
 )
+from handsim.runner.records import read_records
 
 if TYPE_CHECKING:
     from handsim.sim.replay import ReplayConfig
@@ -31,6 +32,7 @@ if TYPE_CHECKING:
 
 def _render(out: Path) -> int:
     """Render the report of ``out`` from its records; print where it is."""
+    # lazy: the report stack, only when rendering a report
     from handsim.report import render_report
 
     files = render_report(out)
@@ -42,8 +44,8 @@ def _render(out: Path) -> int:
 
 def _render_only(out: Path) -> int:
     """Render the report of a run's records and print its line; exit 1 if every recorded trial failed."""
+    # lazy: the runner (MuJoCo), only for a run's records
     from handsim.runner.execute import failure_counts, records_line
-    from handsim.runner.records import read_records
 
     code = _render(out)
     records = read_records(out)
@@ -91,6 +93,7 @@ def run_and_render(
     Raises:
         HandsimError: The dataset is missing, OUT holds records of other parameters, Ray is missing …
     """
+    # lazy: the runner (MuJoCo) and the trial loaders, only for a run
     from handsim.runner.execute import run_dataset
     from handsim.trials import Discovery, discover, select
 
@@ -139,6 +142,7 @@ def _all_failed(failed: int, trials: int, failures: tuple[tuple[str, int, str], 
 
 
 def _report(args: argparse.Namespace) -> int:
+    # lazy: the simulation stack (MuJoCo, trimesh), only for a run
     from handsim.sim.replay import ReplayConfig
 
     if args.render_only is not None:
@@ -148,9 +152,11 @@ def _report(args: argparse.Namespace) -> int:
         return _render_only(out)
     if args.dataset is None or args.output is None:
         return usage_error("report", "give DATASET and -o OUT (or --render-only OUT)")
+    # lazy: the trial loaders, only for a run
     from handsim.trials import TrialOptions
 
     if args.mano_dir is not None:
+        # lazy: the MANO reader, only with --mano-dir
         from handsim.io.mano import find_mano_files
 
         find_mano_files(args.mano_dir)  # before any work: says which files are needed and where to put them

@@ -14,6 +14,7 @@ def load_trajectory(path: str, skeleton_path: str | None, calibration_path: str 
     A GraspDB14 glove recording gets the phases of its own annotation and its single-sample spikes filled
     (:func:`handsim.glove.checks.check_recording`); the checks' result is None for other recordings.
     """
+    # lazy: the readers and glove checks, only for this command
     from handsim.glove import load_calibration
     from handsim.glove.checks import check_recording
     from handsim.glove.phases import match_annotation
@@ -33,6 +34,7 @@ def load_trajectory(path: str, skeleton_path: str | None, calibration_path: str 
 
 
 def _inspect_arctic(args: argparse.Namespace) -> int:
+    # lazy: the ARCTIC and MANO readers, only for ARCTIC sequences
     from handsim.io.arctic_motion import read_arctic_sequence
     from handsim.trajectory_report import describe_arctic
 
@@ -49,6 +51,7 @@ def _inspect_arctic(args: argparse.Namespace) -> int:
 
 
 def _inspect(args: argparse.Namespace) -> int:
+    # lazy: the recording summaries, only for this command
     from handsim.trajectory_report import describe
 
     if args.trajectory.endswith(".mano.npy"):
@@ -62,6 +65,7 @@ def _inspect(args: argparse.Namespace) -> int:
         for spike in checks.spikes:
             print(f"spike      {spike.describe()}")
     if args.plot:
+        # lazy: matplotlib (an optional extra), only with --plot
         from handsim.plotting import plot_trajectory
 
         print(f"plot       {plot_trajectory(trajectory, args.plot, skeleton)}")
@@ -69,6 +73,7 @@ def _inspect(args: argparse.Namespace) -> int:
 
 
 def _calibrate(args: argparse.Namespace) -> int:
+    # lazy: the glove calibration and the raw-count reader, only for this command
     from handsim.glove import estimate_calibration, save_calibration
     from handsim.io.graspdb import read_graspdb_raw
 

@@ -12,6 +12,7 @@ first renders (:mod:`handsim.headless`: EGL on Linux without a display unless ``
 
 from __future__ import annotations
 
+import importlib
 from typing import Any
 
 import gymnasium
@@ -41,8 +42,6 @@ _LAZY = {
 
 def __getattr__(name: str) -> Any:
     if name in _LAZY:
-        import importlib
-
         return getattr(importlib.import_module(_LAZY[name]), name)
     raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
 

@@ -8,7 +8,6 @@ from collections.abc import Iterator
 from pathlib import Path
 
 import numpy as np
-import trimesh
 
 from handsim.errors import InputFileError, MeshError
 from handsim.io._text import UTF8_BOM, decode_text, read_bytes
@@ -118,6 +117,8 @@ def _without_text_bom(data: bytes, suffix: str) -> bytes:
 
 def _trimesh_arrays(p: Path, data: bytes) -> tuple[np.ndarray, np.ndarray]:
     """Vertices (file units) and faces of an OBJ, STL or PLY file, read by trimesh."""
+    import trimesh  # lazy: trimesh + SciPy; MESH_SUFFIXES and the OFF reader need neither
+
     suffix = p.suffix.lower()
     options = {"maintain_order": True} if suffix == ".obj" else {}
     try:
