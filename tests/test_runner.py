@@ -2,10 +2,12 @@
 
 from __future__ import annotations
 
+import dataclasses
 import hashlib
 import json
 import multiprocessing
 import os
+import re
 import shutil
 import struct
 import subprocess
@@ -25,6 +27,7 @@ from handsim.io.mano import MANO_DIR_ENV
 from handsim.runner import execute
 from handsim.runner.execute import RunnerError, run_dataset
 from handsim.runner.png import encode_png
+from handsim.runner.portable import dataset_root, portable_record, record_trial
 from handsim.runner.records import (
     RECORDS_FILE,
     RecordsError,
@@ -524,10 +527,11 @@ def test_a_failing_trial_records_its_error_and_the_others_run(tmp_path):
     error = records["01_ex01-rad-002-grasp-su01.txt"]["error"]
     assert error["type"] == "FormatError"
     assert error["message"] == (
-        f"{bad.resolve()}:1: expected 30 blank-separated entries (6 time-stamp fields, switch, 23 sensors), "
-        "got 9"
-    )
+        "01_ex01-rad-002-grasp-su01.txt:1: expected 30 blank-separated entries (6 time-stamp fields, switch, "
+        "23 sensors), got 9"
+    )  # the file relative to the dataset root
     assert "Traceback (most recent call last)" in error["traceback"]
+    assert '  File "handsim/runner/worker.py", line ' in error["traceback"]  # not where handsim is installed
     failed = records["01_ex01-rad-002-grasp-su01.txt"]
     assert (failed["status"], failed["summary"], failed["curves"], failed["renders"]) == (
         "error",
@@ -536,6 +540,49 @@ def test_a_failing_trial_records_its_error_and_the_others_run(tmp_path):
         [],
     )
     assert records["Models/20"]["status"] == "ok"
+
+
+def _dataset_in(folder: Path) -> Path:
+    """A small dataset (bundled Tzionas sequence 20, a malformed glove recording) copied into ``folder``."""
+    data = _tzionas_copies(folder, [20])
+    (data / "01_ex01-rad-002-grasp-su01.txt").write_text("2014 09 12 08 49 21.71200 1 0.1 garbage\n")
+    return data
+
+
+def test_the_same_dataset_in_two_folders_gives_byte_identical_records(tmp_path):
+    config = ReplayConfig(control_rate=50.0)
+    files = []
+    for name in ("here", "elsewhere/deeper"):
+        data = _dataset_in(tmp_path / name / "data")
+        summary = run_dataset(discover(data), tmp_path / name / "out", workers=1, frames=0, config=config,
+                              progress=False)  # fmt: skip
+        assert (summary.ok, summary.failed) == (1, 1)
+        files.append((tmp_path / name / "out" / RECORDS_FILE).read_bytes())
+    assert str(tmp_path).encode() not in files[0]
+    without_timing = [re.sub(rb',"timing":\{[^}]*\}', b"", f) for f in files]
+    assert without_timing[0] == without_timing[1] and without_timing[0].count(b"\n") == 2
+    record = {r["id"]: r for r in read_records(tmp_path / "here" / "out")}["Models/20"]
+    assert record["trial"]["trajectory_path"] == "Models/20/Model_Hand_R.MOTION"
+    assert record["trial"]["objects"][0]["what"] == "Models/20/Model_Object_Cube.SKEL"
+    assert record["notes"][0] == "hand Model_Hand_R.SKEL and objects ['cube'] from Configs/20/MODELS_INFO.txt"
+
+
+def test_record_trial_joins_a_records_relative_paths_to_the_dataset_root(tmp_path):
+    data = _tzionas_copies(tmp_path / "data", [20])
+    (entry,) = discover(data).entries
+    record = portable_record({"trial": entry.trial.to_dict()}, str(data))
+    assert record["trial"]["skeleton_path"] == "Models/20/Model_Hand_R.SKEL"
+    notes = ("hand Model_Hand_R.SKEL and objects ['cube'] from Configs/20/MODELS_INFO.txt",)  # text: relative
+    assert record_trial(record, data) == dataclasses.replace(entry.trial, notes=notes)
+    catalogue = portable_record({"trial": {**entry.trial.to_dict(), "objects": [{"what": "mug"}]}}, str(data))
+    assert record_trial(catalogue, data).objects[0].what == "mug"  # a catalogue name, not a file in the root
+
+
+def test_a_run_of_trial_entries_finds_their_dataset_root(tmp_path):
+    data = _tzionas_copies(tmp_path / "data", [20, 21])
+    discovery = discover(data)
+    assert dataset_root(discovery.entries) == discovery.root == str(data)
+    assert dataset_root([]) is None
 
 
 def _crashing_outcome(entry, config, frames):
