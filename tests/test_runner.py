@@ -48,6 +48,7 @@ from tests.mano_fixtures import (
     write_arctic_mano_npy,
     write_arctic_object_npy,
 )
+from tests.processes import ROOT, child_env, ray_head
 
 CONFIG = ReplayConfig(stability_at="grasp")
 FRAMES = 4
@@ -723,7 +724,7 @@ def test_the_ray_backend_gives_bitwise_the_records_of_the_local_backend(real_run
     ray = pytest.importorskip("ray")
     discovery, _, _, records = real_run
     entries = tuple(e for e in discovery.entries if e.id in FAST_IDS)
-    ray.init(num_cpus=2, include_dashboard=False, log_to_driver=False)
+    ray.init(address="local", num_cpus=2, include_dashboard=False, log_to_driver=False)
     try:
         summary = run_dataset(entries, tmp_path, backend="ray", config=CONFIG, frames=FRAMES, progress=False)
     finally:
@@ -748,6 +749,32 @@ def test_handsim_report_runs_renders_and_re_renders(tmp_path, capsys):
     assert (out / "run.json").is_file() and len(read_records(out)) == 1
     assert main(["report", "--render-only", str(out)]) == 0
     assert "1 trials: 1 ok" in capsys.readouterr().out
+
+
+@pytest.mark.slow
+def test_handsim_report_runs_on_a_ray_cluster_given_its_address_and_leaves_it_running(tmp_path, capsys):
+    pytest.importorskip("ray")
+    data = _dataset_in(tmp_path / "data")
+    options = ["--frames", "1", "--rate", "50"]
+    assert main(["report", str(data), "-o", str(tmp_path / "ref"), "--workers", "1", *options]) == 0
+    capsys.readouterr()
+    env = {
+        **child_env(),
+        "RAY_AUTH_MODE": "token",
+    }  # the cluster's token authentication (ray start's default)
+    with ray_head(2, tmp_path / "ray.log") as (address, head):
+        ray = ["--backend", "ray", "--address", address, *options]
+        done = subprocess.run(
+            [sys.executable, "-m", "handsim.cli", "report", str(data), "-o", str(tmp_path / "out"), *ray],
+            capture_output=True, text=True, env=env, cwd=ROOT, check=False,
+        )  # fmt: skip
+        assert done.returncode == 0, done.stderr
+        assert head.poll() is None  # the cluster is the user's: still running
+        tzionas = [e for e in discover(data).entries if e.id == "Models/20"]  # no address: a Ray of its own
+        local = run_dataset(tzionas, tmp_path / "local", backend="ray", workers=1, frames=0, progress=False)
+    assert "2 trials: 1 ok, 0 diverged, 1 failed" in done.stdout
+    assert _without_timing(read_records(tmp_path / "out")) == _without_timing(read_records(tmp_path / "ref"))
+    assert local.ran == ("Models/20",) and read_records(tmp_path / "local")[0]["status"] == "ok"
 
 
 @pytest.mark.parametrize(

@@ -380,7 +380,12 @@ def _ray(
     started = not ray.is_initialized()
     if started:
         env = {"env_vars": {"OMP_NUM_THREADS": "1", **_gl_env()}}
-        options = {"address": address} if address else {"num_cpus": workers, "include_dashboard": False}
+        # "local": a new Ray of our own even where a cluster runs on this machine (ray.init() would join it)
+        options = (
+            {"address": address}
+            if address
+            else {"address": "local", "num_cpus": workers, "include_dashboard": False}
+        )
         ray.init(runtime_env=env, log_to_driver=False, logging_level=logging.WARNING, **options)
     task = ray.remote(num_cpus=1, max_retries=0)(_ray_trial)
     pending = {task.remote(entry, config, frames): entry for entry in todo}
