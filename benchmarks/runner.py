@@ -1,10 +1,11 @@
-"""Benchmark: dataset-run throughput with 1 and 2 workers, the runner's own overhead, a projection.
+"""Benchmark: dataset-run throughput with 1 and 2 workers and on a Ray cluster, a GraspDB-sized projection.
 
 Run: python benchmarks/runner.py [--copies N] [--frames N]
 
 The dataset is synthesised by repeating the real GraspDB14 recordings of ``../shared/data/graspdb14``
 (each copy renamed to another trial number, its annotation file copied alongside); without ``../shared``
-the bundled Tzionas sequence is used. A first, untimed run warms the hull cache on disk.
+the bundled Tzionas sequence is used. A first, untimed run of one copy of each recording warms the hull
+cache on disk.
 
 Each run is a fresh process (imports and in-memory caches cold, as for a user's command), timed from
 its start to the last record. Printed, per worker count: wall time, trials per minute and the scaling
@@ -12,13 +13,25 @@ its start to the last record. Printed, per worker count: wall time, trials per m
 placement search; replay; render) and the runner's own overhead: wall ÷ trials (1 worker) minus the
 mean time spent inside the trial function (imports, process start, record writing, progress).
 ``mj_step``'s share of ``replay()`` is measured in the same run on one trial (a raw ``mj_step`` loop with
-the same inputs). Last, the time a GraspDB14-sized dataset (2,200 trials of ~300 frames) would take at
-the measured 2-worker rate.
+the same inputs).
+
+Ray: a local cluster of 2 CPUs (``ray start --head --block``, token authentication as ``ray start``
+enables it) runs the same dataset through ``run_dataset(backend="ray", address=…)`` from a fresh process;
+its throughput over the 2-worker pool's is ``ray_vs_pool`` (1.0: the same; ≥ 0.9: within 10 %), and its
+records must equal the pool's bitwise (``timing`` aside). Only that cluster is stopped after (not every
+Ray of the machine, as ``ray stop`` would).
+
+Projection (``graspdb_projection_min``): 2,200 glove trials of 300 frames on 2 cores = 2,200 × the
+1-worker wall time per trial (overheads included), with its replay part scaled from these recordings'
+mean frame count to 300 frames, ÷ the measured 2-vs-1-worker scaling. The machine's load average
+(``os.getloadavg``) is printed before and after: on a shared machine the figures are only as good as it
+was quiet.
 """
 
 from __future__ import annotations
 
 import argparse
+import os
 import re
 import shutil
 import statistics
@@ -112,16 +125,53 @@ def mj_step_share() -> float:
     return statistics.median(raw) / statistics.median(full)
 
 
+RAY_RUN = """
+import sys, time
+start = time.perf_counter()
+from handsim.trials import discover
+from handsim.runner.execute import run_dataset
+run_dataset(discover(sys.argv[1]), sys.argv[2], backend="ray", address=sys.argv[3], frames=int(sys.argv[4]),
+            progress=False, command=["benchmark"])
+print(time.perf_counter() - start)
+"""
+PROJECTED_FRAMES = 300
+
+
+def ray_run(dataset: Path, out: Path, frames: int, log: Path) -> tuple[float, list[dict]]:
+    """The dataset run on a local 2-CPU Ray cluster by address, in a fresh process; the cluster stopped
+    after."""
+    sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
+    from tests.processes import ray_head
+
+    env = {**os.environ, "RAY_AUTH_MODE": "token"}  # the cluster's token authentication (ray start default)
+    with ray_head(2, log) as (address, _):
+        done = subprocess.run(
+            [sys.executable, "-c", RAY_RUN, str(dataset), str(out), address, str(frames)],
+            check=True, capture_output=True, text=True, env=env,
+        )  # fmt: skip
+    return float(done.stdout.split()[-1]), load_records(out).records
+
+
+def _without_timing(records: list[dict]) -> dict[str, dict]:
+    return {r["id"]: {k: v for k, v in r.items() if k != "timing"} for r in records}
+
+
+def _load() -> str:
+    return " ".join(f"{v:.2f}" for v in os.getloadavg())
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--copies", type=int, default=6, help="copies of each real recording")
     parser.add_argument("--frames", type=int, default=4, help="frames rendered per trial")
     args = parser.parse_args()
+    print(f"load average (1, 5, 15 min) at the start: {_load()} on {os.cpu_count()} cores")
     with tempfile.TemporaryDirectory() as tmp:
         root = Path(tmp)
         dataset = synthesise(root, args.copies)
         trials = len(discover(dataset).entries)
-        run(dataset, root / "warm", 1, 0)  # warms the hull cache on disk and the file system; not timed
+        (root / "one").mkdir()
+        run(synthesise(root / "one", 1), root / "warm", 1, 0)  # warms the hull cache on disk; not timed
         results = {}
         for workers in (1, 2):
             wall, records = run(dataset, root / f"out{workers}", workers, args.frames)
@@ -130,6 +180,12 @@ def main() -> None:
             print(f"{workers} worker(s): {trials} trials in {wall:.1f} s = {rate:.1f} trials/min")
         scaling = results[1][0] / results[2][0]
         print(f"scaling 2 vs 1 worker: {scaling:.2f}×")
+        ray_wall, ray_records = ray_run(dataset, root / "ray", args.frames, root / "ray.log")
+        same = _without_timing(ray_records) == _without_timing(results[2][1])
+        print(
+            f"Ray (local cluster, 2 CPUs, by address): {trials} trials in {ray_wall:.1f} s = "
+            f"{trials / ray_wall * 60:.1f} trials/min; records bitwise the pool's (timing aside): {same}"
+        )
         for workers, (wall, records) in results.items():
             inside = sum(r["timing"]["total_s"] for r in records)
             print(
@@ -155,13 +211,19 @@ def main() -> None:
         frames = statistics.fmean(
             r["trajectory_quality"]["frames"] for r in records if r.get("trajectory_quality")
         )
-        projected = GRASPDB_SIZE / (trials / results[2][0]) / 3600
+        per_trial = wall / trials + mean["replay_s"] * (PROJECTED_FRAMES / frames - 1)
+        projected = GRASPDB_SIZE * per_trial / scaling / 60
         print(
-            f"projection: {GRASPDB_SIZE} trials (~300 frames; these average {frames:.0f}) at the 2-worker "
-            f"rate ≈ {projected:.1f} h"
+            f"projection: {GRASPDB_SIZE} trials of {PROJECTED_FRAMES} frames: {per_trial:.3f} s per trial "
+            f"on 1 worker (measured {wall / trials:.3f} s at {frames:.0f} frames on average, replay scaled "
+            f"to {PROJECTED_FRAMES}) ÷ {scaling:.2f} (2 vs 1 worker) = {projected:.1f} min on 2 cores"
         )
+        print(f"load average (1, 5, 15 min) at the end: {_load()}")
         print(f"scaling_2_workers={scaling:.3f}")
         print(f"runner_overhead={overhead / (wall / trials):.4f}")
+        print(f"ray_records_identical={same}")
+        print(f"graspdb_projection_min={projected:.1f}")
+        print(f"ray_vs_pool={results[2][0] / ray_wall:.3f}")
 
 
 if __name__ == "__main__":

@@ -4,8 +4,12 @@ from __future__ import annotations
 
 import contextlib
 import os
+import shutil
 import signal
+import socket
 import subprocess
+import sys
+import tempfile
 import time
 from collections.abc import Iterator
 from pathlib import Path
@@ -98,3 +102,65 @@ def reaped(process: subprocess.Popen) -> Iterator[Children]:
         if process.poll() is None:
             process.kill()
             process.wait()
+
+
+def _free_port() -> int:
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        return s.getsockname()[1]
+
+
+@contextlib.contextmanager
+def ray_head(cpus: int, log: Path, timeout: float = 180.0) -> Iterator[tuple[str, subprocess.Popen]]:
+    """A local Ray cluster of ``cpus`` CPUs (``ray start --head --block``): its address and process.
+
+    The cluster uses Ray's token authentication (``RAY_AUTH_MODE=token``, as ``ray start`` does by
+    default): a driver connecting by address needs ``RAY_AUTH_MODE=token`` in its environment when it
+    starts (Ray reads it once, on import). Only this cluster is stopped afterwards (SIGINT to its
+    ``ray start``, which stops what it started; SIGKILL to its process group if that hangs), never other
+    Ray clusters of the machine, as ``ray stop`` would.
+
+    Args:
+        cpus: CPUs the cluster offers.
+        log: File for ``ray start``'s output.
+        timeout: Longest wait for the cluster to start, s (a bound, not a speed assertion).
+
+    Raises:
+        RuntimeError: ``ray`` is not installed, or the cluster did not start (its output says why).
+    """
+    ray = shutil.which("ray", path=os.pathsep.join([str(Path(sys.executable).parent), os.environ["PATH"]]))
+    if ray is None:
+        raise RuntimeError("the `ray` command is not installed: pip install 'handsim[ray]'")
+    port = _free_port()
+    command = [ray, "start", "--head", "--block", f"--num-cpus={cpus}", f"--port={port}",
+               "--include-dashboard=false", "--disable-usage-stats"]  # fmt: skip
+    env = {**os.environ, "RAY_AUTH_MODE": "token"}
+    with open(log, "w") as out:
+        process = subprocess.Popen(
+            command, stdout=out, stderr=subprocess.STDOUT, env=env, start_new_session=True
+        )
+    try:
+        deadline = time.monotonic() + timeout
+        while "Ray runtime started" not in log.read_text(errors="replace"):
+            if process.poll() is not None or time.monotonic() > deadline:
+                raise RuntimeError(f"the local Ray cluster did not start:\n{log.read_text(errors='replace')}")
+            time.sleep(0.2)
+        yield f"127.0.0.1:{port}", process
+    finally:
+        if process.poll() is None:
+            process.send_signal(signal.SIGINT)
+            try:
+                process.wait(timeout=60)
+            except subprocess.TimeoutExpired:
+                os.killpg(process.pid, signal.SIGKILL)
+                process.wait()
+        _forget_cluster(port)
+
+
+def _forget_cluster(port: int) -> None:
+    """Remove Ray's note of the latest cluster when it names ours (a stopped ``--block`` head leaves it,
+    and a later ``ray.init()`` without an address would try to connect to it)."""
+    note = Path(tempfile.gettempdir()) / "ray" / "ray_current_cluster"
+    with contextlib.suppress(OSError):
+        if note.read_text().strip().endswith(f":{port}"):
+            note.unlink()

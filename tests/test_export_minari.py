@@ -23,7 +23,8 @@ from handsim.export import (
     export_minari,
     recover_replay_env,
 )
-from handsim.export.episode import INFO_DOCS, STEP_INFO_KEYS
+from handsim.export.episode import INFO_DOCS, STEP_INFO_KEYS, replay_record
+from handsim.runner.portable import portable_record
 from handsim.sim.replay import ReplayConfig, replay
 from handsim.trials import Trial, find_trial, load_trial
 
@@ -332,6 +333,17 @@ def test_relative_input_paths_are_checked_in_the_runs_dataset_folder(record, tmp
         RecordMismatchError, match=rf"trajectory {motion} changed: sha256 [0-9a-f]{{12}}… now"
     ):
         export_minari(run, "handsim/relative-v0")
+
+
+def test_a_record_with_dataset_relative_paths_replays_from_the_runs_dataset_folder(record) -> None:
+    from handsim.assets import TZIONAS_DIR
+
+    portable = portable_record(record, str(TZIONAS_DIR))  # as the runner writes it
+    assert portable["trial"]["trajectory_path"] == "Models/20/Model_Hand_R.MOTION"
+    episode = replay_record(portable, root=TZIONAS_DIR)
+    loaded = json.loads(episode.metadata["trial"])  # the files as loaded: absolute
+    assert loaded["trajectory_path"] == str(TZIONAS_DIR / "Models" / "20" / "Model_Hand_R.MOTION")
+    assert loaded["objects"][0]["what"] == str(TZIONAS_DIR / "Models" / "20" / "Model_Object_Cube.SKEL")
 
 
 def test_export_refuses_a_record_whose_summary_differs_or_skips_it_when_asked(record, tmp_path) -> None:

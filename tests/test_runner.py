@@ -2,10 +2,12 @@
 
 from __future__ import annotations
 
+import dataclasses
 import hashlib
 import json
 import multiprocessing
 import os
+import re
 import shutil
 import struct
 import subprocess
@@ -25,6 +27,7 @@ from handsim.io.mano import MANO_DIR_ENV
 from handsim.runner import execute
 from handsim.runner.execute import RunnerError, run_dataset
 from handsim.runner.png import encode_png
+from handsim.runner.portable import dataset_root, portable_record, record_trial
 from handsim.runner.records import (
     RECORDS_FILE,
     RecordsError,
@@ -45,6 +48,7 @@ from tests.mano_fixtures import (
     write_arctic_mano_npy,
     write_arctic_object_npy,
 )
+from tests.processes import ROOT, child_env, ray_head
 
 CONFIG = ReplayConfig(stability_at="grasp")
 FRAMES = 4
@@ -524,10 +528,11 @@ def test_a_failing_trial_records_its_error_and_the_others_run(tmp_path):
     error = records["01_ex01-rad-002-grasp-su01.txt"]["error"]
     assert error["type"] == "FormatError"
     assert error["message"] == (
-        f"{bad.resolve()}:1: expected 30 blank-separated entries (6 time-stamp fields, switch, 23 sensors), "
-        "got 9"
-    )
+        "01_ex01-rad-002-grasp-su01.txt:1: expected 30 blank-separated entries (6 time-stamp fields, switch, "
+        "23 sensors), got 9"
+    )  # the file relative to the dataset root
     assert "Traceback (most recent call last)" in error["traceback"]
+    assert '  File "handsim/runner/worker.py", line ' in error["traceback"]  # not where handsim is installed
     failed = records["01_ex01-rad-002-grasp-su01.txt"]
     assert (failed["status"], failed["summary"], failed["curves"], failed["renders"]) == (
         "error",
@@ -536,6 +541,49 @@ def test_a_failing_trial_records_its_error_and_the_others_run(tmp_path):
         [],
     )
     assert records["Models/20"]["status"] == "ok"
+
+
+def _dataset_in(folder: Path) -> Path:
+    """A small dataset (bundled Tzionas sequence 20, a malformed glove recording) copied into ``folder``."""
+    data = _tzionas_copies(folder, [20])
+    (data / "01_ex01-rad-002-grasp-su01.txt").write_text("2014 09 12 08 49 21.71200 1 0.1 garbage\n")
+    return data
+
+
+def test_the_same_dataset_in_two_folders_gives_byte_identical_records(tmp_path):
+    config = ReplayConfig(control_rate=50.0)
+    files = []
+    for name in ("here", "elsewhere/deeper"):
+        data = _dataset_in(tmp_path / name / "data")
+        summary = run_dataset(discover(data), tmp_path / name / "out", workers=1, frames=0, config=config,
+                              progress=False)  # fmt: skip
+        assert (summary.ok, summary.failed) == (1, 1)
+        files.append((tmp_path / name / "out" / RECORDS_FILE).read_bytes())
+    assert str(tmp_path).encode() not in files[0]
+    without_timing = [re.sub(rb',"timing":\{[^}]*\}', b"", f) for f in files]
+    assert without_timing[0] == without_timing[1] and without_timing[0].count(b"\n") == 2
+    record = {r["id"]: r for r in read_records(tmp_path / "here" / "out")}["Models/20"]
+    assert record["trial"]["trajectory_path"] == "Models/20/Model_Hand_R.MOTION"
+    assert record["trial"]["objects"][0]["what"] == "Models/20/Model_Object_Cube.SKEL"
+    assert record["notes"][0] == "hand Model_Hand_R.SKEL and objects ['cube'] from Configs/20/MODELS_INFO.txt"
+
+
+def test_record_trial_joins_a_records_relative_paths_to_the_dataset_root(tmp_path):
+    data = _tzionas_copies(tmp_path / "data", [20])
+    (entry,) = discover(data).entries
+    record = portable_record({"trial": entry.trial.to_dict()}, str(data))
+    assert record["trial"]["skeleton_path"] == "Models/20/Model_Hand_R.SKEL"
+    notes = ("hand Model_Hand_R.SKEL and objects ['cube'] from Configs/20/MODELS_INFO.txt",)  # text: relative
+    assert record_trial(record, data) == dataclasses.replace(entry.trial, notes=notes)
+    catalogue = portable_record({"trial": {**entry.trial.to_dict(), "objects": [{"what": "mug"}]}}, str(data))
+    assert record_trial(catalogue, data).objects[0].what == "mug"  # a catalogue name, not a file in the root
+
+
+def test_a_run_of_trial_entries_finds_their_dataset_root(tmp_path):
+    data = _tzionas_copies(tmp_path / "data", [20, 21])
+    discovery = discover(data)
+    assert dataset_root(discovery.entries) == discovery.root == str(data)
+    assert dataset_root([]) is None
 
 
 def _crashing_outcome(entry, config, frames):
@@ -676,7 +724,7 @@ def test_the_ray_backend_gives_bitwise_the_records_of_the_local_backend(real_run
     ray = pytest.importorskip("ray")
     discovery, _, _, records = real_run
     entries = tuple(e for e in discovery.entries if e.id in FAST_IDS)
-    ray.init(num_cpus=2, include_dashboard=False, log_to_driver=False)
+    ray.init(address="local", num_cpus=2, include_dashboard=False, log_to_driver=False)
     try:
         summary = run_dataset(entries, tmp_path, backend="ray", config=CONFIG, frames=FRAMES, progress=False)
     finally:
@@ -701,6 +749,32 @@ def test_handsim_report_runs_renders_and_re_renders(tmp_path, capsys):
     assert (out / "run.json").is_file() and len(read_records(out)) == 1
     assert main(["report", "--render-only", str(out)]) == 0
     assert "1 trials: 1 ok" in capsys.readouterr().out
+
+
+@pytest.mark.slow
+def test_handsim_report_runs_on_a_ray_cluster_given_its_address_and_leaves_it_running(tmp_path, capsys):
+    pytest.importorskip("ray")
+    data = _dataset_in(tmp_path / "data")
+    options = ["--frames", "1", "--rate", "50"]
+    assert main(["report", str(data), "-o", str(tmp_path / "ref"), "--workers", "1", *options]) == 0
+    capsys.readouterr()
+    env = {
+        **child_env(),
+        "RAY_AUTH_MODE": "token",
+    }  # the cluster's token authentication (ray start's default)
+    with ray_head(2, tmp_path / "ray.log") as (address, head):
+        ray = ["--backend", "ray", "--address", address, *options]
+        done = subprocess.run(
+            [sys.executable, "-m", "handsim.cli", "report", str(data), "-o", str(tmp_path / "out"), *ray],
+            capture_output=True, text=True, env=env, cwd=ROOT, check=False,
+        )  # fmt: skip
+        assert done.returncode == 0, done.stderr
+        assert head.poll() is None  # the cluster is the user's: still running
+        tzionas = [e for e in discover(data).entries if e.id == "Models/20"]  # no address: a Ray of its own
+        local = run_dataset(tzionas, tmp_path / "local", backend="ray", workers=1, frames=0, progress=False)
+    assert "2 trials: 1 ok, 0 diverged, 1 failed" in done.stdout
+    assert _without_timing(read_records(tmp_path / "out")) == _without_timing(read_records(tmp_path / "ref"))
+    assert local.ran == ("Models/20",) and read_records(tmp_path / "local")[0]["status"] == "ok"
 
 
 @pytest.mark.parametrize(

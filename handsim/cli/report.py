@@ -191,7 +191,11 @@ def register(commands: argparse._SubParsersAction) -> None:
         help="trials at once (default: all cores; 1 = in-process)",
     )
     report.add_argument("--backend", choices=("local", "ray"), default="local", help="process pool or Ray")
-    report.add_argument("--address", metavar="ADDR", help="Ray cluster address (default: start a local Ray)")
+    report.add_argument(
+        "--address", metavar="ADDR",
+        help="with --backend ray: a running Ray cluster (HOST:PORT, or 'auto' for the one `ray start` "
+        "started on this machine); default: start a Ray of N CPUs for this run",
+    )  # fmt: skip
     report.add_argument(
         "--frames",
         type=non_negative_int,

@@ -267,8 +267,9 @@ def replay_record(
             longer loads, the model or the summary differ (the message lists every difference).
     """
     from handsim.envs.replay_env import ReplayEnv
+    from handsim.runner.portable import record_trial
     from handsim.sim.replay import replay
-    from handsim.trials import Trial, load_trial
+    from handsim.trials import load_trial
 
     rid = str(record.get("id", "?"))
     if not isinstance(record.get("trial"), dict):
@@ -280,7 +281,7 @@ def replay_record(
     if problems:
         raise RecordMismatchError(f"trial {rid!r}: its inputs changed since the run: {'; '.join(problems)}")
     try:
-        loaded = load_trial(Trial.from_dict(record["trial"]), metrics=config.metrics)
+        loaded = load_trial(record_trial(record, root), metrics=config.metrics)
         _check_model(rid, record, loaded.scene.model_sha256)
         result = replay(loaded.scene, loaded.trajectory, config)
         problems = summary_problems(record["summary"], result.summary, rtol, atol)
@@ -389,7 +390,7 @@ def _episode_metadata(record: dict, result, loaded) -> dict:
             "trial_id": record["id"],
             "status": record.get("status"),
             "kind": record.get("kind", loaded.trial.kind),
-            "trial": json.dumps(record["trial"], sort_keys=True),
+            "trial": json.dumps(loaded.trial.to_dict(), sort_keys=True),
             "inputs": json.dumps(record.get("inputs") or [], sort_keys=True),
             "parameters": json.dumps(record["parameters"]["replay"], sort_keys=True),
             "model_sha256": loaded.scene.model_sha256,

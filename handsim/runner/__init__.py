@@ -5,6 +5,7 @@
 * :mod:`handsim.runner.worker` — one trial from files to record (:func:`~handsim.runner.worker.run_trial`).
 * :mod:`handsim.runner.execute` — :func:`~handsim.runner.execute.run_dataset`: every trial, resumable.
 * :mod:`handsim.runner.records` — ``OUT/records.jsonl`` and ``OUT/run.json`` (schema: ``docs/records.md``).
+* :mod:`handsim.runner.portable` — records whose paths are relative to the dataset root, and back.
 
 Importing this package imports neither MuJoCo nor the submodules.
 """

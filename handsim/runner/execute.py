@@ -37,6 +37,7 @@ from pathlib import Path
 from types import ModuleType
 
 from handsim.errors import HandsimError
+from handsim.runner.portable import dataset_root, portable_record
 from handsim.runner.records import (
     RecordWriter,
     load_records,
@@ -177,7 +178,7 @@ def _entries(source: Discovery | Sequence[TrialEntry]) -> tuple[tuple[TrialEntry
     if isinstance(source, Discovery):
         return source.entries, source.to_dict()
     entries = tuple(source)
-    return entries, {"root": None, "trials": len(entries)}
+    return entries, {"root": dataset_root(entries), "trials": len(entries)}
 
 
 def _flat(value: object, prefix: str = "") -> dict[str, object]:
@@ -379,7 +380,12 @@ def _ray(
     started = not ray.is_initialized()
     if started:
         env = {"env_vars": {"OMP_NUM_THREADS": "1", **_gl_env()}}
-        options = {"address": address} if address else {"num_cpus": workers, "include_dashboard": False}
+        # "local": a new Ray of our own even where a cluster runs on this machine (ray.init() would join it)
+        options = (
+            {"address": address}
+            if address
+            else {"address": "local", "num_cpus": workers, "include_dashboard": False}
+        )
         ray.init(runtime_env=env, log_to_driver=False, logging_level=logging.WARNING, **options)
     task = ray.remote(num_cpus=1, max_retries=0)(_ray_trial)
     pending = {task.remote(entry, config, frames): entry for entry in todo}
@@ -528,14 +534,15 @@ def run_dataset(
                 f"{len(entries) - len(todo)} of {len(entries)} trials already recorded in {out}: skipped"
             )
         for outcome in outcomes:
+            record = portable_record(outcome.record, overview.get("root"))
             write_outcome_files(out, outcome)
-            writer.append(outcome.record)
-            ran.append(outcome.record["id"])
-            status[outcome.record["status"]] += 1
+            writer.append(record)
+            ran.append(record["id"])
+            status[record["status"]] += 1
             bar.set_postfix(status, refresh=False)
             bar.update(1)
             if on_record is not None:
-                on_record(outcome.record)
+                on_record(record)
     ids = {e.id for e in entries}
     mine = [r for r in load_records(out).records if r["id"] in ids]
     counts = _counts(mine, ids)

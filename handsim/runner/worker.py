@@ -20,11 +20,11 @@ import os
 import signal
 import sys
 import time
-import traceback
 from dataclasses import dataclass, field
 from pathlib import Path
 
 from handsim import lifeline
+from handsim.runner.portable import portable_traceback
 from handsim.runner.records import SCHEMA, json_ready, write_atomic
 from handsim.sim.replay import ReplayConfig
 from handsim.trials import TrialEntry
@@ -203,7 +203,7 @@ def trial_outcome(entry: TrialEntry, config: ReplayConfig, frames: int = 4) -> T
         record["error"] = {
             "type": type(exc).__name__,
             "message": str(exc),
-            "traceback": "".join(traceback.format_exception(type(exc), exc, exc.__traceback__)),
+            "traceback": portable_traceback(exc),
         }
     timing["total_s"] = time.perf_counter() - start
     record["timing"] = {k: round(v, 3) for k, v in timing.items()}
