@@ -10,7 +10,7 @@ import argparse
 import math
 import sys
 from pathlib import Path
-from typing import TYPE_CHECKING, NoReturn
+from typing import TYPE_CHECKING, Any, NoReturn, Protocol
 
 from handsim.physical_ranges import DENSITY, OBJECT_MASS
 from handsim.runner.records import write_atomic
@@ -20,6 +20,23 @@ if TYPE_CHECKING:
 
 EXIT_INTERRUPTED = 130
 """Exit code after Ctrl-C or SIGTERM (128 + SIGINT, as a shell reports it)."""
+
+
+class Commands(Protocol):
+    """What a command's ``register`` needs of the ``handsim`` subcommands (``add_subparsers()``'s result).
+
+    Named by what it does rather than by argparse's private class, which the standard library does not export.
+    """
+
+    def add_parser(self, name: str, **kwargs: Any) -> argparse.ArgumentParser:
+        """Add the subcommand ``name`` and return its parser."""
+
+
+class ArgumentContainer(Protocol):
+    """A parser or one of its argument groups: anything options are added to."""
+
+    def add_argument(self, *flags: str, **kwargs: Any) -> argparse.Action:
+        """Add one option."""
 
 
 class Parser(argparse.ArgumentParser):
@@ -68,7 +85,7 @@ def positive_number(text: str) -> float:
 
 def add_ranged_float(
     parser: argparse.ArgumentParser,
-    container: argparse.ArgumentParser | argparse._ArgumentGroup,
+    container: ArgumentContainer,
     flag: str,
     value_range: PhysicalRange,
     **kwargs,

@@ -6,6 +6,7 @@ import argparse
 from collections.abc import Callable
 
 from handsim.cli._common import (
+    Commands,
     add_force,
     add_hand_size,
     add_object_mass_options,
@@ -196,7 +197,7 @@ def _add_object_options(parser: argparse.ArgumentParser) -> None:
     )
 
 
-def register(commands: argparse._SubParsersAction) -> None:
+def register(commands: Commands) -> None:
     """Add the ``build`` command and its ``hand``, ``object`` and ``scene`` kinds."""
     build = commands.add_parser(
         "build",

@@ -4,6 +4,8 @@ from __future__ import annotations
 
 import argparse
 
+from handsim.cli._common import Commands
+
 
 def _run(args: argparse.Namespace) -> int:
     # lazy: the catalogue table, only for this command
@@ -30,7 +32,7 @@ def _run(args: argparse.Namespace) -> int:
     return 0
 
 
-def register(commands: argparse._SubParsersAction) -> None:
+def register(commands: Commands) -> None:
     """Add the ``catalog`` command."""
     catalog = commands.add_parser(
         "catalog",

@@ -18,7 +18,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING
 
 from handsim.assets import ASSETS_DIR, TZIONAS_DIR
-from handsim.cli._common import add_hand_size, non_negative_int, output_dir, positive_int
+from handsim.cli._common import Commands, add_hand_size, non_negative_int, output_dir, positive_int
 from handsim.cli.report import run_and_render
 
 if TYPE_CHECKING:
@@ -106,7 +106,7 @@ def _run(args: argparse.Namespace) -> int:
     )
 
 
-def register(commands: argparse._SubParsersAction) -> None:
+def register(commands: Commands) -> None:
     """Add the ``demo`` command."""
     demo = commands.add_parser(
         "demo",

@@ -9,7 +9,7 @@ from __future__ import annotations
 import argparse
 import sys
 
-from handsim.cli._common import positive_int
+from handsim.cli._common import Commands, positive_int
 
 
 def _run_minari(args: argparse.Namespace) -> int:
@@ -46,7 +46,7 @@ def _run_minari(args: argparse.Namespace) -> int:
     return 0
 
 
-def register(commands: argparse._SubParsersAction) -> None:
+def register(commands: Commands) -> None:
     """Add the ``export`` command (``export minari``)."""
     export = commands.add_parser(
         "export",

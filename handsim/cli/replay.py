@@ -14,6 +14,7 @@ import math
 import sys
 
 from handsim.cli._common import (
+    Commands,
     add_arctic_options,
     add_control_rate,
     add_force,
@@ -374,7 +375,7 @@ def _replay(args: argparse.Namespace) -> int:
     return EXIT_NOT_VALID if invalid else 0
 
 
-def register(commands: argparse._SubParsersAction) -> None:
+def register(commands: Commands) -> None:
     """Add the ``replay`` command."""
     replay = commands.add_parser(
         "replay",

@@ -16,6 +16,7 @@ from typing import TYPE_CHECKING
 
 from handsim.cli._common import (
     EXIT_INTERRUPTED,
+    Commands,
     add_arctic_options,
     add_control_rate,
     non_negative_int,
@@ -169,7 +170,7 @@ def _report(args: argparse.Namespace) -> int:
     )  # fmt: skip
 
 
-def register(commands: argparse._SubParsersAction) -> None:
+def register(commands: Commands) -> None:
     """Add the ``report`` command."""
     report = commands.add_parser(
         "report",

@@ -5,7 +5,7 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from handsim.cli._common import output_file
+from handsim.cli._common import Commands, output_file
 
 
 def load_trajectory(path: str, skeleton_path: str | None, calibration_path: str | None):
@@ -89,7 +89,7 @@ def _calibrate(args: argparse.Namespace) -> int:
     return 0
 
 
-def register(commands: argparse._SubParsersAction) -> None:
+def register(commands: Commands) -> None:
     """Add the ``inspect`` and ``calibrate`` commands."""
     inspect = commands.add_parser(
         "inspect",
