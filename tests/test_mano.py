@@ -16,17 +16,14 @@ from handsim.io.mano import (
     FINGERS,
     MANO_JOINT_NAMES,
     MANOSequence,
-    axis_angle_to_matrix,
     full_mano_pose,
     mano_joints,
     mano_mean_joints,
     mano_pose_to_trajectory,
-    matrix_to_zyx,
     read_mano_model,
-    rotation_error,
-    zyx_to_matrix,
 )
 from handsim.io.safe_pickle import load_restricted_pickle
+from handsim.rotations import axis_angle_to_matrix, matrix_to_zyx, rotation_error, zyx_to_matrix
 from handsim.sim import compile_spec, warning_counts
 from tests.mano_fixtures import (
     PARENTS,
