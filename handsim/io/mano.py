@@ -36,6 +36,7 @@ from typing import Any
 
 import numpy as np
 import numpy.typing as npt
+import scipy.sparse
 
 from handsim.assets import ASSETS_DIR
 from handsim.errors import FormatError, InputFileError, ModelError, SkeletonError, TrajectoryError
@@ -186,7 +187,10 @@ class SparseMatrixStub:
         self.state = state
 
     def to_dense(self) -> np.ndarray:
-        """The matrix as a dense float array.
+        """The matrix as a dense float array, rebuilt by :mod:`scipy.sparse` from the pickled arrays.
+
+        The arrays are fully checked (``check_format(full_check=True)``: index pointers, index range)
+        before scipy's native code densifies them.
 
         Raises:
             ValueError: The state lacks ``data``/``indices``/``indptr``/shape or they are inconsistent.
@@ -196,19 +200,18 @@ class SparseMatrixStub:
         data, indices, indptr = (np.asarray(s.get(k)) for k in ("data", "indices", "indptr"))
         if shape is None or data.ndim != 1 or indices.shape != data.shape or indptr.ndim != 1:
             raise ValueError(f"sparse matrix state has keys {sorted(s)}; need data, indices, indptr, _shape")
+        if indices.dtype.kind not in "iu" or indptr.dtype.kind not in "iu":
+            raise ValueError(
+                f"sparse indices and indptr must be integers, got {indices.dtype} and {indptr.dtype}"
+            )
         nrows, ncols = (int(n) for n in shape)
-        major = ncols if self.layout == "csc" else nrows
-        if len(indptr) != major + 1 or indptr[-1] != len(data) or np.any(np.diff(indptr) < 0):
-            raise ValueError(f"inconsistent {self.layout} index pointers for shape {(nrows, ncols)}")
-        outer = np.repeat(np.arange(major), np.diff(indptr))
-        dense = np.zeros((nrows, ncols))
-        rows, cols = (indices, outer) if self.layout == "csc" else (outer, indices)
-        if len(indices) and (
-            indices.min() < 0 or indices.max() >= (nrows if self.layout == "csc" else ncols)
-        ):
-            raise ValueError("sparse matrix index out of range")
-        np.add.at(dense, (rows.astype(np.int64), cols), data.astype(float))
-        return dense
+        build = scipy.sparse.csc_array if self.layout == "csc" else scipy.sparse.csr_array
+        try:
+            matrix = build((data.astype(float), indices, indptr), shape=(nrows, ncols))
+            matrix.check_format(full_check=True)
+        except (TypeError, ValueError) as exc:
+            raise ValueError(f"inconsistent {self.layout} arrays for shape {(nrows, ncols)}: {exc}") from None
+        return matrix.toarray()
 
 
 class CscStub(SparseMatrixStub):
