@@ -28,6 +28,7 @@ import numpy as np
 import numpy.typing as npt
 
 from handsim.errors import SkeletonError
+from handsim.rotations import rotation_about_axis
 
 _ORTHONORMAL_TOL = 1e-6
 
@@ -45,25 +46,6 @@ def mj_name(name: str) -> str:
         The sanitised name.
     """
     return re.sub(r"[^A-Za-z0-9_]", "_", name)
-
-
-def rotation_about_axis(axis: npt.ArrayLike, angles: npt.ArrayLike) -> np.ndarray:
-    """Rotation matrices about a fixed unit axis (Rodrigues' formula).
-
-    Args:
-        axis: Unit rotation axis, shape (3,).
-        angles: Angles in radians, any shape ``S``.
-
-    Returns:
-        Rotation matrices of shape ``S + (3, 3)``.
-    """
-    a = np.asarray(axis, dtype=float)
-    theta = np.asarray(angles, dtype=float)
-    k = np.array([[0.0, -a[2], a[1]], [a[2], 0.0, -a[0]], [-a[1], a[0], 0.0]])
-    k2 = k @ k
-    s = np.sin(theta)[..., None, None]
-    c = np.cos(theta)[..., None, None]
-    return np.eye(3) + s * k + (1.0 - c) * k2
 
 
 @dataclass(frozen=True)

@@ -50,9 +50,9 @@ from dataclasses import dataclass, replace
 from typing import Literal, get_args
 
 import numpy as np
-import numpy.typing as npt
 
 from handsim.errors import TrajectoryError
+from handsim.rotations import slerp
 from handsim.skeleton import Skeleton
 from handsim.trajectory import ObjectTrack, Phase, Trajectory
 
@@ -61,9 +61,6 @@ ResampleMethod = Literal["linear"]
 
 RESAMPLE_METHODS: tuple[ResampleMethod, ...] = get_args(ResampleMethod)
 """All resampling methods."""
-
-_SLERP_LINEAR_DOT = 0.9995
-"""Above this |q0·q1| (angle below about 3.6°) slerp falls back to normalised linear interpolation."""
 
 
 # --------------------------------------------------------------------------------------------------
@@ -395,45 +392,6 @@ def _lerp(a: np.ndarray, b: np.ndarray, w: np.ndarray) -> np.ndarray:
     return np.where(w == 0, a, np.where(w == 1, b, mixed))
 
 
-def slerp(q0: npt.ArrayLike, q1: npt.ArrayLike, w: npt.ArrayLike) -> np.ndarray:
-    """Spherical linear interpolation of unit quaternions (w, x, y, z) along the shorter arc.
-
-    Args:
-        q0: Start quaternions, shape (..., 4); normalised first.
-        q1: End quaternions, shape (..., 4); normalised first, and negated where ``q0 · q1 < 0`` (the
-            same rotation in the hemisphere of ``q0``).
-        w: Interpolation weights in [0, 1], shape (...): 0 gives ``q0``, 1 gives ``q1`` (as given,
-            normalised, without the sign flip).
-
-    Returns:
-        Unit quaternions, shape (..., 4). Pairs closer than about 3.6° are interpolated linearly and
-        normalised (slerp's formula loses precision there).
-    """
-    with np.errstate(divide="ignore", invalid="ignore"):  # a zero quaternion gives NaN, not a warning
-        a = np.asarray(q0, dtype=float)
-        b = np.asarray(q1, dtype=float)
-        a = a / np.linalg.norm(a, axis=-1, keepdims=True)
-        b = b / np.linalg.norm(b, axis=-1, keepdims=True)
-        return _slerp_unit(a, b, np.asarray(w, dtype=float))
-
-
-def _slerp_unit(a: np.ndarray, b: np.ndarray, w: np.ndarray) -> np.ndarray:
-    """:func:`slerp` of normalised quaternions."""
-    weights = np.broadcast_to(w, a.shape[:-1])[..., None]
-    dot = np.sum(a * b, axis=-1, keepdims=True)
-    b_near = np.where(dot < 0, -b, b)
-    dot = np.abs(dot)
-    theta = np.arccos(np.clip(dot, -1.0, 1.0))
-    sin_theta = np.sin(theta)
-    close = dot > _SLERP_LINEAR_DOT
-    safe = np.where(close, 1.0, sin_theta)
-    s0 = np.where(close, 1.0 - weights, np.sin((1.0 - weights) * theta) / safe)
-    s1 = np.where(close, weights, np.sin(weights * theta) / safe)
-    q = s0 * a + s1 * b_near
-    q = q / np.linalg.norm(q, axis=-1, keepdims=True)
-    return np.where(weights == 0, a, np.where(weights == 1, b, q))
-
-
 def _output_valid(known: np.ndarray, i: np.ndarray, j: np.ndarray, w: np.ndarray) -> np.ndarray:
     """An output sample is valid when every bracketing input sample with a nonzero weight is known."""
     if known.ndim > w.ndim:
@@ -658,6 +616,5 @@ __all__ = [
     "join_hands",
     "limit_violations",
     "resample",
-    "slerp",
     "uniform_times",
 ]

@@ -31,7 +31,8 @@ from handsim.io.tzionas_motion import (
     read_tzionas_object_motion,
     read_tzionas_sequence,
 )
-from handsim.skeleton import mj_name, rotation_about_axis
+from handsim.rotations import rotation_about_axis
+from handsim.skeleton import mj_name
 
 MM = 1e-3
 HAND_FRAMES = 186  # Configs/20/INDEX_BOUNDS.txt: TotalAlligned

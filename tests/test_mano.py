@@ -8,6 +8,7 @@ import sys
 import mujoco
 import numpy as np
 import pytest
+import scipy.sparse
 from scipy.spatial.transform import Rotation
 
 from handsim.builders.mano_hand import build_mano_hand, mano_hand_skeleton, mano_model_skeleton, mano_skeleton
@@ -15,18 +16,17 @@ from handsim.errors import FormatError, ModelError, SkeletonError, TrajectoryErr
 from handsim.io.mano import (
     FINGERS,
     MANO_JOINT_NAMES,
+    CscStub,
+    CsrStub,
     MANOSequence,
-    axis_angle_to_matrix,
     full_mano_pose,
     mano_joints,
     mano_mean_joints,
     mano_pose_to_trajectory,
-    matrix_to_zyx,
     read_mano_model,
-    rotation_error,
-    zyx_to_matrix,
 )
 from handsim.io.safe_pickle import load_restricted_pickle
+from handsim.rotations import axis_angle_to_matrix, matrix_to_zyx, rotation_error, zyx_to_matrix
 from handsim.sim import compile_spec, warning_counts
 from tests.mano_fixtures import (
     PARENTS,
@@ -124,6 +124,39 @@ def test_mano_pkl_with_a_wrong_regressor_shape_raises_error_naming_it(tmp_path):
 
 # --------------------------------------------------------------------------------------------------
 # Joints, skeleton, fingertips
+
+
+@pytest.mark.parametrize("layout", ["csc", "csr"])
+def test_sparse_regressor_is_rebuilt_exactly_as_scipy_sparse_densifies_it(layout):
+    rng = np.random.default_rng(3)
+    dense = np.where(rng.uniform(size=(16, 50)) < 0.2, rng.normal(size=(16, 50)), 0.0)
+    matrix = scipy.sparse.csc_array(dense) if layout == "csc" else scipy.sparse.csr_array(dense)
+    stub = CscStub() if layout == "csc" else CsrStub()
+    stub.__setstate__(
+        {"data": matrix.data, "indices": matrix.indices, "indptr": matrix.indptr, "_shape": (16, 50)}
+    )
+    np.testing.assert_array_equal(stub.to_dense(), dense)
+
+
+_INCONSISTENT = "inconsistent csc arrays for shape (16, 2): "  # then scipy.sparse's own reason
+
+
+@pytest.mark.parametrize(
+    ("indices", "indptr", "message"),
+    [
+        ([0, 16], [0, 1, 2], _INCONSISTENT),  # a row index past the last row
+        ([0, 1], [1, 1, 2], _INCONSISTENT),  # index pointers not starting at 0 (was read shifted before)
+        ([0, 1], [0, 2, 1], _INCONSISTENT),  # decreasing index pointers
+        ([0.5, 1], [0, 1, 2], "sparse indices and indptr must be integers, got float64 and int64"),
+    ],
+)
+def test_inconsistent_sparse_regressor_arrays_raise_before_densifying(indices, indptr, message):
+    stub = CscStub()
+    stub.__setstate__(
+        {"data": np.ones(2), "indices": np.array(indices), "indptr": np.array(indptr), "_shape": (16, 2)}
+    )
+    with pytest.raises(ValueError, match="^" + re.escape(message)):
+        stub.to_dense()
 
 
 def test_mano_joints_are_regressed_from_shaped_vertices(mano_pkl):

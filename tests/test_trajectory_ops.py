@@ -13,6 +13,7 @@ from hypothesis import strategies as st
 from handsim.errors import TrajectoryError
 from handsim.glove.phases import attach_phases
 from handsim.io import read_skeleton, read_trajectory
+from handsim.rotations import slerp
 from handsim.skeleton import Dof, Joint, Skeleton
 from handsim.trajectory import ObjectTrack, Phase, Trajectory
 from handsim.trajectory_ops import (
@@ -20,7 +21,6 @@ from handsim.trajectory_ops import (
     clamp_to_limits,
     limit_violations,
     resample,
-    slerp,
     uniform_times,
 )
 

@@ -29,6 +29,7 @@ from handsim.builders.hand_geometry import Capsule, default_hand_mass, finger_ch
 from handsim.builders.surfaces import SKIN
 from handsim.errors import ModelError
 from handsim.physical_ranges import HAND_MASS
+from handsim.rotations import matrix_to_quat
 from handsim.skeleton import Skeleton, mj_name
 
 SKIN_RGBA = (0.87, 0.70, 0.60, 1.0)
@@ -64,12 +65,6 @@ JOINT_CLASSES: dict[str, JointClass] = {
     "rot": JointClass(damping=0.05, kp=1.5, force=2.0),
     "wrist": JointClass(damping=0.5, kp=20.0, force=15.0),
 }
-
-
-def _quat(rotation: np.ndarray) -> np.ndarray:
-    q = np.empty(4)
-    mujoco.mju_mat2Quat(q, np.ascontiguousarray(rotation, dtype=float).ravel())
-    return q
 
 
 def _add_defaults(spec: mujoco.MjSpec, root_has_dofs: bool) -> dict[str, mujoco.MjsDefault]:
@@ -200,7 +195,9 @@ def build_hand(
             parent_body = bodies[joint.parent]
             pos = to_local(joint.parent)(joint.position)
             rot = parent.frame.T @ joint.frame
-        body = parent_body.add_body(name=mj_name(joint.name), pos=pos.tolist(), quat=_quat(rot).tolist())
+        body = parent_body.add_body(
+            name=mj_name(joint.name), pos=pos.tolist(), quat=matrix_to_quat(rot).tolist()
+        )
         bodies[i] = body
         body.add_site(name=mj_name(joint.name), pos=[0.0, 0.0, 0.0], size=[0.003, 0, 0])
         for dof in skeleton.dofs_of(joint.name):

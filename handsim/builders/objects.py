@@ -36,6 +36,7 @@ from handsim.errors import ModelError
 from handsim.mesh import Mesh
 from handsim.object_model import Hinge, ObjectModel, Primitive
 from handsim.physical_ranges import DENSITY, OBJECT_MASS
+from handsim.rotations import quat_to_matrix
 
 OBJECT_RGBA = (0.55, 0.60, 0.68, 1.0)
 HULL_RGBA = (0.9, 0.5, 0.2, 0.4)
@@ -412,6 +413,4 @@ def _primitive_corners(geom: mujoco.MjsGeom) -> np.ndarray:
     else:
         raise ModelError(f"geom {geom.name!r}: unsupported primitive type {kind}")
     corners = np.array([[x, y, z] for x in (-1, 1) for y in (-1, 1) for z in (-1, 1)]) * half
-    rot = np.empty(9)
-    mujoco.mju_quat2Mat(rot, np.asarray(geom.quat, dtype=float))
-    return corners @ rot.reshape(3, 3).T + np.asarray(geom.pos, dtype=float)
+    return corners @ quat_to_matrix(geom.quat).T + np.asarray(geom.pos, dtype=float)

@@ -18,6 +18,7 @@ import numpy.typing as npt
 from handsim.builders.objects import object_points
 from handsim.builders.surfaces import CONTACT_CONDIM, ENVIRONMENT
 from handsim.errors import ModelError
+from handsim.rotations import matrix_to_quat, quat_multiply, quat_rotate, quat_to_matrix
 
 HAND_PREFIX = "hand/"
 OBJECT_PREFIX = "obj/"
@@ -79,9 +80,8 @@ def resting_position(
     Returns:
         Position (x, y, z), metres.
     """
-    rot = np.empty(9)
-    mujoco.mju_quat2Mat(rot, np.asarray(_vector(quat, 4, "quat")))
-    lowest = float((object_points(obj) @ rot.reshape(3, 3).T)[:, 2].min())
+    rot = quat_to_matrix(_vector(quat, 4, "quat"))
+    lowest = float((object_points(obj) @ rot.T)[:, 2].min())
     return np.array([xy[0], xy[1], gap - lowest], dtype=float)
 
 
@@ -255,11 +255,9 @@ def _weld_to_mocap(
             f"({root.first_joint().name!r}); a recorded root pose replaces them, so build the hand without "
             "root DoFs or use hand_root='fixed'"
         )
-    frame_rot, frame_pos = np.empty(9), np.asarray(_vector(pos, 3, "hand_pos"))
-    mujoco.mju_quat2Mat(frame_rot, np.asarray(_vector(quat, 4, "hand_quat")))
-    world_pos = frame_pos + frame_rot.reshape(3, 3) @ np.asarray(root.pos)
-    world_quat = np.empty(4)
-    mujoco.mju_mulQuat(world_quat, np.asarray(_vector(quat, 4, "hand_quat")), np.asarray(root.quat))
+    hand_quat = _vector(quat, 4, "hand_quat")
+    world_pos = np.asarray(_vector(pos, 3, "hand_pos")) + quat_rotate(hand_quat, root.pos)
+    world_quat = quat_multiply(hand_quat, root.quat)
     root.add_freejoint(name=f"root_free/{name}" if name else "root_free")
     target_name = hand_target_name(name)
     target = spec.worldbody.add_body(name=target_name, pos=world_pos.tolist(), quat=world_quat.tolist())
@@ -325,6 +323,4 @@ def _add_look_at_camera(spec: mujoco.MjSpec, name: str, target: np.ndarray, eye:
     up = np.cross(right, forward)
     # MuJoCo cameras look along their -z axis, with x to the right and y up in the image.
     rot = np.column_stack([right, up, -forward])
-    quat = np.empty(4)
-    mujoco.mju_mat2Quat(quat, rot.ravel())
-    spec.worldbody.add_camera(name=name, pos=eye.tolist(), quat=quat.tolist(), fovy=45.0)
+    spec.worldbody.add_camera(name=name, pos=eye.tolist(), quat=matrix_to_quat(rot).tolist(), fovy=45.0)

@@ -28,7 +28,6 @@ from dataclasses import dataclass, replace
 import numpy as np
 import trimesh
 from scipy.spatial import cKDTree
-from scipy.spatial.transform import Rotation
 
 from handsim.errors import TrajectoryError
 from handsim.io.arctic_motion import ARCTIC_FPS, HANDS, ArcticSequence
@@ -36,11 +35,11 @@ from handsim.io.mano import (
     MANO_JOINT_NAMES,
     MANOModel,
     MANOSequence,
-    axis_angle_to_matrix,
     mano_joints,
     mano_pose_to_trajectory,
 )
 from handsim.object_model import ObjectModel
+from handsim.rotations import axis_angle_to_matrix, quat_to_matrix
 from handsim.skeleton import Skeleton
 from handsim.trajectory import ObjectTrack, Trajectory
 from handsim.trajectory_ops import join_hands
@@ -204,7 +203,7 @@ def hand_points(
     names = (*MANO_JOINT_NAMES, *skeleton.fingertips)
     index = [skeleton.joint_index(n) for n in names]
     local = skeleton.forward_kinematics(trajectory.targets).positions[:, index] - skeleton.joints[0].position
-    rotation = Rotation.from_quat(trajectory.root_pose[:, 3:], scalar_first=True).as_matrix()
+    rotation = quat_to_matrix(trajectory.root_pose[:, 3:])
     return trajectory.root_pose[:, None, :3] + local @ np.swapaxes(rotation, 1, 2)
 
 
@@ -224,7 +223,7 @@ def surface_distances(
     """
     n = len(points)
     pos, quat = track.pose[:, :3], track.pose[:, 3:]
-    rotation = Rotation.from_quat(quat, scalar_first=True).as_matrix()
+    rotation = quat_to_matrix(quat)
     in_object = np.einsum("nji,npj->npi", rotation, points - pos[:, None])  # Rᵀ (p − t)
     closest = np.full(n, np.inf)
     deepest = np.zeros(n)

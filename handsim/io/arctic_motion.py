@@ -38,8 +38,9 @@ from typing import Any
 import numpy as np
 
 from handsim.errors import FormatError, HandsimError, InputFileError
-from handsim.io.mano import MANOSequence, axis_angle_to_quat
+from handsim.io.mano import MANOSequence
 from handsim.io.safe_pickle import load_npy
+from handsim.rotations import axis_angle_to_quat
 from handsim.trajectory import ObjectTrack
 
 ARCTIC_FPS = 30.0

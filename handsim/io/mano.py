@@ -29,7 +29,6 @@ Conventions (pinned by ``tests/test_mano.py``; details and measured numbers in `
 from __future__ import annotations
 
 import json
-import math
 import os
 from dataclasses import dataclass
 from pathlib import Path
@@ -37,10 +36,18 @@ from typing import Any
 
 import numpy as np
 import numpy.typing as npt
+import scipy.sparse
 
 from handsim.assets import ASSETS_DIR
 from handsim.errors import FormatError, InputFileError, ModelError, SkeletonError, TrajectoryError
 from handsim.io.safe_pickle import load_restricted_pickle
+from handsim.rotations import (
+    axis_angle_to_matrix,
+    axis_angle_to_quat,
+    matrix_to_zyx,
+    rotation_error,
+    zyx_to_matrix,
+)
 from handsim.skeleton import Skeleton
 from handsim.trajectory import ObjectTrack, Trajectory
 
@@ -80,102 +87,6 @@ MANO_ARRAYS = (
 """The entries :func:`read_mano_model` reads from a MANO pkl; every other entry is ignored."""
 
 _OPTIONAL = ("posedirs", "hands_components", "hands_mean")
-_SMALL_ANGLE = 1e-6
-_GIMBAL_COS = 1e-12
-
-
-# --------------------------------------------------------------------------------------------------
-# Rotations
-
-
-def _skew(v: np.ndarray) -> np.ndarray:
-    out = np.zeros((*v.shape[:-1], 3, 3))
-    out[..., 0, 1], out[..., 0, 2] = -v[..., 2], v[..., 1]
-    out[..., 1, 0], out[..., 1, 2] = v[..., 2], -v[..., 0]
-    out[..., 2, 0], out[..., 2, 1] = -v[..., 1], v[..., 0]
-    return out
-
-
-def axis_angle_to_matrix(aa: npt.ArrayLike) -> np.ndarray:
-    """Rotation matrices from axis-angle vectors (Rodrigues).
-
-    Args:
-        aa: Axis-angle vectors (unit axis × angle in radians), shape (..., 3).
-
-    Returns:
-        Rotation matrices, shape (..., 3, 3).
-    """
-    v = np.asarray(aa, dtype=float)
-    theta2 = np.sum(v * v, axis=-1)
-    theta = np.sqrt(theta2)
-    small = theta < _SMALL_ANGLE
-    safe = np.where(small, 1.0, theta)
-    a = np.where(small, 1.0 - theta2 / 6.0, np.sin(safe) / safe)
-    b = np.where(small, 0.5 - theta2 / 24.0, (1.0 - np.cos(safe)) / (safe * safe))
-    k = _skew(v)
-    return np.eye(3) + a[..., None, None] * k + b[..., None, None] * (k @ k)
-
-
-def axis_angle_to_quat(aa: npt.ArrayLike) -> np.ndarray:
-    """Unit quaternions (w, x, y, z) from axis-angle vectors.
-
-    Args:
-        aa: Axis-angle vectors in radians, shape (..., 3).
-
-    Returns:
-        Quaternions with w ≥ 0 for angles ≤ π, shape (..., 4).
-    """
-    v = np.asarray(aa, dtype=float)
-    theta2 = np.sum(v * v, axis=-1)
-    theta = np.sqrt(theta2)
-    small = theta < _SMALL_ANGLE
-    safe = np.where(small, 1.0, theta)
-    s = np.where(small, 0.5 - theta2 / 48.0, np.sin(0.5 * safe) / safe)
-    return np.concatenate([np.cos(0.5 * theta)[..., None], s[..., None] * v], axis=-1)
-
-
-def _rot(axis: int, angle: np.ndarray) -> np.ndarray:
-    c, s = np.cos(angle), np.sin(angle)
-    i, j = {0: (1, 2), 1: (2, 0), 2: (0, 1)}[axis]  # the plane rotated, in right-handed order
-    out = np.zeros((*np.shape(angle), 3, 3))
-    out[..., axis, axis] = 1.0
-    out[..., i, i], out[..., j, j] = c, c
-    out[..., i, j], out[..., j, i] = -s, s
-    return out
-
-
-def zyx_to_matrix(angles: npt.ArrayLike) -> np.ndarray:
-    """``Rz(a) · Ry(b) · Rx(c)`` for angles ``(a, b, c)`` in radians, shape (..., 3) → (..., 3, 3)."""
-    q = np.asarray(angles, dtype=float)
-    return _rot(2, q[..., 0]) @ _rot(1, q[..., 1]) @ _rot(0, q[..., 2])
-
-
-def matrix_to_zyx(rotation: npt.ArrayLike) -> np.ndarray:
-    """Angles ``(a, b, c)`` with ``Rz(a) · Ry(b) · Rx(c) = R`` (exact up to rounding, also at gimbal lock).
-
-    ``a`` and ``b`` come from the first column; ``c`` from the remainder ``Ry(b)ᵀ Rz(a)ᵀ R``, so errors in
-    ``a`` near the singularity (|b| → π/2, where only a ± c is defined) are absorbed by ``c`` and the
-    product still equals ``R`` to rounding.
-
-    Args:
-        rotation: Rotation matrices, shape (..., 3, 3).
-
-    Returns:
-        Angles in radians, shape (..., 3): a, c in [−π, π], b in [−π/2, π/2].
-    """
-    r = np.asarray(rotation, dtype=float)
-    cos_b = np.hypot(r[..., 0, 0], r[..., 1, 0])
-    b = np.arctan2(-r[..., 2, 0], cos_b)
-    a = np.where(cos_b > _GIMBAL_COS, np.arctan2(r[..., 1, 0], r[..., 0, 0]), 0.0)
-    rest = np.swapaxes(_rot(1, b), -1, -2) @ np.swapaxes(_rot(2, a), -1, -2) @ r
-    c = np.arctan2(rest[..., 2, 1] - rest[..., 1, 2], rest[..., 1, 1] + rest[..., 2, 2])
-    return np.stack([a, b, c], axis=-1)
-
-
-def rotation_error(r1: npt.ArrayLike, r2: npt.ArrayLike) -> np.ndarray:
-    """Angle in radians of ``r1ᵀ r2``, accurate near zero (from ``‖r1 − r2‖_F = 2√2 sin(θ/2)``)."""
-    diff = np.linalg.norm(np.asarray(r1) - np.asarray(r2), axis=(-2, -1))
-    return 2.0 * np.arcsin(np.minimum(1.0, diff / (2.0 * math.sqrt(2.0))))
 
 
 # --------------------------------------------------------------------------------------------------
@@ -276,7 +187,10 @@ class SparseMatrixStub:
         self.state = state
 
     def to_dense(self) -> np.ndarray:
-        """The matrix as a dense float array.
+        """The matrix as a dense float array, rebuilt by :mod:`scipy.sparse` from the pickled arrays.
+
+        The arrays are fully checked (``check_format(full_check=True)``: index pointers, index range)
+        before scipy's native code densifies them.
 
         Raises:
             ValueError: The state lacks ``data``/``indices``/``indptr``/shape or they are inconsistent.
@@ -286,19 +200,18 @@ class SparseMatrixStub:
         data, indices, indptr = (np.asarray(s.get(k)) for k in ("data", "indices", "indptr"))
         if shape is None or data.ndim != 1 or indices.shape != data.shape or indptr.ndim != 1:
             raise ValueError(f"sparse matrix state has keys {sorted(s)}; need data, indices, indptr, _shape")
+        if indices.dtype.kind not in "iu" or indptr.dtype.kind not in "iu":
+            raise ValueError(
+                f"sparse indices and indptr must be integers, got {indices.dtype} and {indptr.dtype}"
+            )
         nrows, ncols = (int(n) for n in shape)
-        major = ncols if self.layout == "csc" else nrows
-        if len(indptr) != major + 1 or indptr[-1] != len(data) or np.any(np.diff(indptr) < 0):
-            raise ValueError(f"inconsistent {self.layout} index pointers for shape {(nrows, ncols)}")
-        outer = np.repeat(np.arange(major), np.diff(indptr))
-        dense = np.zeros((nrows, ncols))
-        rows, cols = (indices, outer) if self.layout == "csc" else (outer, indices)
-        if len(indices) and (
-            indices.min() < 0 or indices.max() >= (nrows if self.layout == "csc" else ncols)
-        ):
-            raise ValueError("sparse matrix index out of range")
-        np.add.at(dense, (rows.astype(np.int64), cols), data.astype(float))
-        return dense
+        build = scipy.sparse.csc_array if self.layout == "csc" else scipy.sparse.csr_array
+        try:
+            matrix = build((data.astype(float), indices, indptr), shape=(nrows, ncols))
+            matrix.check_format(full_check=True)
+        except (TypeError, ValueError) as exc:
+            raise ValueError(f"inconsistent {self.layout} arrays for shape {(nrows, ncols)}: {exc}") from None
+        return matrix.toarray()
 
 
 class CscStub(SparseMatrixStub):

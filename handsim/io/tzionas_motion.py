@@ -46,13 +46,19 @@ from pathlib import Path
 
 import numpy as np
 import numpy.typing as npt
-from scipy.spatial.transform import Rotation
 
 from handsim.errors import FormatError, InputFileError, TrajectoryError
 from handsim.io._text import numbered_lines, parse_int, read_bytes, read_text, sha256_of
 from handsim.io.tzionas import SkelBone, read_motion, read_skel, read_tzionas_skeleton
-from handsim.poses import quat_conjugate, quat_multiply
-from handsim.skeleton import Skeleton, rotation_about_axis
+from handsim.rotations import (
+    matrix_to_quat,
+    quat_about,
+    quat_conjugate,
+    quat_multiply,
+    quat_to_axis_angle,
+    rotation_about_axis,
+)
+from handsim.skeleton import Skeleton
 from handsim.trajectory import ObjectTrack, Trajectory
 from handsim.trajectory_ops import join_hands, with_limit_note
 
@@ -160,11 +166,6 @@ def config_dir_of(models_dir: str | Path) -> Path:
 # Rotation decomposition
 
 
-def _quat_about(axis: np.ndarray, angles: np.ndarray) -> np.ndarray:
-    half = 0.5 * np.asarray(angles, dtype=float)
-    return np.concatenate([np.cos(half)[..., None], np.sin(half)[..., None] * axis], axis=-1)
-
-
 def _wrap(angles: np.ndarray) -> np.ndarray:
     return np.pi - np.mod(np.pi - angles, 2.0 * np.pi)  # (-π, π]
 
@@ -198,7 +199,7 @@ def _fit_two(q: np.ndarray, a1: np.ndarray, a2: np.ndarray) -> np.ndarray:
 
 def _profile(q: np.ndarray, axes: np.ndarray, x: np.ndarray) -> np.ndarray:
     """Best fit (|⟨q, fit⟩|) of a 3-DoF chain with its outermost angle fixed at ``x``."""
-    rest = quat_multiply(quat_conjugate(_quat_about(axes[0], x)), q)
+    rest = quat_multiply(quat_conjugate(quat_about(axes[0], x)), q)
     return _largest_singular(_pair_matrix(rest, axes[1], axes[2]))
 
 
@@ -227,7 +228,7 @@ def _fit_three(q: np.ndarray, axes: np.ndarray) -> np.ndarray:
     candidates, fits = [], []
     for c in range(2):  # the two best peaks: a 3-DoF chain generally has two exact solutions
         x = _golden_max(q, axes, grid[ranked[:, c]] - step, grid[ranked[:, c]] + step)
-        inner = _fit_two(quat_multiply(quat_conjugate(_quat_about(axes[0], x)), q), axes[1], axes[2])
+        inner = _fit_two(quat_multiply(quat_conjugate(quat_about(axes[0], x)), q), axes[1], axes[2])
         candidates.append(np.concatenate([_wrap(x)[:, None], inner], axis=1))
         fits.append(_profile(q, axes, x))
     smaller = np.sum(candidates[1] ** 2, axis=1) < np.sum(candidates[0] ** 2, axis=1)
@@ -241,17 +242,13 @@ def _fit_three(q: np.ndarray, axes: np.ndarray) -> np.ndarray:
 def _chain_quats(axes: np.ndarray, angles: np.ndarray) -> np.ndarray:
     out = np.tile([1.0, 0.0, 0.0, 0.0], (len(angles), 1))
     for i, axis in enumerate(axes):
-        out = quat_multiply(out, _quat_about(axis, angles[:, i]))
+        out = quat_multiply(out, quat_about(axis, angles[:, i]))
     return out
 
 
 def _residual(q: np.ndarray, axes: np.ndarray, angles: np.ndarray) -> np.ndarray:
     """Rotation vector (T, 3) taking the chain to ``q``, in the chain's end frame."""
-    diff = quat_multiply(quat_conjugate(_chain_quats(axes, angles)), q)
-    diff *= np.where(diff[:, :1] < 0, -1.0, 1.0)
-    norm = np.linalg.norm(diff[:, 1:], axis=1)
-    scale = np.where(norm > 1e-300, 2.0 * np.arctan2(norm, diff[:, 0]) / np.maximum(norm, 1e-300), 2.0)
-    return diff[:, 1:] * scale[:, None]
+    return quat_to_axis_angle(quat_multiply(quat_conjugate(_chain_quats(axes, angles)), q))
 
 
 def _newton_step(q: np.ndarray, axes: np.ndarray, angles: np.ndarray) -> np.ndarray:
@@ -267,12 +264,6 @@ def _newton_step(q: np.ndarray, axes: np.ndarray, angles: np.ndarray) -> np.ndar
     moved = _wrap(angles + step)
     better = np.linalg.norm(_residual(q, axes, moved), axis=1) < np.linalg.norm(error, axis=1)
     return np.where(better[:, None], moved, angles)
-
-
-def _to_quat(matrices: np.ndarray) -> np.ndarray:
-    """Unit quaternions (w, x, y, z) of rotation matrices (…, 3, 3)."""
-    xyzw = Rotation.from_matrix(matrices.reshape(-1, 3, 3)).as_quat()
-    return np.roll(xyzw, 1, axis=-1).reshape((*matrices.shape[:-2], 4))
 
 
 def fit_dof_angles(rotations: npt.ArrayLike, axes: npt.ArrayLike) -> tuple[np.ndarray, np.ndarray]:
@@ -302,7 +293,7 @@ def fit_dof_angles(rotations: npt.ArrayLike, axes: npt.ArrayLike) -> tuple[np.nd
         raise ValueError(f"at most 3 axes can be fitted, got {len(a)}")
     if len(a) and np.abs(np.linalg.norm(a, axis=1) - 1.0).max() > 1e-6:
         raise ValueError(f"axes must be unit vectors, got norms {np.linalg.norm(a, axis=1)}")
-    q = _to_quat(r)
+    q = matrix_to_quat(r)
     if len(a) == 0:
         angles = np.zeros((len(r), 0))
     elif len(a) == 1:
@@ -500,7 +491,7 @@ def _fit(skeleton: Skeleton, rec: _Recording, rows: np.ndarray) -> tuple[np.ndar
         fitted.append(joint.name)
         residuals.append(residual)
     root = skeleton.joints[0]
-    quat = _continuous(_to_quat(frames[:, 0]))
+    quat = _continuous(matrix_to_quat(frames[:, 0]))
     root_pose = np.concatenate([positions[:, 0], quat], axis=1)
     fk = skeleton.forward_kinematics(targets)
     turn = frames[:, 0] @ root.frame.T
@@ -659,7 +650,7 @@ def _object_pose(recording: _Recording, root: str, rows: np.ndarray) -> np.ndarr
     r, t = recording.rotations[root], recording.origins[root]
     turn = r[rows] @ r[0].T
     shift = t[rows] - turn @ t[0]
-    return np.concatenate([shift, _continuous(_to_quat(turn))], axis=1)
+    return np.concatenate([shift, _continuous(matrix_to_quat(turn))], axis=1)
 
 
 def fit_tzionas_object_motion(

@@ -32,6 +32,7 @@ import numpy as np
 
 from handsim.errors import FormatError
 from handsim.io._text import parse_floats, read_bytes
+from handsim.rotations import rotation_about_axis
 from handsim.skeleton import Dof, Joint, Skeleton, mj_name
 
 AXIS_TAGS = ("rotx", "roty", "rotz")
@@ -215,8 +216,7 @@ def local_frame(bone: np.ndarray) -> np.ndarray:
     v = bone / np.linalg.norm(bone)
     q = np.cross(v, [0.0, 1.0, 0.0])
     angle = float(np.sign(q[2]) * math.asin(min(1.0, float(np.linalg.norm(q)))))
-    c, s = math.cos(angle), math.sin(angle)
-    return np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])
+    return rotation_about_axis((0.0, 0.0, 1.0), angle)
 
 
 def read_xmlskel(path: str | Path) -> Skeleton:

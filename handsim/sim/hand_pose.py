@@ -5,6 +5,7 @@ from __future__ import annotations
 import mujoco
 import numpy as np
 
+from handsim.rotations import matrix_to_quat
 from handsim.sim.compiled import SimScene
 from handsim.trajectory import Trajectory
 
@@ -51,6 +52,4 @@ def hand_frame(scene: SimScene) -> np.ndarray:
     palm /= np.linalg.norm(palm)
     hand = np.column_stack([fingers, palm, np.cross(fingers, palm)])
     world = np.column_stack([[1.0, 0, 0], [0, 0, -1.0], [0, 1.0, 0]])
-    quat = np.empty(4)
-    mujoco.mju_mat2Quat(quat, (world @ hand.T).ravel())
-    return quat
+    return matrix_to_quat(world @ hand.T)

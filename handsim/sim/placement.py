@@ -39,7 +39,7 @@ import numpy as np
 from scipy.spatial import cKDTree
 
 from handsim.fingers import finger_of
-from handsim.poses import quat_multiply
+from handsim.rotations import quat_multiply
 from handsim.sim.collide import HandObjectCollider
 from handsim.sim.compiled import SimScene
 from handsim.sim.grasp_frame import GraspFrame, closing_frames, flexion_fraction

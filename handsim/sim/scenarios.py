@@ -27,7 +27,8 @@ import numpy.typing as npt
 from handsim.builders.objects import object_points
 from handsim.builders.scene import attach_hand, build_scene
 from handsim.errors import ModelError, TrajectoryError
-from handsim.poses import compose, quat_multiply, quat_rotate, transform_points
+from handsim.poses import compose, transform_points
+from handsim.rotations import quat_multiply, quat_rotate, rotation_onto
 from handsim.sim.compiled import SceneSetup, SimScene, compile_scene
 from handsim.sim.control import DEFAULT_CONTROL_RATE
 from handsim.sim.grasp_frame import GraspFrame, grasp_frame
@@ -40,20 +41,6 @@ CAMERA_DOWN = (0.0, 1.0, 0.0)
 """Image down (+y) of a pinhole camera frame, e.g. the Tzionas rigging world (extrinsics identity)."""
 HOLD_HEIGHT = 0.25
 """Glove scenario: the object's lowest point starts this far above the table top, m."""
-
-
-def _rotation_onto(a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    """Smallest rotation (quaternion) taking unit vector ``a`` onto unit vector ``b``."""
-    axis = np.cross(a, b)
-    s, c = np.linalg.norm(axis), float(np.dot(a, b))
-    if s < 1e-12:
-        if c > 0:
-            return np.array([1.0, 0.0, 0.0, 0.0])
-        other = np.eye(3)[int(np.argmin(np.abs(a)))]
-        axis = np.cross(a, other)
-        return np.concatenate([[0.0], axis / np.linalg.norm(axis)])
-    angle = np.arctan2(s, c)
-    return np.concatenate([[np.cos(angle / 2)], np.sin(angle / 2) * axis / s])
 
 
 def support_frame(
@@ -76,7 +63,7 @@ def support_frame(
     world_axes = quat_rotate(start_pose[3:], axes)
     best = int(np.argmax(world_axes @ hint))
     down = world_axes[best]
-    turn = _rotation_onto(down, np.array([0.0, 0.0, -1.0]))
+    turn = rotation_onto(down, np.array([0.0, 0.0, -1.0]))
     rotated = quat_rotate(turn, transform_points(start_pose, points))
     origin = quat_rotate(turn, start_pose[:3])
     shift = np.array([-origin[0], -origin[1], -rotated[:, 2].min()])
@@ -108,7 +95,7 @@ def hand_only_frame(
     """
     hint = np.asarray(gravity_hint, dtype=float)
     hint = hint / np.linalg.norm(hint)
-    turn = _rotation_onto(hint, np.array([0.0, 0.0, -1.0]))
+    turn = rotation_onto(hint, np.array([0.0, 0.0, -1.0]))
     origin = quat_rotate(turn, np.asarray(root_pose, dtype=float)[:3])
     note = (
         f"no object: gravity along the hint {hint.round(3).tolist()} (nothing rests on a support to say "
@@ -314,7 +301,7 @@ def glove_scene(
     )
     best = placement.best
     down, down_note = hold_down(best, spec.hold_orientation)
-    turn = _rotation_onto(AXES[down], np.array([0.0, 0.0, -1.0]))
+    turn = rotation_onto(AXES[down], np.array([0.0, 0.0, -1.0]))
     lowest = transform_points(
         compose(np.concatenate([[0.0, 0.0, 0.0], turn]), best.pose), placement.object_points
     )

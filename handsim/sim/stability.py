@@ -31,7 +31,7 @@ import numpy as np
 import numpy.typing as npt
 
 from handsim.errors import SimulationError
-from handsim.poses import quat_angle
+from handsim.rotations import quat_angle
 from handsim.sim.compiled import SimScene
 from handsim.sim.stepper import Stepper
 
