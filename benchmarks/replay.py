@@ -30,6 +30,7 @@ from __future__ import annotations
 
 import argparse
 import math
+import os
 import statistics
 import tempfile
 import time
@@ -53,12 +54,21 @@ from handsim.sim.compiled import compile_scene
 from handsim.sim.control import control_schedule
 from handsim.sim.drive import ScheduleDriver, scenario_switches
 from handsim.sim.metrics import MetricSpec
-from handsim.sim.replay import replay, run_schedule
+from handsim.sim.replay import ReplayConfig, replay, run_schedule
 from handsim.sim.scenarios import glove_scene, recorded_scene
 from handsim.sim.stepper import Stepper
 from handsim.trajectory import ObjectTrack, Trajectory
 
 GRASPDB = Path(__file__).resolve().parents[1].parent / "shared" / "data" / "graspdb14"
+CLOCK = time.process_time
+"""Single-threaded ratios use this process's CPU time: on a machine shared with other work, wall time
+charges the other work's time slices to whichever side ran then; CPU time does not (it equals wall time on
+a quiet machine). The vector environment's scaling is wall time (it is about using more cores)."""
+ONE_RUN = ReplayConfig(ensemble=False)
+"""The replay ratio is one simulation of the recording; a glove trial's robustness ensemble replays
+variants of the scene on top (each itself a ``replay``), timed on its own line."""
+VECTOR_WORLDS = (2, 4, 8)
+REPLAY = "handsim/Replay-v0"
 
 
 def tzionas_case():
@@ -146,7 +156,7 @@ def raw_seconds(scene, schedule) -> float:
     supports = [o.support_eq for o in scene.layout.objects if o.support_eq >= 0]
     geoms = [g for o in scene.layout.objects for g in o.collision_geoms]
     contype, conaffinity = scene.model.geom_contype[geoms].copy(), scene.model.geom_conaffinity[geoms].copy()
-    start = time.perf_counter()
+    start = CLOCK()
     for i in range(1, schedule.frames):
         if i - 1 == release:
             data.eq_active[supports] = 0
@@ -157,20 +167,20 @@ def raw_seconds(scene, schedule) -> float:
             data.mocap_quat[mocap] = root[i, :, 3:]
         data.ctrl[:] = ctrl[i]
         mujoco.mj_step(model, data, nstep=k)
-    return time.perf_counter() - start
+    return CLOCK() - start
 
 
 def loop_seconds(scene, schedule) -> float:
     driver = _driver(scene, schedule, own_model=False)
-    start = time.perf_counter()
+    start = CLOCK()
     run_schedule(driver)
-    return time.perf_counter() - start
+    return CLOCK() - start
 
 
-def replay_seconds(scene, trajectory) -> float:
-    start = time.perf_counter()
-    replay(scene, trajectory)
-    return time.perf_counter() - start
+def replay_seconds(scene, trajectory, config: ReplayConfig = ONE_RUN) -> float:
+    start = CLOCK()
+    replay(scene, trajectory, config)
+    return CLOCK() - start
 
 
 def env_ratio(repeats: int) -> tuple[float, float, float] | None:
@@ -201,27 +211,73 @@ def env_ratio(repeats: int) -> tuple[float, float, float] | None:
     data = mujoco.MjData(model)
     for _ in range(repeats):
         env.reset(seed=0)
-        start = time.perf_counter()
+        start = CLOCK()
         for _ in range(steps):
             env.step(action)
-        env_times.append(time.perf_counter() - start)
+        env_times.append(CLOCK() - start)
         mujoco.mj_copyData(data, model, start_state)
-        start = time.perf_counter()
+        start = CLOCK()
         for i in range(steps):  # the same physics from the same state, nothing observed
             data.ctrl[:] = ctrls[i]
             data.mocap_pos[:] = mocap_pos[i]
             data.mocap_quat[:] = mocap_quat[i]
             mujoco.mj_step(model, data, nstep=skip)
-        raw_times.append(time.perf_counter() - start)
+        raw_times.append(CLOCK() - start)
     env_rate = steps * skip / statistics.median(env_times)
     raw_rate = steps * skip / statistics.median(raw_times)
     return env_rate, raw_rate, env_rate / raw_rate
+
+
+def vector_rates(repeats: int, steps: int = 200) -> tuple[float, dict[int, float], dict[int, float]]:
+    """Wall-clock env-steps per second: one ``Replay-v0``, and N worlds native and in ``AsyncVectorEnv``.
+
+    Every environment runs ``steps`` steps with zero residuals from frame 0 of the default scene (Tzionas
+    sequence 20), interleaved, median of ``repeats``; the single environment is the unwrapped one (no
+    gymnasium wrappers: the fastest single baseline).
+    """
+    import gymnasium
+
+    import handsim  # noqa: F401  registers the envs
+
+    single = gymnasium.make(REPLAY).unwrapped
+    native = {
+        n: gymnasium.make_vec(REPLAY, num_envs=n, vectorization_mode="vector_entry_point")
+        for n in VECTOR_WORLDS
+    }
+    pooled = {n: gymnasium.make_vec(REPLAY, num_envs=n, vectorization_mode="async") for n in VECTOR_WORLDS}
+
+    def rate(env, worlds: int) -> float:
+        env.reset(seed=0)
+        action = np.zeros(env.action_space.shape, np.float32)
+        start = time.perf_counter()
+        for _ in range(steps):
+            env.step(action)
+        return worlds * steps / (time.perf_counter() - start)
+
+    one: list[float] = []
+    many: dict[int, list[float]] = {n: [] for n in VECTOR_WORLDS}
+    processes: dict[int, list[float]] = {n: [] for n in VECTOR_WORLDS}
+    for _ in range(repeats):
+        one.append(rate(single, 1))
+        for n in VECTOR_WORLDS:
+            many[n].append(rate(native[n], n))
+            processes[n].append(rate(pooled[n], n))
+    for env in (*native.values(), *pooled.values()):
+        env.close()
+    median = statistics.median
+    return median(one), {n: median(r) for n, r in many.items()}, {n: median(r) for n, r in processes.items()}
+
+
+def _load() -> str:
+    one, five, _ = os.getloadavg()
+    return f"load {one:.2f} {five:.2f} on {os.cpu_count()} cores"
 
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--repeats", type=int, default=7)
     args = parser.parse_args()
+    print(f"start: {_load()}")
     worst_replay, arctic = np.inf, np.nan
     for build in (tzionas_case, glove_case, arctic_case):
         name, scene, trajectory = build()
@@ -241,15 +297,36 @@ def main() -> None:
             print(
                 f"  {label:12s} {rate:9.0f} steps/s  real-time ×{realtime:6.1f}  vs raw {raw_s / seconds:.3f}"
             )
+        if scene.setup.hold_window is not None and scene.layout.objects:
+            ensemble = replay_seconds(scene, trajectory, ReplayConfig())
+            members = len(scene.setup.placement.get("ensemble", ()))
+            print(
+                f"  replay() with the robustness ensemble ({members} more replays, release stability): "
+                f"{ensemble:.2f} s CPU ({ensemble / full_s:.1f}× one replay)"
+            )
+        print(f"  ({_load()})")
         if build is arctic_case:
             arctic = raw_s / full_s
         else:
             worst_replay = min(worst_replay, raw_s / full_s)
     env = env_ratio(args.repeats)
     if env is not None:
-        print(f"Replay-v0 env.step: {env[0]:.0f} steps/s vs raw mj_step×frame_skip {env[1]:.0f} steps/s")
+        print(
+            f"Replay-v0 env.step: {env[0]:.0f} steps/s vs raw mj_step×frame_skip {env[1]:.0f} steps/s "
+            f"({_load()})"
+        )
+    one, native, pooled = vector_rates(args.repeats)
+    print(f"Replay-v0 env-steps/s (wall clock): one env {one:.0f}")
+    for n in VECTOR_WORLDS:
+        verdict = "beats" if native[n] > pooled[n] else "does NOT beat"
+        print(
+            f"  N={n}: native vector env {native[n]:6.0f} (×{native[n] / one:.2f} one env)  "
+            f"AsyncVectorEnv {pooled[n]:6.0f} (×{pooled[n] / one:.2f}): native {verdict} async"
+        )
+    print(f"end: {_load()}")
     print(f"replay_vs_raw={worst_replay:.3f}")
     print(f"env_vs_raw={env[2]:.3f}" if env is not None else "env_vs_raw=nan")
+    print(f"vector_env_scaling={min(native[n] / one for n in VECTOR_WORLDS):.3f}")
     print(f"arctic_replay_vs_raw={arctic:.3f}")
 
 

@@ -146,8 +146,10 @@ class ReplayVectorEnv(gym.vector.VectorEnv):
         self._obs = np.zeros((self.num_envs, *env.observation_space.shape))
         self._actions = np.zeros((self.num_envs, len(env.dof_names)))
         self._world_rng: list[np.random.Generator | None] = [None] * self.num_envs
-        self._pos_slice, self._vel_slice = env._pos_slice, env._vel_slice
         self._qpos_adr, self._qvel_adr = env._qpos_adr, env._qvel_adr
+        self._pos_cols, self._vel_cols, self._ref_cols = (
+            np.arange(s.start, s.stop) for s in (env._pos_slice, env._vel_slice, env._ref_slice)
+        )
 
     # ---- facts --------------------------------------------------------------------------------------------
     @property
@@ -233,33 +235,36 @@ class ReplayVectorEnv(gym.vector.VectorEnv):
         for i in reset_ids:
             frame_info[i] = self._reset_world(int(i), None)
         if ids.size:
-            outside = (a < -1.0) | (a > 1.0)
-            clipped = np.count_nonzero(outside, axis=1)
-            np.clip(a, -1.0, 1.0, out=self._actions)
+            clipped = np.count_nonzero((a < -1.0) | (a > 1.0), axis=1)
+            np.minimum(np.maximum(a, -1.0, out=self._actions), 1.0, out=self._actions)
             self._advance(ids)
-            stepped = self._observe(ids)
+            stepped = self._observe(ids)[ids]
             frame_info[ids] = self._frames[ids]
-            values = {key: np.zeros(n) for key in _STEP_KEYS}
-            diverged = np.zeros(n, bool)
             warnings = self._warnings(ids)
-            env = self._env
-            for i in ids:
-                obs, k = self._obs[i], int(self._frames[i])
+            env, reward_of = self._env, self._env._reward
+            table = []  # per stepped world: the reward, its terms and the info numbers
+            for i, penetration in zip(ids.tolist(), stepped.tolist(), strict=True):
                 action = self._actions[i]
                 squares = float(np.dot(action, action))
-                r_track, r_object, r_pen, r_action, mean_sq, drift = env._reward(obs, k, squares, stepped[i])
-                rewards[i] = r_track + r_object + r_pen + r_action
-                events = warnings.get(int(i), ())
+                terms = reward_of(self._obs[i], int(self._frames[i]), squares, penetration)
+                r_track, r_object, r_pen, r_action, mean_sq, drift = terms
+                reward = r_track + r_object + r_pen + r_action  # in the single env's order
+                table.append(
+                    (reward, r_track, r_object, r_pen, r_action, math.sqrt(mean_sq), drift, penetration)
+                )
+            columns = np.zeros((len(_STEP_KEYS) + 1, n))
+            columns[:, ids] = np.array(table).T
+            rewards = columns[0]
+            diverged = np.zeros(n, bool)
+            for i, events in warnings.items():
                 diverged[i] = any(e.diverged for e in events)
-                terminated[i] = diverged[i] or drift > env._max_drift
-                truncated[i] = k >= self._last and not terminated[i]
-                terms = (r_track, r_object, r_pen, r_action, math.sqrt(mean_sq), drift, stepped[i])
-                for key, value in zip(_STEP_KEYS, terms, strict=True):
-                    values[key][i] = value
+            drift_over = columns[1 + _STEP_KEYS.index("object_drift")] > env._max_drift
+            terminated[ids] = diverged[ids] | drift_over[ids]
+            truncated[ids] = (self._frames[ids] >= self._last) & ~terminated[ids]
             mask = np.zeros(n, bool)
             mask[ids] = True
-            for key, value in values.items():
-                infos[key], infos[f"_{key}"] = value, mask
+            for key, column in zip(_STEP_KEYS, columns[1:], strict=True):
+                infos[key], infos[f"_{key}"] = column, mask
             infos["diverged"], infos["_diverged"] = diverged, mask
             infos["action_clipped"], infos["_action_clipped"] = np.where(mask, clipped, 0), mask
             if warnings:
@@ -300,21 +305,21 @@ class ReplayVectorEnv(gym.vector.VectorEnv):
 
     def _advance(self, ids: np.ndarray) -> None:
         """One control frame of worlds ``ids``: the switches of their frame, root targets, controls, step."""
-        k = self._frames[ids]
+        k, rows = self._frames[ids], ids[:, None]
         if self._release >= 0 and self._eq_active is not None:
             release = ids[k == self._release]
             if release.size:
-                self._eq_active[np.ix_(release, self._supports)] = 0
+                self._eq_active[release[:, None], self._supports] = 0
         if self._contact > 0:
             contact = ids[k == self._contact]
             if contact.size:
                 driver = self._env._driver  # the scene's own collision filters of the objects
-                self._contype[np.ix_(contact, self._geoms)] = driver._contype
-                self._conaffinity[np.ix_(contact, self._geoms)] = driver._conaffinity
+                self._contype[contact[:, None], self._geoms] = driver._contype
+                self._conaffinity[contact[:, None], self._geoms] = driver._conaffinity
         n = k + 1
         if self._root_pos is not None:
-            self._mocap_pos[np.ix_(ids, self._mocap)] = self._root_pos[n]
-            self._mocap_quat[np.ix_(ids, self._mocap)] = self._root_quat[n]
+            self._mocap_pos[rows, self._mocap] = self._root_pos[n]
+            self._mocap_quat[rows, self._mocap] = self._root_quat[n]
         controls = np.empty((ids.size, self._ctrl.shape[1]))
         self._env._controls(self._actions[ids], n, controls)
         self._ctrl[ids] = controls
@@ -323,13 +328,9 @@ class ReplayVectorEnv(gym.vector.VectorEnv):
 
     def _observe(self, ids: np.ndarray) -> np.ndarray:
         """Fill the observation rows of worlds ``ids`` from their state; returns each world's penetration."""
-        env, obs = self._env, self._obs
-        obs[np.ix_(ids, np.arange(self._pos_slice.start, self._pos_slice.stop))] = self._qpos[
-            np.ix_(ids, self._qpos_adr)
-        ]
-        obs[np.ix_(ids, np.arange(self._vel_slice.start, self._vel_slice.stop))] = self._qvel[
-            np.ix_(ids, self._qvel_adr)
-        ]
+        env, obs, rows = self._env, self._obs, ids[:, None]
+        obs[rows, self._pos_cols] = self._qpos[rows, self._qpos_adr]
+        obs[rows, self._vel_cols] = self._qvel[rows, self._qvel_adr]
         penetration = np.zeros(self.num_envs)
         contacts, force_slice, pen_index = env._contacts, env._force_slice, env._pen_index
         for i in ids:
@@ -338,9 +339,7 @@ class ReplayVectorEnv(gym.vector.VectorEnv):
             penetration[i] = contacts.penetration(sensordata)
         frames = self._frames[ids]
         obs[ids, pen_index] = penetration[ids]
-        obs[np.ix_(ids, np.arange(env._ref_slice.start, env._ref_slice.stop))] = env._refs[
-            np.minimum(frames + 1, self._last)
-        ]
+        obs[rows, self._ref_cols] = env._refs[np.minimum(frames + 1, self._last)]
         obs[ids, env._progress_index] = frames / self._last
         return penetration
 
