@@ -8,22 +8,49 @@ an ARCTIC-shaped scene (:func:`handsim.sim.arctic_scene.arctic_scene`: two MANO 
 mean-shape model, each welded to a moving wrist, curling their fingers over a two-part box whose lid opens
 and closes, 10 s at ARCTIC's 30 fps).
 
-For each scene, in the same process and interleaved (median of ``--repeats``):
+Run it from the repository root as ``PYTHONPATH=. python benchmarks/replay.py`` to time this tree's
+``handsim`` (a script's own folder comes first on ``sys.path``, so an installed copy would win).
+
+For each scene, in the same process and interleaved (median of ``--repeats``), in CPU seconds of this
+process (:data:`CLOCK`):
 
 * raw: ``mj_step`` from the replay's initial state with only the replay's inputs (controls, mocap root
   pose, the glove contact switch, support release) set once per frame, ``nstep = substeps`` per call —
-  the same simulation with
-  nothing recorded or checked: the floor any replay loop can reach on this model;
+  the same simulation with nothing recorded or checked: the floor any replay loop can reach on this model;
 * loop: :func:`handsim.sim.replay.run_schedule` (the stepping loop: controls, mocap root, support
   release, warning checks, sensor and state copies);
-* replay: the whole :func:`handsim.sim.replay.replay` call (schedule, loop and metrics);
-* env (when the gymnasium env is available): ``env.step`` of ``handsim/Replay-v0`` with zero residuals
-  against raw ``mj_step × frame_skip`` on the env's own model, from the same state with the same
-  controls and root targets.
+* replay: the whole :func:`handsim.sim.replay.replay` call (schedule, loop, metrics, summary, flags) of
+  one simulation of the recording (:data:`ONE_RUN`); for the glove scene the robustness ensemble's extra
+  replays are timed on their own line;
+* env: ``env.step`` of ``handsim/Replay-v0`` with zero residuals against raw ``mj_step × frame_skip`` on
+  the env's own model, from the same state with the same controls and root targets;
+* vector env (wall clock): env-steps per second of one unwrapped ``Replay-v0``, of the native vector
+  environment (:class:`handsim.envs.replay_vector_env.ReplayVectorEnv`, N worlds on MuJoCo's threads) and
+  of ``gymnasium.vector.AsyncVectorEnv`` (N processes) at N = 2, 4, 8.
 
-Prints steps per second, the real-time factor and the ratios; the last lines are
-``replay_vs_raw=<ratio>`` (worst one-hand scene), ``env_vs_raw=<ratio>`` and ``arctic_replay_vs_raw=<ratio>``
-(the ARCTIC-shaped scene) for tracking over time.
+Where the remaining time goes (measured with cProfile and per-part CPU timers on this 2-core machine):
+
+* ``replay()``: the stepping loop is at the raw loop (its Python is ~1 µs per frame: one method call, a
+  bytes comparison of the warning counters, two row copies). Outside it, per replay: the control schedule
+  (resampling the recording to the control rate, slerp of root and object poses: 0.5 ms glove, 1.7 ms
+  Tzionas, 4 ms ARCTIC), a fresh ``MjData`` (its 15 MB arena) with the model copy the glove's contact
+  switch needs and the reset's first ``mj_forward`` (~1 ms), the fingertips' kinematic targets (one
+  ``mj_kinematics`` per frame, ~1.5 µs of MuJoCo plus ~2 µs of Python each: 1.6 ms glove, 2.3 ms
+  Tzionas, 5 ms ARCTIC; a numpy forward kinematics over all frames at once was tried and is no faster at
+  these sizes — its 3×3 products per joint cost what MuJoCo's whole pass does), the other per-frame
+  metrics (~1 ms: contact slots, poses, tracking) and the summary and plausibility flags (~0.7 ms). On
+  the glove scene (78 ms of stepping) these ~5 ms are the 5–7 % between ``replay()`` and raw.
+* ``env.step``: ~20 numpy calls on preallocated buffers (action check, controls, mocap targets, two state
+  gathers, the contact-force product, references, reward terms) and the ``info`` dict: 15–25 µs on a
+  quiet machine, ~40 µs on a loaded one, against ~250 µs of ``mj_step × 5`` on the Tzionas scene.
+* the vector environment: ``Batch.step`` runs the worlds on the threads; the main thread adds the
+  vectorised controls and gathers and a short per-world loop for the reward terms (the single
+  environment's own code, so the results are the same bitwise), ~10 µs per world.
+
+Prints steps per second, the real-time factor and the ratios, with the load average beside them (the
+machine is shared); the last lines are ``replay_vs_raw=<ratio>`` (worst one-hand scene),
+``env_vs_raw=<ratio>``, ``vector_env_scaling=<ratio>`` (the native vector environment's env-steps/s over
+one environment's, worst N) and ``arctic_replay_vs_raw=<ratio>`` (the ARCTIC-shaped scene).
 """
 
 from __future__ import annotations

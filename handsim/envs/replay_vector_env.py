@@ -124,6 +124,8 @@ class ReplayVectorEnv(gym.vector.VectorEnv):
         switches = driver.switches
         self._release = switches.release_frame
         self._contact = switches.contact_frame
+        # the frames at whose start something switches (release ≥ 0; contacts switched only when > 0)
+        self._switches = {f for f, first in ((self._release, 0), (self._contact, 1)) if f >= first}
         self._supports = driver._supports
         self._eq_active = batch.bind("eq_active") if model.neq else None
         self._mocap = driver._mocap
@@ -141,15 +143,16 @@ class ReplayVectorEnv(gym.vector.VectorEnv):
         self._last = env._last
         self._times = env._times
         self._frames = np.zeros(self.num_envs, dtype=np.int64)
-        self._running = np.zeros(self.num_envs, dtype=bool)
+        self._everyone = np.arange(self.num_envs)
+        self._started = False
+        self._pending = False  # some world ended on the last step and is reset on the next
         self._autoreset = np.zeros(self.num_envs, dtype=bool)
+        self._max_drift = env._max_drift
+        self._all_mocap = driver._all_mocap
         self._obs = np.zeros((self.num_envs, *env.observation_space.shape))
         self._actions = np.zeros((self.num_envs, len(env.dof_names)))
         self._world_rng: list[np.random.Generator | None] = [None] * self.num_envs
         self._qpos_adr, self._qvel_adr = env._qpos_adr, env._qvel_adr
-        self._pos_cols, self._vel_cols, self._ref_cols = (
-            np.arange(s.start, s.stop) for s in (env._pos_slice, env._vel_slice, env._ref_slice)
-        )
 
     # ---- facts --------------------------------------------------------------------------------------------
     @property
@@ -193,10 +196,11 @@ class ReplayVectorEnv(gym.vector.VectorEnv):
         for i in range(self.num_envs):
             frames[i] = self._reset_world(i, options)
         self._autoreset[:] = False
+        self._started, self._pending = True, False
         return self._obs.copy(), {
             "frame": frames,
             "_frame": np.ones(self.num_envs, bool),
-            "time": self._times[frames].astype(float),
+            "time": self._times[frames],
             "_time": np.ones(self.num_envs, bool),
         }
 
@@ -219,66 +223,79 @@ class ReplayVectorEnv(gym.vector.VectorEnv):
                 f"ReplayVectorEnv: actions must have shape {self.action_space.shape} "
                 f"(one residual in [-1, 1] per hand DoF per world), got shape {a.shape}"
             )
-        if not np.isfinite(a).all():
+        inside = (a >= -1.0) & (a <= 1.0)  # NaN fails both tests
+        in_range = bool(inside.all())
+        if not in_range and not np.isfinite(a).all():
             bad = sorted({int(i) for i in np.nonzero(~np.isfinite(a))[0]})
             raise ValueError(f"ReplayVectorEnv: actions of worlds {bad} have NaN or infinite values")
-        if not (self._running | self._autoreset).all():
+        if not self._started:
             raise gym.error.ResetNeeded("call reset() before step()")
         n = self.num_envs
-        rewards = np.zeros(n)
         terminated = np.zeros(n, bool)
-        truncated = np.zeros(n, bool)
-        reset_ids = np.flatnonzero(self._autoreset)
-        ids = np.flatnonzero(~self._autoreset)
         infos: dict[str, Any] = {}
-        frame_info = np.empty(n, dtype=np.int64)
-        for i in reset_ids:
-            frame_info[i] = self._reset_world(int(i), None)
+        if self._pending:  # worlds that ended on the last call are reset now, the others step
+            reset_ids = np.flatnonzero(self._autoreset)
+            ids = np.flatnonzero(~self._autoreset)
+            sel: slice | np.ndarray = ids
+            for i in reset_ids.tolist():
+                self._reset_world(i, None)
+        else:
+            ids, sel = self._everyone, slice(None)
         if ids.size:
-            clipped = np.count_nonzero((a < -1.0) | (a > 1.0), axis=1)
-            np.minimum(np.maximum(a, -1.0, out=self._actions), 1.0, out=self._actions)
-            self._advance(ids)
-            stepped = self._observe(ids)[ids]
-            frame_info[ids] = self._frames[ids]
+            if in_range:
+                clipped = np.zeros(n, np.int64)
+                self._actions[:] = a
+            else:
+                clipped = (~inside).sum(axis=1)
+                np.minimum(np.maximum(a, -1.0, out=self._actions), 1.0, out=self._actions)
+            self._advance(ids, sel)
+            penetration = self._observe(ids, sel)
             warnings = self._warnings(ids)
-            env, reward_of = self._env, self._env._reward
+            reward_of, actions, obs, frames = self._env._reward, self._actions, self._obs, self._frames
             table = []  # per stepped world: the reward, its terms and the info numbers
-            for i, penetration in zip(ids.tolist(), stepped.tolist(), strict=True):
-                action = self._actions[i]
-                squares = float(np.dot(action, action))
-                terms = reward_of(self._obs[i], int(self._frames[i]), squares, penetration)
+            for i in ids.tolist():
+                action = actions[i]
+                depth = float(penetration[i])
+                terms = reward_of(obs[i], int(frames[i]), float(np.dot(action, action)), depth)
                 r_track, r_object, r_pen, r_action, mean_sq, drift = terms
                 reward = r_track + r_object + r_pen + r_action  # in the single env's order
-                table.append(
-                    (reward, r_track, r_object, r_pen, r_action, math.sqrt(mean_sq), drift, penetration)
-                )
-            columns = np.zeros((len(_STEP_KEYS) + 1, n))
-            columns[:, ids] = np.array(table).T
-            rewards = columns[0]
+                table.append((reward, r_track, r_object, r_pen, r_action, math.sqrt(mean_sq), drift, depth))
+            if self._pending:
+                columns = np.zeros((len(_STEP_KEYS) + 1, n))
+                columns[:, ids] = np.array(table).T
+                mask = np.zeros(n, bool)
+                mask[ids] = True
+                clipped[~mask] = 0
+            else:
+                columns = np.array(table).T
+                mask = self._everyone >= 0
             diverged = np.zeros(n, bool)
             for i, events in warnings.items():
                 diverged[i] = any(e.diverged for e in events)
-            drift_over = columns[1 + _STEP_KEYS.index("object_drift")] > env._max_drift
-            terminated[ids] = diverged[ids] | drift_over[ids]
-            truncated[ids] = (self._frames[ids] >= self._last) & ~terminated[ids]
-            mask = np.zeros(n, bool)
-            mask[ids] = True
+            terminated[sel] = diverged[sel] | (
+                columns[1 + _STEP_KEYS.index("object_drift")][sel] > self._max_drift
+            )
             for key, column in zip(_STEP_KEYS, columns[1:], strict=True):
                 infos[key], infos[f"_{key}"] = column, mask
             infos["diverged"], infos["_diverged"] = diverged, mask
-            infos["action_clipped"], infos["_action_clipped"] = np.where(mask, clipped, 0), mask
+            infos["action_clipped"], infos["_action_clipped"] = clipped, mask
             if warnings:
                 described = np.full(n, None, dtype=object)
                 for i, events in warnings.items():
                     described[i] = tuple(e.describe() for e in events)
                 infos["warnings"] = described
                 infos["_warnings"] = np.array([w is not None for w in described])
+            rewards = columns[0]
+        else:
+            rewards = np.zeros(n)
+        frame_info = self._frames.copy()  # a reset world's start frame is before the last: not truncated
+        truncated = (frame_info >= self._last) & ~terminated
         everyone = np.ones(n, bool)
         infos["frame"], infos["_frame"] = frame_info, everyone
-        infos["time"], infos["_time"] = self._times[frame_info].astype(float), everyone
+        infos["time"], infos["_time"] = self._times[frame_info], everyone
         ended = terminated | truncated
-        self._running[ended] = False
         self._autoreset = ended
+        self._pending = bool(ended.any())
         return self._obs.copy(), rewards, terminated, truncated, infos
 
     def close_extras(self, **kwargs: Any) -> None:
@@ -300,53 +317,62 @@ class ReplayVectorEnv(gym.vector.VectorEnv):
         self._seen[i] = self._warning[i, :, 1]
         self._obs[i] = obs
         self._frames[i] = info["frame"]
-        self._running[i] = True
         return int(info["frame"])
 
-    def _advance(self, ids: np.ndarray) -> None:
-        """One control frame of worlds ``ids``: the switches of their frame, root targets, controls, step."""
-        k, rows = self._frames[ids], ids[:, None]
-        if self._release >= 0 and self._eq_active is not None:
+    def _advance(self, ids: np.ndarray, sel: slice | np.ndarray) -> None:
+        """One control frame of worlds ``ids`` (``sel``: the same, or ``slice(None)`` for every world).
+
+        The switches of their frame, the root targets and controls of the next, then ``frame_skip`` steps.
+        """
+        k = self._frames[sel]
+        at = self._switches.intersection(k.tolist())  # usually empty: decided without a numpy reduction
+        if self._release in at and self._eq_active is not None:
             release = ids[k == self._release]
-            if release.size:
-                self._eq_active[release[:, None], self._supports] = 0
-        if self._contact > 0:
+            self._eq_active[release[:, None], self._supports] = 0
+        if self._contact in at:
             contact = ids[k == self._contact]
-            if contact.size:
-                driver = self._env._driver  # the scene's own collision filters of the objects
-                self._contype[contact[:, None], self._geoms] = driver._contype
-                self._conaffinity[contact[:, None], self._geoms] = driver._conaffinity
+            driver = self._env._driver  # the scene's own collision filters of the objects
+            self._contype[contact[:, None], self._geoms] = driver._contype
+            self._conaffinity[contact[:, None], self._geoms] = driver._conaffinity
         n = k + 1
         if self._root_pos is not None:
-            self._mocap_pos[rows, self._mocap] = self._root_pos[n]
-            self._mocap_quat[rows, self._mocap] = self._root_quat[n]
-        controls = np.empty((ids.size, self._ctrl.shape[1]))
-        self._env._controls(self._actions[ids], n, controls)
-        self._ctrl[ids] = controls
-        self._batch.step(ids if ids.size < self.num_envs else None, nstep=self._substeps)
-        self._frames[ids] = n
+            if self._all_mocap:
+                self._mocap_pos[sel] = self._root_pos[n]
+                self._mocap_quat[sel] = self._root_quat[n]
+            else:
+                self._mocap_pos[ids[:, None], self._mocap] = self._root_pos[n]
+                self._mocap_quat[ids[:, None], self._mocap] = self._root_quat[n]
+        if isinstance(sel, slice):
+            self._env._controls(self._actions, n, self._ctrl)
+            self._batch.step(None, nstep=self._substeps)
+        else:
+            controls = np.empty((ids.size, self._ctrl.shape[1]))
+            self._env._controls(self._actions[ids], n, controls)
+            self._ctrl[ids] = controls
+            self._batch.step(ids, nstep=self._substeps)
+        self._frames[sel] = n
 
-    def _observe(self, ids: np.ndarray) -> np.ndarray:
+    def _observe(self, ids: np.ndarray, sel: slice | np.ndarray) -> np.ndarray:
         """Fill the observation rows of worlds ``ids`` from their state; returns each world's penetration."""
-        env, obs, rows = self._env, self._obs, ids[:, None]
-        obs[rows, self._pos_cols] = self._qpos[rows, self._qpos_adr]
-        obs[rows, self._vel_cols] = self._qvel[rows, self._qvel_adr]
+        env, obs = self._env, self._obs
+        rows = sel if isinstance(sel, slice) else ids[:, None]
+        obs[sel, env._pos_slice] = self._qpos[rows, self._qpos_adr]
+        obs[sel, env._vel_slice] = self._qvel[rows, self._qvel_adr]
         penetration = np.zeros(self.num_envs)
-        contacts, force_slice, pen_index = env._contacts, env._force_slice, env._pen_index
-        for i in ids:
-            sensordata = self._sensordata[i]
-            contacts.link_forces(sensordata, obs[i, force_slice])
-            penetration[i] = contacts.penetration(sensordata)
-        frames = self._frames[ids]
-        obs[ids, pen_index] = penetration[ids]
-        obs[rows, self._ref_cols] = env._refs[np.minimum(frames + 1, self._last)]
-        obs[ids, env._progress_index] = frames / self._last
+        contacts, force_slice, sensordata = env._contacts, env._force_slice, self._sensordata
+        for i in ids.tolist():
+            contacts.link_forces(sensordata[i], obs[i, force_slice])
+            penetration[i] = contacts.penetration(sensordata[i])
+        frames = self._frames[sel]
+        obs[sel, env._pen_index] = penetration[sel]
+        obs[sel, env._ref_slice] = env._refs[np.minimum(frames + 1, self._last)]
+        obs[sel, env._progress_index] = frames / self._last
         return penetration
 
     def _warnings(self, ids: np.ndarray) -> dict[int, tuple]:
         """The MuJoCo warnings of the last frame, by world (empty almost always)."""
         counts = self._warning[:, :, 1]
-        if np.array_equal(counts[ids], self._seen[ids]):
+        if counts.tobytes() == self._seen.tobytes():  # a reset world's counters were taken at its reset
             return {}
         events = {}
         for i in ids:
