@@ -3,37 +3,17 @@ autoreset, seeds, info masks), and exactly the results of N single environments 
 
 from __future__ import annotations
 
-import functools
-
 import gymnasium as gym
 import numpy as np
 import pytest
 from gymnasium.vector import AutoresetMode
 
 import handsim  # noqa: F401  registers the environments
-from handsim.builders import build_object, build_scene, default_hand
-from handsim.builders.catalog import get
 from handsim.envs import VECTOR_ENVS
 from handsim.envs.replay_vector_env import ReplayVectorEnv
-from handsim.sim.compiled import compile_scene
-from handsim.sim.scenarios import glove_scene
-from handsim.trajectory import Phase, Trajectory
+from tests.helpers import glove_switch_inputs
 
 REPLAY = "handsim/Replay-v0"
-
-
-@functools.lru_cache(maxsize=1)
-def _glove_inputs():
-    """A short glove scene: contacts switched on mid-run, the support released before the end."""
-    hand, ball = default_hand(), build_object(get("tennis_ball"))
-    layout = compile_scene(build_scene(hand, ball)).layout
-    t = np.arange(100) / 64.0
-    flex = np.array(["flex" in n and not n.startswith("root") for n in layout.dof_names])
-    closing = np.where(t < 0.2, 1.0, np.clip((t - 0.4) / 0.6, 0, 0.6 / 0.95)) * 0.95
-    targets = closing[:, None] * np.where(flex, layout.ctrl_range[:, 1], 0.0)
-    grasp = (Phase("grasp", int(np.searchsorted(t, 0.8)), 100),)
-    trajectory = Trajectory(t, layout.dof_names, targets, np.ones_like(targets, bool), phases=grasp)
-    return glove_scene(hand, trajectory, ball), trajectory
 
 
 def _pair(num_envs: int, **kwargs):
@@ -114,7 +94,7 @@ def test_native_vector_env_resets_terminated_worlds_on_the_next_step_like_gymnas
 
 
 def test_native_vector_env_switches_contacts_and_releases_supports_like_single_envs():
-    scene, trajectory = _glove_inputs()
+    scene, trajectory = glove_switch_inputs()
     native, sync = _pair(2, scene=scene, trajectory=trajectory)
     try:
         _run_both(native, sync, steps=110, seed=3, scale=0.5)  # through the switches and a truncation

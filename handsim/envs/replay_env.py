@@ -30,6 +30,16 @@ from handsim.trajectory import Trajectory
 
 DEFAULT_SEQUENCE = ("Models", "20")
 """The bundled Tzionas sequence under :data:`handsim.assets.TZIONAS_DIR`."""
+STEP_NUMBERS = (
+    "reward_tracking",
+    "reward_object",
+    "reward_penetration",
+    "reward_action",
+    "tracking_error",
+    "object_drift",
+    "penetration",
+)
+"""The numbers a step puts in ``info`` besides ``frame``, ``time``, ``diverged`` and ``action_clipped``."""
 
 
 @functools.lru_cache(maxsize=1)

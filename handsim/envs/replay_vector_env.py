@@ -34,19 +34,10 @@ from gymnasium.vector import AutoresetMode
 from gymnasium.vector.utils import batch_space
 from mujoco import batch as mjbatch
 
-from handsim.envs.replay_env import ReplayEnv
+from handsim.envs.replay_env import STEP_NUMBERS, ReplayEnv
 from handsim.sim.stepper import warning_events
 
 _INTEGRATION = int(mujoco.mjtState.mjSTATE_INTEGRATION)
-_STEP_KEYS = (
-    "reward_tracking",
-    "reward_object",
-    "reward_penetration",
-    "reward_action",
-    "tracking_error",
-    "object_drift",
-    "penetration",
-)
 
 
 def _threads(num_envs: int, nthread: int | None) -> int:
@@ -261,7 +252,7 @@ class ReplayVectorEnv(gym.vector.VectorEnv):
                 reward = r_track + r_object + r_pen + r_action  # in the single env's order
                 table.append((reward, r_track, r_object, r_pen, r_action, math.sqrt(mean_sq), drift, depth))
             if self._pending:
-                columns = np.zeros((len(_STEP_KEYS) + 1, n))
+                columns = np.zeros((len(STEP_NUMBERS) + 1, n))
                 columns[:, ids] = np.array(table).T
                 mask = np.zeros(n, bool)
                 mask[ids] = True
@@ -273,9 +264,9 @@ class ReplayVectorEnv(gym.vector.VectorEnv):
             for i, events in warnings.items():
                 diverged[i] = any(e.diverged for e in events)
             terminated[sel] = diverged[sel] | (
-                columns[1 + _STEP_KEYS.index("object_drift")][sel] > self._max_drift
+                columns[1 + STEP_NUMBERS.index("object_drift")][sel] > self._max_drift
             )
-            for key, column in zip(_STEP_KEYS, columns[1:], strict=True):
+            for key, column in zip(STEP_NUMBERS, columns[1:], strict=True):
                 infos[key], infos[f"_{key}"] = column, mask
             infos["diverged"], infos["_diverged"] = diverged, mask
             infos["action_clipped"], infos["_action_clipped"] = clipped, mask
