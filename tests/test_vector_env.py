@@ -101,6 +101,13 @@ def test_native_vector_env_switches_contacts_and_releases_supports_like_single_e
     finally:
         native.close()
         sync.close()
+    # random starts: worlds pass the switches at different steps and restart before or after them
+    native, sync = _pair(3, scene=scene, trajectory=trajectory, random_start=True)
+    try:
+        assert _run_both(native, sync, steps=200, seed=11, scale=1.1) >= 3
+    finally:
+        native.close()
+        sync.close()
 
 
 def test_native_vector_env_reports_a_divergence_in_one_world_like_a_single_env():
