@@ -8,28 +8,56 @@ an ARCTIC-shaped scene (:func:`handsim.sim.arctic_scene.arctic_scene`: two MANO 
 mean-shape model, each welded to a moving wrist, curling their fingers over a two-part box whose lid opens
 and closes, 10 s at ARCTIC's 30 fps).
 
-For each scene, in the same process and interleaved (median of ``--repeats``):
+Run it from the repository root as ``PYTHONPATH=. python benchmarks/replay.py`` to time this tree's
+``handsim`` (a script's own folder comes first on ``sys.path``, so an installed copy would win).
+
+For each scene, in the same process and interleaved (median of ``--repeats``), in CPU seconds of this
+process (:data:`CLOCK`):
 
 * raw: ``mj_step`` from the replay's initial state with only the replay's inputs (controls, mocap root
   pose, the glove contact switch, support release) set once per frame, ``nstep = substeps`` per call —
-  the same simulation with
-  nothing recorded or checked: the floor any replay loop can reach on this model;
+  the same simulation with nothing recorded or checked: the floor any replay loop can reach on this model;
 * loop: :func:`handsim.sim.replay.run_schedule` (the stepping loop: controls, mocap root, support
   release, warning checks, sensor and state copies);
-* replay: the whole :func:`handsim.sim.replay.replay` call (schedule, loop and metrics);
-* env (when the gymnasium env is available): ``env.step`` of ``handsim/Replay-v0`` with zero residuals
-  against raw ``mj_step × frame_skip`` on the env's own model, from the same state with the same
-  controls and root targets.
+* replay: the whole :func:`handsim.sim.replay.replay` call (schedule, loop, metrics, summary, flags) of
+  one simulation of the recording (:data:`ONE_RUN`); for the glove scene the robustness ensemble's extra
+  replays are timed on their own line;
+* env: ``env.step`` of ``handsim/Replay-v0`` with zero residuals against raw ``mj_step × frame_skip`` on
+  the env's own model, from the same state with the same controls and root targets;
+* vector env (wall clock): env-steps per second of one unwrapped ``Replay-v0``, of the native vector
+  environment (:class:`handsim.envs.replay_vector_env.ReplayVectorEnv`, N worlds on MuJoCo's threads) and
+  of ``gymnasium.vector.AsyncVectorEnv`` (N processes) at N = 2, 4, 8.
 
-Prints steps per second, the real-time factor and the ratios; the last lines are
-``replay_vs_raw=<ratio>`` (worst one-hand scene), ``env_vs_raw=<ratio>`` and ``arctic_replay_vs_raw=<ratio>``
-(the ARCTIC-shaped scene) for tracking over time.
+Where the remaining time goes (measured with cProfile and per-part CPU timers on this 2-core machine):
+
+* ``replay()``: the stepping loop is at the raw loop (its Python is ~1 µs per frame: one method call, a
+  bytes comparison of the warning counters, two row copies). Outside it, per replay: the control schedule
+  (resampling the recording to the control rate, slerp of root and object poses: 0.5 ms glove, 1.7 ms
+  Tzionas, 4 ms ARCTIC), a fresh ``MjData`` (its 15 MB arena) with the model copy the glove's contact
+  switch needs and the reset's first ``mj_forward`` (~1 ms), the fingertips' kinematic targets (one
+  ``mj_kinematics`` per frame, ~1.5 µs of MuJoCo plus ~2 µs of Python each: 1.6 ms glove, 2.3 ms
+  Tzionas, 5 ms ARCTIC; a numpy forward kinematics over all frames at once was tried and is no faster at
+  these sizes — its 3×3 products per joint cost what MuJoCo's whole pass does), the other per-frame
+  metrics (~1 ms: contact slots, poses, tracking) and the summary and plausibility flags (~0.7 ms). On
+  the glove scene (78 ms of stepping) these ~5 ms are the 5–7 % between ``replay()`` and raw.
+* ``env.step``: ~20 numpy calls on preallocated buffers (action check, controls, mocap targets, two state
+  gathers, the contact-force product, references, reward terms) and the ``info`` dict: 15–25 µs on a
+  quiet machine, ~40 µs on a loaded one, against ~250 µs of ``mj_step × 5`` on the Tzionas scene.
+* the vector environment: ``Batch.step`` runs the worlds on the threads; the main thread adds the
+  vectorised controls and gathers and a short per-world loop for the reward terms (the single
+  environment's own code, so the results are the same bitwise), ~10 µs per world.
+
+Prints steps per second, the real-time factor and the ratios, with the load average beside them (the
+machine is shared); the last lines are ``replay_vs_raw=<ratio>`` (worst one-hand scene),
+``env_vs_raw=<ratio>``, ``vector_env_scaling=<ratio>`` (the native vector environment's env-steps/s over
+one environment's, worst N) and ``arctic_replay_vs_raw=<ratio>`` (the ARCTIC-shaped scene).
 """
 
 from __future__ import annotations
 
 import argparse
 import math
+import os
 import statistics
 import tempfile
 import time
@@ -53,12 +81,21 @@ from handsim.sim.compiled import compile_scene
 from handsim.sim.control import control_schedule
 from handsim.sim.drive import ScheduleDriver, scenario_switches
 from handsim.sim.metrics import MetricSpec
-from handsim.sim.replay import replay, run_schedule
+from handsim.sim.replay import ReplayConfig, replay, run_schedule
 from handsim.sim.scenarios import glove_scene, recorded_scene
 from handsim.sim.stepper import Stepper
 from handsim.trajectory import ObjectTrack, Trajectory
 
 GRASPDB = Path(__file__).resolve().parents[1].parent / "shared" / "data" / "graspdb14"
+CLOCK = time.process_time
+"""Single-threaded ratios use this process's CPU time: on a machine shared with other work, wall time
+charges the other work's time slices to whichever side ran then; CPU time does not (it equals wall time on
+a quiet machine). The vector environment's scaling is wall time (it is about using more cores)."""
+ONE_RUN = ReplayConfig(ensemble=False)
+"""The replay ratio is one simulation of the recording; a glove trial's robustness ensemble replays
+variants of the scene on top (each itself a ``replay``), timed on its own line."""
+VECTOR_WORLDS = (2, 4, 8)
+REPLAY = "handsim/Replay-v0"
 
 
 def tzionas_case():
@@ -146,7 +183,7 @@ def raw_seconds(scene, schedule) -> float:
     supports = [o.support_eq for o in scene.layout.objects if o.support_eq >= 0]
     geoms = [g for o in scene.layout.objects for g in o.collision_geoms]
     contype, conaffinity = scene.model.geom_contype[geoms].copy(), scene.model.geom_conaffinity[geoms].copy()
-    start = time.perf_counter()
+    start = CLOCK()
     for i in range(1, schedule.frames):
         if i - 1 == release:
             data.eq_active[supports] = 0
@@ -157,20 +194,20 @@ def raw_seconds(scene, schedule) -> float:
             data.mocap_quat[mocap] = root[i, :, 3:]
         data.ctrl[:] = ctrl[i]
         mujoco.mj_step(model, data, nstep=k)
-    return time.perf_counter() - start
+    return CLOCK() - start
 
 
 def loop_seconds(scene, schedule) -> float:
     driver = _driver(scene, schedule, own_model=False)
-    start = time.perf_counter()
+    start = CLOCK()
     run_schedule(driver)
-    return time.perf_counter() - start
+    return CLOCK() - start
 
 
-def replay_seconds(scene, trajectory) -> float:
-    start = time.perf_counter()
-    replay(scene, trajectory)
-    return time.perf_counter() - start
+def replay_seconds(scene, trajectory, config: ReplayConfig = ONE_RUN) -> float:
+    start = CLOCK()
+    replay(scene, trajectory, config)
+    return CLOCK() - start
 
 
 def env_ratio(repeats: int) -> tuple[float, float, float] | None:
@@ -201,27 +238,73 @@ def env_ratio(repeats: int) -> tuple[float, float, float] | None:
     data = mujoco.MjData(model)
     for _ in range(repeats):
         env.reset(seed=0)
-        start = time.perf_counter()
+        start = CLOCK()
         for _ in range(steps):
             env.step(action)
-        env_times.append(time.perf_counter() - start)
+        env_times.append(CLOCK() - start)
         mujoco.mj_copyData(data, model, start_state)
-        start = time.perf_counter()
+        start = CLOCK()
         for i in range(steps):  # the same physics from the same state, nothing observed
             data.ctrl[:] = ctrls[i]
             data.mocap_pos[:] = mocap_pos[i]
             data.mocap_quat[:] = mocap_quat[i]
             mujoco.mj_step(model, data, nstep=skip)
-        raw_times.append(time.perf_counter() - start)
+        raw_times.append(CLOCK() - start)
     env_rate = steps * skip / statistics.median(env_times)
     raw_rate = steps * skip / statistics.median(raw_times)
     return env_rate, raw_rate, env_rate / raw_rate
+
+
+def vector_rates(repeats: int, steps: int = 200) -> tuple[float, dict[int, float], dict[int, float]]:
+    """Wall-clock env-steps per second: one ``Replay-v0``, and N worlds native and in ``AsyncVectorEnv``.
+
+    Every environment runs ``steps`` steps with zero residuals from frame 0 of the default scene (Tzionas
+    sequence 20), interleaved, median of ``repeats``; the single environment is the unwrapped one (no
+    gymnasium wrappers: the fastest single baseline).
+    """
+    import gymnasium
+
+    import handsim  # noqa: F401  registers the envs
+
+    single = gymnasium.make(REPLAY).unwrapped
+    native = {
+        n: gymnasium.make_vec(REPLAY, num_envs=n, vectorization_mode="vector_entry_point")
+        for n in VECTOR_WORLDS
+    }
+    pooled = {n: gymnasium.make_vec(REPLAY, num_envs=n, vectorization_mode="async") for n in VECTOR_WORLDS}
+
+    def rate(env, worlds: int) -> float:
+        env.reset(seed=0)
+        action = np.zeros(env.action_space.shape, np.float32)
+        start = time.perf_counter()
+        for _ in range(steps):
+            env.step(action)
+        return worlds * steps / (time.perf_counter() - start)
+
+    one: list[float] = []
+    many: dict[int, list[float]] = {n: [] for n in VECTOR_WORLDS}
+    processes: dict[int, list[float]] = {n: [] for n in VECTOR_WORLDS}
+    for _ in range(repeats):
+        one.append(rate(single, 1))
+        for n in VECTOR_WORLDS:
+            many[n].append(rate(native[n], n))
+            processes[n].append(rate(pooled[n], n))
+    for env in (*native.values(), *pooled.values()):
+        env.close()
+    median = statistics.median
+    return median(one), {n: median(r) for n, r in many.items()}, {n: median(r) for n, r in processes.items()}
+
+
+def _load() -> str:
+    one, five, _ = os.getloadavg()
+    return f"load {one:.2f} {five:.2f} on {os.cpu_count()} cores"
 
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--repeats", type=int, default=7)
     args = parser.parse_args()
+    print(f"start: {_load()}")
     worst_replay, arctic = np.inf, np.nan
     for build in (tzionas_case, glove_case, arctic_case):
         name, scene, trajectory = build()
@@ -241,15 +324,36 @@ def main() -> None:
             print(
                 f"  {label:12s} {rate:9.0f} steps/s  real-time ×{realtime:6.1f}  vs raw {raw_s / seconds:.3f}"
             )
+        if scene.setup.hold_window is not None and scene.layout.objects:
+            ensemble = replay_seconds(scene, trajectory, ReplayConfig())
+            members = len(scene.setup.placement.get("ensemble", ()))
+            print(
+                f"  replay() with the robustness ensemble ({members} more replays, release stability): "
+                f"{ensemble:.2f} s CPU ({ensemble / full_s:.1f}× one replay)"
+            )
+        print(f"  ({_load()})")
         if build is arctic_case:
             arctic = raw_s / full_s
         else:
             worst_replay = min(worst_replay, raw_s / full_s)
     env = env_ratio(args.repeats)
     if env is not None:
-        print(f"Replay-v0 env.step: {env[0]:.0f} steps/s vs raw mj_step×frame_skip {env[1]:.0f} steps/s")
+        print(
+            f"Replay-v0 env.step: {env[0]:.0f} steps/s vs raw mj_step×frame_skip {env[1]:.0f} steps/s "
+            f"({_load()})"
+        )
+    one, native, pooled = vector_rates(args.repeats)
+    print(f"Replay-v0 env-steps/s (wall clock): one env {one:.0f}")
+    for n in VECTOR_WORLDS:
+        verdict = "beats" if native[n] > pooled[n] else "does NOT beat"
+        print(
+            f"  N={n}: native vector env {native[n]:6.0f} (×{native[n] / one:.2f} one env)  "
+            f"AsyncVectorEnv {pooled[n]:6.0f} (×{pooled[n] / one:.2f}): native {verdict} async"
+        )
+    print(f"end: {_load()}")
     print(f"replay_vs_raw={worst_replay:.3f}")
     print(f"env_vs_raw={env[2]:.3f}" if env is not None else "env_vs_raw=nan")
+    print(f"vector_env_scaling={min(native[n] / one for n in VECTOR_WORLDS):.3f}")
     print(f"arctic_replay_vs_raw={arctic:.3f}")
 
 

@@ -18,17 +18,13 @@ import pytest
 from gymnasium.utils.env_checker import check_env
 
 import handsim  # noqa: F401  registers the environments
-from handsim.builders import build_object, build_scene, default_hand
-from handsim.builders.catalog import get
 from handsim.builders.graspdb_objects import UnknownObjectError
 from handsim.envs import ENVS, register_envs
 from handsim.envs.grasp_env import GraspEnv
 from handsim.envs.replay_env import ReplayEnv, default_replay_inputs
-from handsim.sim.compiled import compile_scene
 from handsim.sim.drive import scenario_switches
 from handsim.sim.replay import ReplayConfig, replay
-from handsim.sim.scenarios import glove_scene
-from handsim.trajectory import Phase, Trajectory
+from tests.helpers import glove_switch_inputs
 
 ROOT = Path(__file__).resolve().parents[1]
 REPLAY, GRASP = "handsim/Replay-v0", "handsim/Grasp-v0"
@@ -182,16 +178,7 @@ def test_replay_with_zero_residuals_is_the_replay_core_bitwise():
 
 
 def test_replay_env_switches_contacts_and_releases_a_glove_scenes_support_like_the_replay_core():
-    hand, ball = default_hand(), build_object(get("tennis_ball"))
-    layout = compile_scene(build_scene(hand, ball)).layout
-    t = np.arange(100) / 64.0
-    flex = np.array(["flex" in n and not n.startswith("root") for n in layout.dof_names])
-    # a fist first (the fingers curl through where the ball will be), then open, then close on the ball
-    closing = np.where(t < 0.2, 1.0, np.clip((t - 0.4) / 0.6, 0, 0.6 / 0.95)) * 0.95
-    targets = closing[:, None] * np.where(flex, layout.ctrl_range[:, 1], 0.0)
-    grasp = (Phase("grasp", int(np.searchsorted(t, 0.8)), 100),)
-    trajectory = Trajectory(t, layout.dof_names, targets, np.ones_like(targets, bool), phases=grasp)
-    scene = glove_scene(hand, trajectory, ball)
+    scene, trajectory = glove_switch_inputs()
     result = replay(scene, trajectory, ReplayConfig(keep_states=True))
     env = ReplayEnv(scene, trajectory)
     env.reset(seed=0)

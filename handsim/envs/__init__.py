@@ -22,19 +22,22 @@ ENVS = {
     "handsim/Grasp-v0": "handsim.envs.grasp_env:GraspEnv",
 }
 """Registered environment ids and their entry points."""
+VECTOR_ENVS = {"handsim/Replay-v0": "handsim.envs.replay_vector_env:ReplayVectorEnv"}
+"""Native vector environments (``gymnasium.make_vec(..., vectorization_mode="vector_entry_point")``)."""
 
 
 def register_envs() -> None:
     """Register the environments with gymnasium (again after a registry reset; never twice)."""
     for env_id, entry_point in ENVS.items():
         if env_id not in gymnasium.registry:
-            gymnasium.register(id=env_id, entry_point=entry_point)
+            gymnasium.register(id=env_id, entry_point=entry_point, vector_entry_point=VECTOR_ENVS.get(env_id))
 
 
 register_envs()
 
 _LAZY = {
     "ReplayEnv": "handsim.envs.replay_env",
+    "ReplayVectorEnv": "handsim.envs.replay_vector_env",
     "GraspEnv": "handsim.envs.grasp_env",
     "RenderError": "handsim.errors",
 }
@@ -46,4 +49,4 @@ def __getattr__(name: str) -> Any:
     raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
 
 
-__all__ = ["ENVS", "GraspEnv", "RenderError", "ReplayEnv", "register_envs"]
+__all__ = ["ENVS", "VECTOR_ENVS", "GraspEnv", "RenderError", "ReplayEnv", "ReplayVectorEnv", "register_envs"]

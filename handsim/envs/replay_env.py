@@ -30,6 +30,16 @@ from handsim.trajectory import Trajectory
 
 DEFAULT_SEQUENCE = ("Models", "20")
 """The bundled Tzionas sequence under :data:`handsim.assets.TZIONAS_DIR`."""
+STEP_NUMBERS = (
+    "reward_tracking",
+    "reward_object",
+    "reward_penetration",
+    "reward_action",
+    "tracking_error",
+    "object_drift",
+    "penetration",
+)
+"""The numbers a step puts in ``info`` besides ``frame``, ``time``, ``diverged`` and ``action_clipped``."""
 
 
 @functools.lru_cache(maxsize=1)
@@ -194,7 +204,6 @@ class ReplayEnv(HandEnv):
         self._ctrl_lo = np.clip(ctrl - self._scale, lo, hi)
         self._ctrl_hi = np.clip(ctrl + self._scale, lo, hi)
         self._ctrl_ref = ctrl
-        self._ctrl = np.zeros(nu)
         self._err = np.zeros(nu)
         self._delta = np.zeros(3)
         self._last = schedule.frames - 1
@@ -244,8 +253,6 @@ class ReplayEnv(HandEnv):
             "_obs_vel",
             "_obs_refs",
             "_obs_force",
-            "_obs_hand",
-            "_obs_objects",
         )
         self._bind()
 
@@ -255,8 +262,6 @@ class ReplayEnv(HandEnv):
         self._data_ctrl = data.ctrl
         self._obs_pos, self._obs_vel = obs[self._pos_slice], obs[self._vel_slice]
         self._obs_refs, self._obs_force = obs[self._ref_slice], obs[self._force_slice]
-        self._obs_hand = obs[self._hand_slice]
-        self._obs_objects = [obs[start : start + 3] for start, _, _ in self._tracks]
 
     # ---- public facts -----------------------------------------------------------------------------------
     @property
@@ -307,31 +312,10 @@ class ReplayEnv(HandEnv):
                 else "call reset() before step()"
             )
         n = k + 1
-        ctrl = self._ctrl
-        np.multiply(a, self._scale, out=ctrl)
-        ctrl += self._ctrl_ref[n]
-        np.maximum(ctrl, self._ctrl_lo[n], out=ctrl)
-        np.minimum(ctrl, self._ctrl_hi[n], out=self._data_ctrl)
+        self._controls(a, n, self._data_ctrl)
         events = self._driver.advance()  # the controls are in data.ctrl already
         penetration = self._observe()
-
-        err = np.subtract(self._obs_hand, self._ref_ctrl[n], out=self._err)
-        mean_sq = float(np.dot(err, err)) / err.size if err.size else 0.0
-        r_track = self._w_track * math.exp(-mean_sq * self._inv_sigma2_track)
-        r_object, drift, tracked = 0.0, 0.0, 0
-        delta = self._delta
-        for view, (_, positions, valid) in zip(self._obs_objects, self._tracks, strict=True):
-            if not valid[n]:
-                continue
-            np.subtract(view, positions[n], out=delta)
-            d2 = float(np.dot(delta, delta))
-            r_object += math.exp(-d2 * self._inv_sigma2_object)
-            drift = max(drift, math.sqrt(d2))
-            tracked += 1
-        if tracked:
-            r_object *= self._w_object / tracked
-        r_pen = -self._w_pen * penetration
-        r_action = -self._w_action * squares
+        r_track, r_object, r_pen, r_action, mean_sq, drift = self._reward(self._obs, n, squares, penetration)
         reward = r_track + r_object + r_pen + r_action
 
         diverged = any(e.diverged for e in events) if events else False
@@ -355,6 +339,54 @@ class ReplayEnv(HandEnv):
         if events:
             info["warnings"] = tuple(e.describe() for e in events)
         return self._obs.copy(), reward, terminated, truncated, info
+
+    def _controls(self, action: np.ndarray, frame: int | np.ndarray, out: np.ndarray) -> None:
+        """The actuator controls towards ``frame``: ``clip(ref + residual_scale · action, ctrl range)``.
+
+        Elementwise, so one world (``action`` (nu,), ``frame`` an int) and many (``action`` (worlds, nu),
+        ``frame`` (worlds,)) give bitwise the same controls.
+
+        Args:
+            action: Actions already clipped to the action space.
+            frame: The frame each world steps towards.
+            out: Where the controls go (``data.ctrl``, or a batch's controls).
+        """
+        np.multiply(action, self._scale, out=out)
+        out += self._ctrl_ref[frame]
+        np.maximum(out, self._ctrl_lo[frame], out=out)
+        np.minimum(out, self._ctrl_hi[frame], out=out)
+
+    def _reward(
+        self, obs: np.ndarray, frame: int, squares: float, penetration: float
+    ) -> tuple[float, float, float, float, float, float]:
+        """The reward terms of one world that reached ``frame`` with observation ``obs``.
+
+        Args:
+            obs: The world's observation (obs_size,).
+            frame: The frame reached.
+            squares: Sum of squares of the (clipped) action.
+            penetration: Deepest hand–object penetration, m.
+
+        Returns:
+            ``reward_tracking``, ``reward_object``, ``reward_penetration``, ``reward_action``, the mean
+            squared joint error (rad²) and the largest recorded-object drift (m).
+        """
+        err = np.subtract(obs[self._hand_slice], self._ref_ctrl[frame], out=self._err)
+        mean_sq = float(np.dot(err, err)) / err.size if err.size else 0.0
+        r_track = self._w_track * math.exp(-mean_sq * self._inv_sigma2_track)
+        r_object, drift, tracked = 0.0, 0.0, 0
+        delta = self._delta
+        for start, positions, valid in self._tracks:
+            if not valid[frame]:
+                continue
+            np.subtract(obs[start : start + 3], positions[frame], out=delta)
+            d2 = float(np.dot(delta, delta))
+            r_object += math.exp(-d2 * self._inv_sigma2_object)
+            drift = max(drift, math.sqrt(d2))
+            tracked += 1
+        if tracked:
+            r_object *= self._w_object / tracked
+        return r_track, r_object, -self._w_pen * penetration, -self._w_action * squares, mean_sq, drift
 
     def _observe(self) -> float:
         """Fill the observation buffer from the state; returns the penetration, m."""

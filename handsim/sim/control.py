@@ -127,9 +127,8 @@ def control_schedule(scene: SimScene, trajectory: Trajectory, rate_hz: float) ->
     held = tuple(n for n in layout.dof_names if n not in column)
     initial = np.clip(0.0, layout.ctrl_range[:, 0], layout.ctrl_range[:, 1])
     ctrl = np.tile(initial, (traj.times.shape[0], 1))
-    for a, name in enumerate(layout.dof_names):
-        if name in column:
-            ctrl[:, a] = traj.targets[:, column[name]]
+    actuators = [a for a, name in enumerate(layout.dof_names) if name in column]
+    ctrl[:, actuators] = traj.targets[:, [column[layout.dof_names[a]] for a in actuators]]
     check_controls(ctrl, f"{trajectory.source or 'trajectory'} targets after resampling")
     if held:
         notes.append(

@@ -63,7 +63,6 @@ class ScheduleDriver:
         layout = stepper.scene.layout
         self.stepper, self.schedule, self.switches = stepper, schedule, switches
         self.frame = 0
-        self._data = stepper.data
         self._supports = np.array([o.support_eq for o in layout.objects if o.support_eq >= 0], dtype=np.int64)
         self._geoms = np.array([g for o in layout.objects for g in o.collision_geoms], dtype=np.int64)
         model = stepper.model
@@ -75,6 +74,24 @@ class ScheduleDriver:
         self._root_qpos = [h.root_free_qpos for h in welded]
         self._root_pos = None if roots is None else np.ascontiguousarray(roots[:, :, :3])
         self._root_quat = None if roots is None else np.ascontiguousarray(roots[:, :, 3:])
+        # every mocap body is a welded root, in order: whole-array copies instead of fancy indexing
+        self._all_mocap = np.array_equal(self._mocap, np.arange(model.nmocap))
+        self._bind()
+
+    def _bind(self) -> None:
+        """Views into the stepper's data used every frame (recreated after unpickling)."""
+        self._data = self.stepper.data
+        self._mocap_pos, self._mocap_quat = self._data.mocap_pos, self._data.mocap_quat
+
+    def __getstate__(self) -> dict:
+        state = self.__dict__.copy()
+        for name in ("_data", "_mocap_pos", "_mocap_quat"):
+            del state[name]  # views into the stepper's data: recreated from the unpickled stepper
+        return state
+
+    def __setstate__(self, state: dict) -> None:
+        self.__dict__.update(state)
+        self._bind()
 
     def reset(self, frame: int = 0) -> None:
         """Put the scene in the recorded state of ``frame``, with the switches as they are then.
@@ -133,8 +150,12 @@ class ScheduleDriver:
         if k == self.switches.contact_frame and k > 0:
             self._set_contacts(True)
         if self._root_pos is not None:
-            self._data.mocap_pos[self._mocap] = self._root_pos[k + 1]
-            self._data.mocap_quat[self._mocap] = self._root_quat[k + 1]
+            if self._all_mocap:
+                self._mocap_pos[:] = self._root_pos[k + 1]
+                self._mocap_quat[:] = self._root_quat[k + 1]
+            else:
+                self._mocap_pos[self._mocap] = self._root_pos[k + 1]
+                self._mocap_quat[self._mocap] = self._root_quat[k + 1]
         events = self.stepper.step(ctrl)
         self.frame = k + 1
         return events

@@ -216,16 +216,20 @@ def _kinematic_targets(scene: SimScene, schedule: ControlSchedule, qpos: np.ndar
 
 
 def _target_tips(scene: SimScene, qpos: np.ndarray) -> np.ndarray:
-    """Fingertip site positions (N, tips, 3) for each qpos row (kinematics only)."""
-    model, sites = scene.model, scene.layout.tip_sites
+    """Fingertip site positions (N, tips, 3) for each qpos row (kinematics only).
+
+    One ``mj_kinematics`` per row; the loop body is the least Python around it (every site copied, the
+    tips picked once at the end).
+    """
+    model = scene.model
     data = mujoco.MjData(model)
-    tips = np.empty((qpos.shape[0], sites.size, 3))
+    sites = np.empty((qpos.shape[0], model.nsite, 3))
     state, site_xpos, kinematics = data.qpos, data.site_xpos, mujoco.mj_kinematics
-    for k in range(qpos.shape[0]):
-        state[:] = qpos[k]
+    for k, row in enumerate(qpos):
+        state[:] = row
         kinematics(model, data)
-        np.take(site_xpos, sites, axis=0, out=tips[k])
-    return tips
+        sites[k] = site_xpos
+    return sites[:, scene.layout.tip_sites]
 
 
 def _poses(sensors: np.ndarray, pos_adr: int, quat_adr: int) -> np.ndarray:

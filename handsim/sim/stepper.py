@@ -126,31 +126,61 @@ class Stepper:
         return self._new_warnings()
 
     def _new_warnings(self) -> tuple[WarningEvent, ...]:
-        events = []
         message = " | ".join(_MESSAGES)
         _MESSAGES.clear()
-        first = (self.frame - 1) * self.substeps
-        for i in np.flatnonzero(self._counts != self._seen):
-            name = WARNING_NAMES[i]
-            step = first
-            if name in _RESETTING:
-                # the reset sets time to 0; the steps after it, the reset's own included, advanced it
-                after = round(self.data.time / self.model.opt.timestep)
-                step = first + self.substeps - after
-            events.append(
-                WarningEvent(
-                    name=name,
-                    step=step,
-                    frame=self.frame - 1,
-                    count=int(self._counts[i] - self._seen[i]),
-                    info=int(self.data.warning[i].lastinfo),
-                    diverged=name in DIVERGENCE_WARNINGS,
-                    message=message,
-                )
-            )
+        events = warning_events(
+            self._counts,
+            self._seen,
+            self.data.warning.lastinfo,
+            frame=self.frame - 1,
+            substeps=self.substeps,
+            steps_since_reset=round(self.data.time / self.model.opt.timestep),
+            message=message,
+        )
         self._seen[:] = self._counts
         self._seen_bytes = self._seen.tobytes()
-        return tuple(events)
+        return events
+
+
+def warning_events(
+    counts: np.ndarray,
+    seen: np.ndarray,
+    lastinfo: np.ndarray,
+    *,
+    frame: int,
+    substeps: int,
+    steps_since_reset: int,
+    message: str = "",
+) -> tuple[WarningEvent, ...]:
+    """The warnings MuJoCo counted during control frame ``frame`` (one simulation).
+
+    Args:
+        counts: MuJoCo's warning counters after the frame (``data.warning.number``).
+        seen: The counters before it.
+        lastinfo: MuJoCo's ``lastinfo`` per warning.
+        frame: Index of the control frame.
+        substeps: MuJoCo steps per control frame.
+        steps_since_reset: ``round(data.time / timestep)`` after the frame: a reset sets time to 0, so for
+            warnings that reset the state the steps after it (the reset's own included) say where it was.
+        message: MuJoCo's message text caught during the frame.
+    """
+    events = []
+    first = frame * substeps
+    for i in np.flatnonzero(counts != seen):
+        name = WARNING_NAMES[i]
+        step = first + substeps - steps_since_reset if name in _RESETTING else first
+        events.append(
+            WarningEvent(
+                name=name,
+                step=step,
+                frame=frame,
+                count=int(counts[i] - seen[i]),
+                info=int(lastinfo[i]),
+                diverged=name in DIVERGENCE_WARNINGS,
+                message=message,
+            )
+        )
+    return tuple(events)
 
 
 def check_controls(values: np.ndarray, what: str) -> None:
