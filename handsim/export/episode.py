@@ -16,6 +16,7 @@ from pathlib import Path
 
 import numpy as np
 
+from handsim.envs.replay_env import STEP_NUMBERS
 from handsim.errors import HandsimError
 from handsim.export.errors import ExportError, RecordMismatchError
 from handsim.runner.trial_record import sha256_file
@@ -31,15 +32,9 @@ UNCHECKED_SUMMARY_KEYS = frozenset({"stable", "simulation_displacement_mm"})
 MAX_WARNINGS_KEPT = 20
 """MuJoCo warnings described in an episode's metadata (the count is always kept)."""
 
-STEP_INFO_KEYS = (
-    "reward_tracking",
-    "reward_object",
-    "reward_penetration",
-    "reward_action",
-    "tracking_error",
-    "object_drift",
-)
-"""Entries of the environment's ``info`` that exist only after a step (NaN in the reset row)."""
+STEP_INFO_KEYS = tuple(key for key in STEP_NUMBERS if key != "penetration")
+"""Entries of the environment's ``info`` that exist only after a step (NaN in the reset row); ``penetration``
+is read from the observation, which the reset row has too."""
 INFO_DOCS = {
     "frame": "control frame index of the row's observation (0 = the reset state)",
     "time": "trajectory time of that frame, s",
