@@ -37,12 +37,19 @@ import math
 
 import numpy as np
 import numpy.typing as npt
-from scipy.spatial.transform import Rotation
 
 _GIMBAL_COS = 1e-12
 _SLERP_LINEAR_DOT = 0.9995
 """Above this |q0·q1| (angle below about 3.6°) slerp falls back to normalised linear interpolation."""
 _PARALLEL_SIN = 1e-12
+
+
+def _scipy_rotation() -> type:
+    """The ``scipy.spatial.transform.Rotation`` class."""
+    # lazy: scipy costs ~0.5 s at start-up, and light commands (``handsim catalog``) need only the numpy parts
+    from scipy.spatial.transform import Rotation
+
+    return Rotation
 
 
 def _scipy(stack: np.ndarray, width: int) -> tuple[np.ndarray, tuple[int, ...]]:
@@ -97,7 +104,7 @@ def quat_angle(a: npt.ArrayLike, b: npt.ArrayLike) -> np.ndarray:
 def quat_to_matrix(q: npt.ArrayLike) -> np.ndarray:
     """Rotation matrices of quaternions (w, x, y, z), shape (..., 4) → (..., 3, 3); ``q`` is normalised."""
     flat, lead = _scipy(np.asarray(q, dtype=float), 1)
-    return Rotation.from_quat(flat, scalar_first=True).as_matrix().reshape((*lead, 3, 3))
+    return _scipy_rotation().from_quat(flat, scalar_first=True).as_matrix().reshape((*lead, 3, 3))
 
 
 def matrix_to_quat(matrix: npt.ArrayLike) -> np.ndarray:
@@ -106,7 +113,7 @@ def matrix_to_quat(matrix: npt.ArrayLike) -> np.ndarray:
     The sign is scipy's (not canonicalised): callers that need continuity or ``w ≥ 0`` choose it.
     """
     flat, lead = _scipy(np.asarray(matrix, dtype=float), 2)
-    return Rotation.from_matrix(flat).as_quat(scalar_first=True).reshape((*lead, 4))
+    return _scipy_rotation().from_matrix(flat).as_quat(scalar_first=True).reshape((*lead, 4))
 
 
 def axis_angle_to_quat(aa: npt.ArrayLike) -> np.ndarray:
@@ -119,7 +126,7 @@ def axis_angle_to_quat(aa: npt.ArrayLike) -> np.ndarray:
         ``(cos θ/2, sin(θ/2) · axis)``, shape (..., 4): w ≥ 0 for angles ≤ π, w < 0 beyond (no sign flip).
     """
     flat, lead = _scipy(np.asarray(aa, dtype=float), 1)
-    return Rotation.from_rotvec(flat).as_quat(scalar_first=True).reshape((*lead, 4))
+    return _scipy_rotation().from_rotvec(flat).as_quat(scalar_first=True).reshape((*lead, 4))
 
 
 def quat_about(axis: npt.ArrayLike, angles: npt.ArrayLike) -> np.ndarray:
@@ -137,13 +144,13 @@ def quat_to_axis_angle(q: npt.ArrayLike) -> np.ndarray:
     ``q`` is normalised, and ``q`` and ``−q`` give the same vector (the shorter rotation).
     """
     flat, lead = _scipy(np.asarray(q, dtype=float), 1)
-    return Rotation.from_quat(flat, scalar_first=True).as_rotvec().reshape((*lead, 3))
+    return _scipy_rotation().from_quat(flat, scalar_first=True).as_rotvec().reshape((*lead, 3))
 
 
 def axis_angle_to_matrix(aa: npt.ArrayLike) -> np.ndarray:
     """Rotation matrices of axis-angle vectors (unit axis × angle, radians), shape (..., 3) → (..., 3, 3)."""
     flat, lead = _scipy(np.asarray(aa, dtype=float), 1)
-    return Rotation.from_rotvec(flat).as_matrix().reshape((*lead, 3, 3))
+    return _scipy_rotation().from_rotvec(flat).as_matrix().reshape((*lead, 3, 3))
 
 
 def rotation_about_axis(axis: npt.ArrayLike, angles: npt.ArrayLike) -> np.ndarray:

@@ -36,7 +36,6 @@ from typing import Any
 
 import numpy as np
 import numpy.typing as npt
-import scipy.sparse
 
 from handsim.assets import ASSETS_DIR
 from handsim.errors import FormatError, InputFileError, ModelError, SkeletonError, TrajectoryError
@@ -205,6 +204,9 @@ class SparseMatrixStub:
                 f"sparse indices and indptr must be integers, got {indices.dtype} and {indptr.dtype}"
             )
         nrows, ncols = (int(n) for n in shape)
+        # lazy: only a MANO .pkl needs scipy.sparse; the ARCTIC readers beside this module are light
+        import scipy.sparse
+
         build = scipy.sparse.csc_array if self.layout == "csc" else scipy.sparse.csr_array
         try:
             matrix = build((data.astype(float), indices, indptr), shape=(nrows, ncols))
