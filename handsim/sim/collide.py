@@ -27,6 +27,7 @@ from scipy.spatial import ConvexHull, QhullError
 from handsim.sim.compiled import SimScene
 
 _HAND_BIT, _OBJECT_BIT = 2, 2
+_NO_LINKS, _NO_DISTANCES = np.zeros(0, dtype=np.int64), np.zeros(0)
 _CHUNK = 4096  # poses per vectorised bound evaluation (memory: chunk × object balls × hand geoms × 3)
 UNDECIDED, CLEAR, DEEP = 0, 1, 2
 """What :meth:`HandObjectCollider.screen` says of a pose: run the query; no link within the touch distance;
@@ -90,27 +91,39 @@ class HandObjectCollider:
         self.data.qpos[:] = qpos
         self.data.qpos[a : a + 7] = pose
 
-    def touch_at(self, pos: np.ndarray, quat: np.ndarray) -> Touch:
-        """The links touching the object at pose (``pos``, ``quat``) and the deepest penetration."""
+    def _contacts(self, pos: np.ndarray, quat: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Link index and distance of each hand–object contact within the touch distance at a pose."""
         d, a = self.data, self.obj.free_qpos
         d.qpos[a : a + 3] = pos
         d.qpos[a + 3 : a + 7] = quat
         mujoco.mj_kinematics(self.model, d)
         mujoco.mj_collision(self.model, d)
         self.queries += 1
-        distance = np.full(self.layout.link_bodies.size, np.inf)
         n = d.ncon
         if n == 0:
-            return Touch(np.zeros(0, dtype=np.int64), 0.0, distance)
+            return _NO_LINKS, _NO_DISTANCES
         geom = d.contact.geom[:n]
         dist = d.contact.dist[:n]
         other = np.where(self.is_obj[geom[:, 0]], geom[:, 1], geom[:, 0])
         link = self.link_index[self.model.geom_bodyid[other]]
         keep = (link >= 0) & (dist <= self.touch)
-        if not keep.any():
+        return link[keep], dist[keep]
+
+    def touch_at(self, pos: np.ndarray, quat: np.ndarray) -> Touch:
+        """The links touching the object at pose (``pos``, ``quat``) and the deepest penetration."""
+        link, dist = self._contacts(pos, quat)
+        distance = np.full(self.layout.link_bodies.size, np.inf)
+        if not link.size:
             return Touch(np.zeros(0, dtype=np.int64), 0.0, distance)
-        np.minimum.at(distance, link[keep], dist[keep])
-        return Touch(np.flatnonzero(np.isfinite(distance)), float(max(0.0, -dist[keep].min())), distance)
+        np.minimum.at(distance, link, dist)
+        return Touch(np.flatnonzero(np.isfinite(distance)), float(max(0.0, -dist.min())), distance)
+
+    def depth_links(self, pos: np.ndarray, quat: np.ndarray) -> tuple[float, int]:
+        """:meth:`touch_at`'s ``depth`` and number of ``links``, without the per-link distances."""
+        link, dist = self._contacts(pos, quat)
+        if not link.size:
+            return 0.0, 0
+        return float(max(0.0, -dist.min())), len(set(link.tolist()))
 
     def hand_spheres(self) -> tuple[np.ndarray, np.ndarray]:
         """Centres (G, 3) and bounding radii (G,) of the hand's colliding geoms at the current posture.
@@ -131,14 +144,21 @@ class HandObjectCollider:
             Per position :data:`CLEAR` (the query would find no link within the touch distance),
             :data:`DEEP` (the query would find a penetration deeper than ``depth``) or :data:`UNDECIDED`.
         """
-        clear, overlap = self.bounds(positions, quat)
+        clear, overlap = self.bounds(positions, quat, depth)
         result = np.full(len(positions), UNDECIDED, dtype=np.int8)
         result[clear] = CLEAR
         result[~clear & (overlap > depth)] = DEEP
         return result
 
-    def bounds(self, positions: np.ndarray, quat: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    def bounds(
+        self, positions: np.ndarray, quat: np.ndarray, floor: float = -np.inf
+    ) -> tuple[np.ndarray, np.ndarray]:
         """Bounds of the queries at each position with orientation ``quat``, hand as set.
+
+        Args:
+            positions: Object positions (N, 3), m.
+            quat: The object's orientation (w, x, y, z) for all of them.
+            floor: Overlaps not above this may be reported as −inf (pairs too far apart are not computed).
 
         Returns:
             Per position: whether every object geom's bounding sphere lies farther than the touch distance
@@ -164,32 +184,38 @@ class HandObjectCollider:
         o_frames = [(data.geom_xpos[g].copy(), data.geom_xmat[g].reshape(3, 3).copy()) for g in objs]
         data.qpos[a : a + 7] = pose
         mujoco.mj_kinematics(model, data)
-        reach = o_rb[:, None] + h_rb[None, :] + 1e-9  # (O, G)
+        # clear: every pair of bounding spheres apart (squared distances as one matrix product per chunk)
+        centres = (h_pos[None, :, :] - o_pos[:, None, :]).reshape(-1, 3)  # (O·G, 3)
+        reach2 = ((o_rb[:, None] + h_rb[None, :]).reshape(-1) + 1e-6) ** 2
         balls = [(p + m @ c, r) for (p, m), (c, _, r) in zip(o_frames, self._balls, strict=True) if r > 0]
-        b_pos = np.array([c for c, _ in balls]).reshape(-1, 3) @ rot.T
-        b_rad = np.array([r for _, r in balls])
         cores = []
         for g, (c, axis, r) in zip(hand, self._cores, strict=True):
             if r > 0:
                 m = data.geom_xmat[g].reshape(3, 3)
                 cores.append((data.geom_xpos[g] + m @ c, m @ axis, r))
-        c_a = np.array([p - v for p, v, _ in cores]).reshape(-1, 3)
-        c_d = np.array([2 * v for _, v, _ in cores]).reshape(-1, 3)
-        c_rad = np.array([r for _, _, r in cores])
-        c_len2 = np.maximum((c_d * c_d).sum(axis=1), 1e-300)
+        # deep: ball b (centre x + q_b) against core c (segment s_c + t·d_c): one segment per pair, shifted
+        start_k = np.array([s - v - rot @ q for q, _ in balls for s, v, _ in cores]).reshape(-1, 3)
+        dir_k = np.array([2 * v for _ in balls for _, v, _ in cores]).reshape(-1, 3)
+        rad_k = np.array([rb + rc for _, rb in balls for _, _, rc in cores])
+        len2_k = np.maximum((dir_k * dir_k).sum(axis=1), 1e-300)
+        mid_k = start_k + dir_k / 2
+        reach_k = rad_k - floor  # an overlap above the floor needs the segment nearer than this
+        cull2 = np.where(reach_k > 0, (reach_k + np.sqrt(len2_k) / 2 + 1e-6) ** 2, -1.0)
         clear = np.zeros(len(positions), dtype=bool)
         overlap = np.full(len(positions), -np.inf)
-        for start in range(0, len(positions), _CHUNK):
-            pos = np.asarray(positions[start : start + _CHUNK], dtype=float)
-            gap = np.linalg.norm(pos[:, None, None, :] + o_pos[None, :, None, :] - h_pos[None, None], axis=-1)
-            clear[start : start + _CHUNK] = (gap > reach).all(axis=(1, 2))
-            if b_rad.size and c_rad.size:
-                centre = pos[:, None, None, :] + b_pos[None, :, None, :] - c_a[None, None]  # (N, B, C, 3)
-                t = np.clip((centre * c_d).sum(axis=-1) / c_len2, 0.0, 1.0)
-                far = np.linalg.norm(centre - t[..., None] * c_d, axis=-1)
-                overlap[start : start + _CHUNK] = (b_rad[None, :, None] + c_rad[None, None, :] - far).max(
-                    axis=(1, 2)
-                )
+        for first in range(0, len(positions), _CHUNK):
+            x = np.asarray(positions[first : first + _CHUNK], dtype=float)
+            x2 = (x * x).sum(axis=1)[:, None]
+            d2 = x2 - 2.0 * (x @ centres.T) + (centres * centres).sum(axis=1)[None]
+            clear[first : first + _CHUNK] = (d2 > reach2[None]).all(axis=1)
+            if rad_k.size:
+                near = x2 - 2.0 * (x @ mid_k.T) + (mid_k * mid_k).sum(axis=1)[None] < cull2[None]
+                n, k = np.nonzero(near)
+                rel = x[n] - start_k[k]
+                t = np.clip((rel * dir_k[k]).sum(axis=1) / len2_k[k], 0.0, 1.0)
+                depth = rad_k[k] - np.linalg.norm(rel - t[:, None] * dir_k[k], axis=1)
+                chunk = overlap[first : first + _CHUNK]
+                np.maximum.at(chunk, n, depth)
         return clear, overlap
 
 

@@ -399,10 +399,10 @@ class _Search:
                 self.screened += 1
                 self.pruned_deep = True
                 continue
-            touch = self.collider.touch_at(pose[:3], pose[3:])
-            self._consider(pose, touch.depth)
-            if touch.depth <= self.spec.penetration and touch.links.size:
-                fitting.append((pose, int(touch.links.size)))
+            depth, links = self.collider.depth_links(pose[:3], pose[3:])
+            self._consider(pose, depth)
+            if depth <= self.spec.penetration and links:
+                fitting.append((pose, links))
         return fitting
 
     def _ranked(self, fitting: list[tuple[np.ndarray, int]]) -> list[tuple[tuple, np.ndarray]]:

@@ -19,9 +19,7 @@ from __future__ import annotations
 
 import hashlib
 import json
-import os
 import pickle
-import tempfile
 from functools import lru_cache
 from pathlib import Path
 
@@ -30,6 +28,7 @@ import numpy as np
 
 from handsim.errors import FormatError
 from handsim.io.safe_pickle import loads_restricted_pickle
+from handsim.runner.records import write_atomic
 from handsim.sim.compiled import SimScene
 from handsim.sim.grasp_frame import GraspFrame
 from handsim.trajectory import Trajectory
@@ -129,17 +128,10 @@ def read_entry(path: Path, key: str, allowed: dict) -> object:
 
 
 def write_entry(path: Path, key: str, placement: object) -> None:
-    """Write an entry atomically (temporary file in the same folder, then rename)."""
+    """Write an entry atomically (:func:`handsim.runner.records.write_atomic`).
+
+    Raises:
+        OSError: It cannot be written.
+    """
     payload = pickle.dumps((CACHE_FORMAT_VERSION, placement), protocol=5)
-    data = _MAGIC + f"{key}\n{hashlib.sha256(payload).hexdigest()}\n".encode("ascii") + payload
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(prefix=f".{key[:16]}.", suffix=".tmp", dir=path.parent)
-    try:
-        with os.fdopen(fd, "wb") as f:
-            f.write(data)
-            f.flush()
-            os.fsync(f.fileno())
-        os.replace(tmp, path)
-    except BaseException:
-        Path(tmp).unlink(missing_ok=True)
-        raise
+    write_atomic(path, _MAGIC + f"{key}\n{hashlib.sha256(payload).hexdigest()}\n".encode("ascii") + payload)
