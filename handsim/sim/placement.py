@@ -26,6 +26,12 @@ The search (:func:`place_object`):
 Every pose within the tolerance is a candidate: when none touches the hand, the feasible pose nearest the
 fingertips' centre is kept (with a note); only when no pose of any level is within the tolerance is the
 placement infeasible, and then it says so with the numbers (the replay's hold is then not judged).
+
+Speed: the poses of one orientation are first screened together by cheap bounds
+(:meth:`HandObjectCollider.screen`): a pose that touches nothing, or that is surely deeper than the
+tolerance plus :data:`SCREEN_MARGIN`, is settled without a collision query; the result is the same as
+querying every pose (an infeasible search is rerun without the bounds, so that its least penetration is
+MuJoCo's). :func:`place_object` keeps each result in the placement cache (:mod:`handsim.sim.placement_cache`).
 """
 
 from __future__ import annotations
@@ -189,7 +195,7 @@ class Placement:
             its label (``"+x 2 mm"``, ``"-z 5°"`` …) and its own fit and contact frames.
         feasible: Some pose was within the penetration tolerance; False: ``best`` is the least penetrating
             pose seen and the hold cannot be judged.
-        queries: Collision queries run (poses and frames tried).
+        queries: Poses and frames tried (by a collision query, or settled by the bounds).
         grip_tests: Candidates whose grip was tested.
         feasible_poses: Poses within the tolerance seen on the grids.
         object_points: The object's collision points in its own frame (mesh vertices; primitives' extreme
