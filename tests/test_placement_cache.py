@@ -125,3 +125,13 @@ def test_a_corrupt_entry_is_ignored_with_a_note_and_replaced(monkeypatch, tmp_pa
     fresh = place_object(*args, **kwargs, use_cache=False)
     assert _bits(read_entry(path, path.stem, placement_module._CACHED_CLASSES)) == _bits(fresh)
     assert entry_path(tmp_path / "cache", path.stem) == path
+
+
+def test_a_cache_that_cannot_be_written_gives_the_placement_with_a_note(monkeypatch, tmp_path):
+    args, kwargs = _search_inputs(monkeypatch, tmp_path)
+    blocker = tmp_path / "not_a_folder"
+    blocker.write_text("a file where the cache folder would be", encoding="utf-8")
+    placement = place_object(*args, **kwargs, cache_dir=blocker)
+    assert f"; could not write placement cache entry {blocker / 'placement'}" in placement.note
+    fresh = place_object(*args, **kwargs, use_cache=False)
+    assert _bits(dataclasses.replace(placement, note=fresh.note)) == _bits(fresh)

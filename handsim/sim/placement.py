@@ -38,6 +38,7 @@ from __future__ import annotations
 
 import itertools
 import math
+import pickle
 from dataclasses import asdict, dataclass, field, replace
 from pathlib import Path
 
@@ -621,7 +622,7 @@ def place_object(
     placement = _place(scene, trajectory, grasp, spec, release_delay, control_rate, shift, turn_deg)
     try:
         write_entry(path, key, placement)
-    except OSError as e:
+    except (OSError, pickle.PicklingError, TypeError) as e:  # a full disk; a result that will not pickle
         notes.append(f"could not write placement cache entry {path}: {e}")
     return replace(placement, note="; ".join([placement.note, *notes])) if notes else placement
 

@@ -12,7 +12,9 @@ only the placement's own classes and NumPy arrays).
 Entries live in ``cache_dir/placement/<key[:2]>/<key>.pkl`` (``cache_dir`` as for the convex hulls:
 :func:`handsim.builders.decompose.default_cache_dir`), written atomically (temporary file, then rename).
 An entry whose checksum, format or key does not match is ignored and replaced, with a note; it is never
-trusted.
+trusted. A value changed at run time rather than in a source file (a module constant patched by a
+script) is not in the key: such a caller passes ``use_cache=False`` to
+:func:`~handsim.sim.placement.place_object`.
 """
 
 from __future__ import annotations
