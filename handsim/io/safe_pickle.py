@@ -151,6 +151,17 @@ def load_restricted_pickle(path: str | Path, allowed: Mapping[tuple[str, str], A
         return _unpickle(f, p, allowed)
 
 
+def loads_restricted_pickle(
+    data: bytes, source: str | Path, allowed: Mapping[tuple[str, str], Any] | None = None
+) -> Any:
+    """Unpickle bytes read from ``source`` as :func:`load_restricted_pickle` unpickles a file.
+
+    Raises:
+        FormatError: As :func:`load_restricted_pickle` (naming ``source``).
+    """
+    return _unpickle(io.BytesIO(data), Path(source), allowed)
+
+
 def load_npy(path: str | Path, allowed: Mapping[tuple[str, str], Any] | None = None) -> np.ndarray:
     """Read a ``.npy`` file; an object array (``allow_pickle``) is unpickled with the restricted unpickler.
 

@@ -5,6 +5,13 @@ collide (the hand's self-contacts are switched off: they do not change with the 
 object's geoms carry a margin of the touch distance, so that MuJoCo reports the links within that distance
 as contacts with a positive ``dist``. Moving the object is writing its free joint's ``qpos``; nothing is
 recompiled.
+
+:meth:`HandObjectCollider.screen` settles many poses at one posture without running collision detection,
+where cheap bounds already decide a query's outcome: a pose whose geoms' bounding spheres all lie farther
+than the touch distance from every hand geom's is clear (the query would find nothing, as MuJoCo's own
+bounding-sphere test would), and a pose where a ball inscribed in one of the object's convex geoms overlaps
+a ball or capsule core inscribed in a hand geom by more than a depth is at least that deep (separating two
+convex shapes takes at least the overlap of balls they contain).
 """
 
 from __future__ import annotations
@@ -14,10 +21,17 @@ from dataclasses import dataclass
 
 import mujoco
 import numpy as np
+from scipy.optimize import linprog
+from scipy.spatial import ConvexHull, QhullError
 
 from handsim.sim.compiled import SimScene
 
 _HAND_BIT, _OBJECT_BIT = 2, 2
+_NO_LINKS, _NO_DISTANCES = np.zeros(0, dtype=np.int64), np.zeros(0)
+_CHUNK = 4096  # poses per vectorised bound evaluation (memory: chunk × object balls × hand geoms × 3)
+UNDECIDED, CLEAR, DEEP = 0, 1, 2
+"""What :meth:`HandObjectCollider.screen` says of a pose: run the query; no link within the touch distance;
+deeper than the given depth."""
 
 
 @dataclass(frozen=True)
@@ -66,6 +80,9 @@ class HandObjectCollider:
         self.data = mujoco.MjData(model)
         self.queries = 0
         self._hand_geoms = np.flatnonzero(is_hand)
+        self._obj_geoms = np.flatnonzero(self.is_obj)
+        self._cores = [_core(model, g) for g in self._hand_geoms]
+        self._balls = [_core(model, g) for g in self._obj_geoms]
 
     def set_hand(self, qpos: np.ndarray) -> None:
         """Put the hand (and everything else but the object's pose) at ``qpos`` (nq,)."""
@@ -74,27 +91,39 @@ class HandObjectCollider:
         self.data.qpos[:] = qpos
         self.data.qpos[a : a + 7] = pose
 
-    def touch_at(self, pos: np.ndarray, quat: np.ndarray) -> Touch:
-        """The links touching the object at pose (``pos``, ``quat``) and the deepest penetration."""
+    def _contacts(self, pos: np.ndarray, quat: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Link index and distance of each hand–object contact within the touch distance at a pose."""
         d, a = self.data, self.obj.free_qpos
         d.qpos[a : a + 3] = pos
         d.qpos[a + 3 : a + 7] = quat
         mujoco.mj_kinematics(self.model, d)
         mujoco.mj_collision(self.model, d)
         self.queries += 1
-        distance = np.full(self.layout.link_bodies.size, np.inf)
         n = d.ncon
         if n == 0:
-            return Touch(np.zeros(0, dtype=np.int64), 0.0, distance)
+            return _NO_LINKS, _NO_DISTANCES
         geom = d.contact.geom[:n]
         dist = d.contact.dist[:n]
         other = np.where(self.is_obj[geom[:, 0]], geom[:, 1], geom[:, 0])
         link = self.link_index[self.model.geom_bodyid[other]]
         keep = (link >= 0) & (dist <= self.touch)
-        if not keep.any():
+        return link[keep], dist[keep]
+
+    def touch_at(self, pos: np.ndarray, quat: np.ndarray) -> Touch:
+        """The links touching the object at pose (``pos``, ``quat``) and the deepest penetration."""
+        link, dist = self._contacts(pos, quat)
+        distance = np.full(self.layout.link_bodies.size, np.inf)
+        if not link.size:
             return Touch(np.zeros(0, dtype=np.int64), 0.0, distance)
-        np.minimum.at(distance, link[keep], dist[keep])
-        return Touch(np.flatnonzero(np.isfinite(distance)), float(max(0.0, -dist[keep].min())), distance)
+        np.minimum.at(distance, link, dist)
+        return Touch(np.flatnonzero(np.isfinite(distance)), float(max(0.0, -dist.min())), distance)
+
+    def depth_links(self, pos: np.ndarray, quat: np.ndarray) -> tuple[float, int]:
+        """:meth:`touch_at`'s ``depth`` and number of ``links``, without the per-link distances."""
+        link, dist = self._contacts(pos, quat)
+        if not link.size:
+            return 0.0, 0
+        return float(max(0.0, -dist.min())), len(set(link.tolist()))
 
     def hand_spheres(self) -> tuple[np.ndarray, np.ndarray]:
         """Centres (G, 3) and bounding radii (G,) of the hand's colliding geoms at the current posture.
@@ -102,3 +131,138 @@ class HandObjectCollider:
         Call after a query (or :func:`mujoco.mj_kinematics`) at that posture.
         """
         return self.data.geom_xpos[self._hand_geoms].copy(), self.model.geom_rbound[self._hand_geoms].copy()
+
+    def screen(self, positions: np.ndarray, quat: np.ndarray, depth: float) -> np.ndarray:
+        """What cheap bounds say of the object at each position with orientation ``quat``, hand as set.
+
+        Args:
+            positions: Object positions (N, 3), m.
+            quat: The object's orientation (w, x, y, z) for all of them.
+            depth: A pose whose inscribed balls overlap the hand's by more than this is :data:`DEEP`, m.
+
+        Returns:
+            Per position :data:`CLEAR` (the query would find no link within the touch distance),
+            :data:`DEEP` (the query would find a penetration deeper than ``depth``) or :data:`UNDECIDED`.
+        """
+        clear, overlap = self.bounds(positions, quat, depth)
+        result = np.full(len(positions), UNDECIDED, dtype=np.int8)
+        result[clear] = CLEAR
+        result[~clear & (overlap > depth)] = DEEP
+        return result
+
+    def bounds(
+        self, positions: np.ndarray, quat: np.ndarray, floor: float = -np.inf
+    ) -> tuple[np.ndarray, np.ndarray]:
+        """Bounds of the queries at each position with orientation ``quat``, hand as set.
+
+        Args:
+            positions: Object positions (N, 3), m.
+            quat: The object's orientation (w, x, y, z) for all of them.
+            floor: Overlaps not above this may be reported as −inf (pairs too far apart are not computed).
+
+        Returns:
+            Per position: whether every object geom's bounding sphere lies farther than the touch distance
+            from every hand geom's (clear); and the largest overlap of a ball inscribed in an object geom
+            with a capsule core inscribed in a hand geom, m (a lower bound of the penetration; −inf without
+            cores).
+        """
+        model, data = self.model, self.data
+        mujoco.mj_kinematics(model, data)
+        rot = np.empty(9)
+        mujoco.mju_quat2Mat(rot, np.asarray(quat, dtype=float))
+        rot = rot.reshape(3, 3)
+        hand = self._hand_geoms
+        h_pos, h_rb = data.geom_xpos[hand].copy(), model.geom_rbound[hand] + model.geom_margin[hand]
+        # bounding spheres of the object's geoms (relative to its free joint's frame)
+        a = self.obj.free_qpos
+        pose = data.qpos[a : a + 7].copy()
+        data.qpos[a : a + 7] = [0, 0, 0, 1, 0, 0, 0]
+        mujoco.mj_kinematics(model, data)
+        objs = self._obj_geoms
+        o_pos = data.geom_xpos[objs] @ rot.T
+        o_rb = model.geom_rbound[objs] + model.geom_margin[objs]
+        o_frames = [(data.geom_xpos[g].copy(), data.geom_xmat[g].reshape(3, 3).copy()) for g in objs]
+        data.qpos[a : a + 7] = pose
+        mujoco.mj_kinematics(model, data)
+        # clear: every pair of bounding spheres apart (squared distances as one matrix product per chunk)
+        centres = (h_pos[None, :, :] - o_pos[:, None, :]).reshape(-1, 3)  # (O·G, 3)
+        reach2 = ((o_rb[:, None] + h_rb[None, :]).reshape(-1) + 1e-6) ** 2
+        balls = [(p + m @ c, r) for (p, m), (c, _, r) in zip(o_frames, self._balls, strict=True) if r > 0]
+        cores = []
+        for g, (c, axis, r) in zip(hand, self._cores, strict=True):
+            if r > 0:
+                m = data.geom_xmat[g].reshape(3, 3)
+                cores.append((data.geom_xpos[g] + m @ c, m @ axis, r))
+        # deep: ball b (centre x + q_b) against core c (segment s_c + t·d_c): one segment per pair, shifted
+        start_k = np.array([s - v - rot @ q for q, _ in balls for s, v, _ in cores]).reshape(-1, 3)
+        dir_k = np.array([2 * v for _ in balls for _, v, _ in cores]).reshape(-1, 3)
+        rad_k = np.array([rb + rc for _, rb in balls for _, _, rc in cores])
+        len2_k = np.maximum((dir_k * dir_k).sum(axis=1), 1e-300)
+        mid_k = start_k + dir_k / 2
+        reach_k = rad_k - floor  # an overlap above the floor needs the segment nearer than this
+        cull2 = np.where(reach_k > 0, (reach_k + np.sqrt(len2_k) / 2 + 1e-6) ** 2, -1.0)
+        clear = np.zeros(len(positions), dtype=bool)
+        overlap = np.full(len(positions), -np.inf)
+        for first in range(0, len(positions), _CHUNK):
+            x = np.asarray(positions[first : first + _CHUNK], dtype=float)
+            x2 = (x * x).sum(axis=1)[:, None]
+            d2 = x2 - 2.0 * (x @ centres.T) + (centres * centres).sum(axis=1)[None]
+            clear[first : first + _CHUNK] = (d2 > reach2[None]).all(axis=1)
+            if rad_k.size:
+                near = x2 - 2.0 * (x @ mid_k.T) + (mid_k * mid_k).sum(axis=1)[None] < cull2[None]
+                n, k = np.nonzero(near)
+                rel = x[n] - start_k[k]
+                t = np.clip((rel * dir_k[k]).sum(axis=1) / len2_k[k], 0.0, 1.0)
+                depth = rad_k[k] - np.linalg.norm(rel - t[:, None] * dir_k[k], axis=1)
+                chunk = overlap[first : first + _CHUNK]
+                np.maximum.at(chunk, n, depth)
+        return clear, overlap
+
+
+def _core(model: mujoco.MjModel, geom: int) -> tuple[np.ndarray, np.ndarray, float]:
+    """A capsule core inside a colliding geom, in the geom's frame: centre, half axis and radius.
+
+    The geom contains every ball of the radius centred on the segment centre ± half axis (a ball is a
+    segment of length 0). Radius 0: no core (a geom type without one).
+    """
+    kind, size = int(model.geom_type[geom]), model.geom_size[geom]
+    zero = np.zeros(3)
+    if kind == mujoco.mjtGeom.mjGEOM_SPHERE:
+        return zero, zero, float(size[0])
+    if kind == mujoco.mjtGeom.mjGEOM_CAPSULE:
+        return zero, np.array([0.0, 0.0, size[1]]), float(size[0])
+    if kind == mujoco.mjtGeom.mjGEOM_CYLINDER:
+        return zero, zero, float(min(size[0], size[1]))
+    if kind in (mujoco.mjtGeom.mjGEOM_BOX, mujoco.mjtGeom.mjGEOM_ELLIPSOID):
+        return zero, zero, float(size.min())
+    if kind == mujoco.mjtGeom.mjGEOM_MESH and model.geom_dataid[geom] >= 0:
+        mesh = int(model.geom_dataid[geom])
+        points = model.mesh_vert[
+            model.mesh_vertadr[mesh] : model.mesh_vertadr[mesh] + model.mesh_vertnum[mesh]
+        ]
+        centre, radius = _inscribed_ball(np.asarray(points, dtype=float))
+        return centre, zero, radius
+    return zero, zero, 0.0
+
+
+def _inscribed_ball(points: np.ndarray) -> tuple[np.ndarray, float]:
+    """The largest ball inside the convex hull of ``points`` (its Chebyshev centre), shrunk by 1 µm.
+
+    MuJoCo collides a mesh geom as its vertices' convex hull. Radius 0 when the hull is flat or degenerate.
+    """
+    try:
+        hull = ConvexHull(points)
+    except (QhullError, ValueError):
+        return np.zeros(3), 0.0
+    normals, offsets = hull.equations[:, :3], hull.equations[:, 3]
+    scale = np.linalg.norm(normals, axis=1)
+    # maximise r subject to n·c + |n| r ≤ −d for every face (variables c, r)
+    result = linprog(
+        np.array([0.0, 0.0, 0.0, -1.0]),
+        A_ub=np.column_stack([normals, scale]),
+        b_ub=-offsets,
+        bounds=[(None, None)] * 3 + [(0.0, None)],
+    )
+    if result.status != 0 or result.x[3] <= 1e-6:
+        return np.zeros(3), 0.0
+    return result.x[:3], float(result.x[3]) - 1e-6

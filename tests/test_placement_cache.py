@@ -1,0 +1,137 @@
+"""The placement search at the cost of few collision queries, and its cache.
+
+Bounds settle many poses without a collision query (:meth:`HandObjectCollider.screen`): they must never
+contradict MuJoCo's own detection, and the search with them must be the search without them. The cache
+(:mod:`handsim.sim.placement_cache`) must give back the computed placement bit for bit and never trust a
+corrupt entry.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+
+import numpy as np
+import pytest
+
+import handsim.sim.placement as placement_module
+import handsim.sim.scenarios as scenarios
+from handsim.assets import ASSETS_DIR
+from handsim.sim.collide import HandObjectCollider
+from handsim.sim.hand_pose import targets_qpos
+from handsim.sim.placement import SCREEN_MARGIN, PlacementSpec, _searched, place_object
+from handsim.sim.placement_cache import entry_path, placement_key, read_entry
+from handsim.trials import load_trial
+
+TENNIS = ASSETS_DIR / "demo" / "tennis_ball.grasp.json"
+
+
+def _bits(value) -> object:
+    """A value's exact content, comparable with ``==``: floats as hex, arrays as dtype, shape and bytes."""
+    if dataclasses.is_dataclass(value):
+        return (
+            type(value).__name__,
+            tuple((f.name, _bits(getattr(value, f.name))) for f in dataclasses.fields(value)),
+        )
+    if isinstance(value, np.ndarray):
+        return (value.dtype.str, value.shape, value.tobytes())
+    if isinstance(value, (tuple, list)):
+        return (type(value).__name__, tuple(_bits(v) for v in value))
+    if isinstance(value, dict):
+        return ("dict", tuple((k, _bits(v)) for k, v in value.items()))
+    if isinstance(value, (float, np.floating)):
+        return (type(value).__name__, float(value).hex())
+    return (type(value).__name__, value)
+
+
+def _search_inputs(monkeypatch, tmp_path, **options) -> tuple[tuple, dict]:
+    """The arguments ``glove_scene`` passes to ``place_object`` for the demo tennis-ball grasp."""
+    monkeypatch.setenv("HANDSIM_CACHE_DIR", str(tmp_path / "cache"))
+    seen = []
+    original = scenarios.place_object
+
+    def recording(*args, **kwargs):
+        seen.append((args, kwargs))
+        return original(*args, **kwargs)
+
+    monkeypatch.setattr(scenarios, "place_object", recording)
+    load_trial(TENNIS, **options)
+    return seen[0]
+
+
+@pytest.mark.parametrize("obj", ["tennis_ball", "mug"])
+def test_the_bounds_never_contradict_mujocos_collision_detection(monkeypatch, tmp_path, obj):
+    (scene, trajectory, grasp, *_), _ = _search_inputs(monkeypatch, tmp_path, obj=obj)
+    collider = HandObjectCollider(scene, 0.002)
+    collider.set_hand(targets_qpos(scene, trajectory, grasp.closed))
+    mujoco_centre = collider.data.site_xpos[scene.layout.tip_sites].mean(axis=0)
+    rng = np.random.default_rng(7)
+    positions = mujoco_centre + rng.uniform(-0.12, 0.12, size=(600, 3))
+    quat = np.array([np.sqrt(0.5), np.sqrt(0.5), 0.0, 0.0])
+    clear, overlap = collider.bounds(positions, quat)
+    depths = np.array([collider.touch_at(p, quat).depth for p in positions])
+    links = np.array([collider.touch_at(p, quat).links.size for p in positions])
+    assert clear.sum() > 0 and (overlap > 0.002 + SCREEN_MARGIN).sum() > 0  # both bounds decide some poses
+    assert (links[clear] == 0).all()
+    assert (overlap <= depths + SCREEN_MARGIN / 10).all()  # EPA's tolerance, well inside the margin
+
+
+def test_the_search_screened_by_bounds_is_the_search_by_collision_queries(monkeypatch, tmp_path):
+    (scene, trajectory, grasp, spec, *_), _ = _search_inputs(monkeypatch, tmp_path)
+    screened, ranked = _searched(scene, trajectory, grasp, spec, screen=True)
+    exact, ranked_exact = _searched(scene, trajectory, grasp, spec, screen=False)
+    assert screened.screened > 0 and exact.screened == 0
+    assert screened.collider.queries < exact.collider.queries
+    assert screened.collider.queries + screened.screened == exact.collider.queries
+    assert screened.feasible_poses == exact.feasible_poses
+    assert _bits(ranked) == _bits(ranked_exact)
+    assert _bits(screened.nearest) == _bits(exact.nearest)
+
+
+def test_a_cached_placement_is_the_computed_one_bit_for_bit(monkeypatch, tmp_path):
+    args, kwargs = _search_inputs(monkeypatch, tmp_path)
+    computed = place_object(*args, **kwargs, use_cache=False)
+
+    def no_search(*_args, **_kwargs):
+        raise AssertionError("searched although the placement was cached")
+
+    monkeypatch.setattr(placement_module, "_place", no_search)
+    cached = place_object(*args, **kwargs)  # written by load_trial's search
+    assert _bits(cached) == _bits(computed)
+    assert len(list((tmp_path / "cache" / "placement").rglob("*.pkl"))) == 1
+
+
+def test_the_key_changes_with_the_spec_and_the_trajectory(monkeypatch, tmp_path):
+    (scene, trajectory, grasp, spec, *_), _ = _search_inputs(monkeypatch, tmp_path)
+    base = placement_key(scene, trajectory, grasp, {"spec": spec.to_dict()})
+    other_spec = PlacementSpec(penetration=0.0025).to_dict()
+    assert placement_key(scene, trajectory, grasp, {"spec": other_spec}) != base
+    moved = trajectory.targets.copy()
+    moved[0, 0] += 1e-12
+    changed = dataclasses.replace(trajectory, targets=moved)
+    assert placement_key(scene, changed, grasp, {"spec": spec.to_dict()}) != base
+    assert placement_key(scene, trajectory, grasp, {"spec": spec.to_dict()}) == base
+
+
+def test_a_corrupt_entry_is_ignored_with_a_note_and_replaced(monkeypatch, tmp_path):
+    args, kwargs = _search_inputs(monkeypatch, tmp_path)
+    (path,) = (tmp_path / "cache" / "placement").rglob("*.pkl")
+    data = bytearray(path.read_bytes())
+    data[-20] ^= 0xFF
+    path.write_bytes(bytes(data))
+    placement = place_object(*args, **kwargs)
+    assert placement.note.endswith(
+        f"; placement cache entry {path} was corrupt (checksum mismatch) and was replaced"
+    )
+    fresh = place_object(*args, **kwargs, use_cache=False)
+    assert _bits(read_entry(path, path.stem, placement_module._CACHED_CLASSES)) == _bits(fresh)
+    assert entry_path(tmp_path / "cache", path.stem) == path
+
+
+def test_a_cache_that_cannot_be_written_gives_the_placement_with_a_note(monkeypatch, tmp_path):
+    args, kwargs = _search_inputs(monkeypatch, tmp_path)
+    blocker = tmp_path / "not_a_folder"
+    blocker.write_text("a file where the cache folder would be", encoding="utf-8")
+    placement = place_object(*args, **kwargs, cache_dir=blocker)
+    assert f"; could not write placement cache entry {blocker / 'placement'}" in placement.note
+    fresh = place_object(*args, **kwargs, use_cache=False)
+    assert _bits(dataclasses.replace(placement, note=fresh.note)) == _bits(fresh)
