@@ -238,14 +238,14 @@ def test_an_os_error_writing_an_output_is_one_line_and_exit_1(capsys, tmp_path):
 
 
 def test_write_atomic_leaves_no_partial_file_when_interrupted(tmp_path, monkeypatch):
-    from handsim.runner import records
+    from handsim import files
 
     def interrupted(*args: object) -> None:
         raise KeyboardInterrupt
 
-    monkeypatch.setattr(records.os, "replace", interrupted)
+    monkeypatch.setattr(files.os, "replace", interrupted)
     with pytest.raises(KeyboardInterrupt):
-        records.write_atomic(tmp_path / "out.json", b"{}")
+        files.write_atomic(tmp_path / "out.json", b"{}")
     assert list(tmp_path.iterdir()) == []
 
 

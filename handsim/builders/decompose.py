@@ -30,6 +30,7 @@ import contextlib
 import hashlib
 import importlib.metadata
 import importlib.util
+import io
 import json
 import math
 import numbers
@@ -51,6 +52,7 @@ from tqdm import tqdm
 
 from handsim.assets import ASSETS_DIR
 from handsim.errors import MeshError
+from handsim.files import write_atomic
 from handsim.mesh import FLATNESS_TOL, Mesh
 
 CACHE_FORMAT_VERSION = 1  # bump when the entry layout or the hull post-processing changes
@@ -562,23 +564,15 @@ def _checksum(arrays: dict[str, np.ndarray]) -> str:
 
 
 def _write_entry(path: Path, hulls: tuple[ConvexHull, ...], seconds: float, notes: tuple[str, ...]) -> None:
-    """Write a cache entry atomically (temporary file in the same folder, then rename)."""
+    """Write a cache entry atomically (:func:`handsim.files.write_atomic`)."""
     arrays = _pack(hulls)
     arrays["coacd_seconds"] = np.array(seconds, dtype=np.float64)
     arrays["notes"] = np.array(notes, dtype=str) if notes else np.zeros(0, dtype="<U1")
     arrays["format"] = np.array(CACHE_FORMAT_VERSION, dtype=np.int64)
     arrays["checksum"] = np.array(_checksum(arrays))
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.stem[:16]}.", suffix=".tmp", dir=path.parent)
-    try:
-        with os.fdopen(fd, "wb") as f:
-            np.savez(f, **arrays)
-            f.flush()
-            os.fsync(f.fileno())
-        os.replace(tmp, path)
-    except BaseException:
-        Path(tmp).unlink(missing_ok=True)
-        raise
+    buffer = io.BytesIO()
+    np.savez(buffer, **arrays)
+    write_atomic(path, buffer.getvalue())
 
 
 def _read_entry(path: Path) -> tuple[tuple[ConvexHull, ...], float, tuple[str, ...]]:

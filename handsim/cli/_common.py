@@ -12,8 +12,8 @@ import sys
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, NoReturn, Protocol
 
+from handsim.files import write_atomic
 from handsim.physical_ranges import DENSITY, OBJECT_MASS
-from handsim.runner.records import write_atomic
 
 if TYPE_CHECKING:
     from handsim.physical_ranges import PhysicalRange

@@ -6,12 +6,12 @@ import json
 from dataclasses import dataclass
 from pathlib import Path
 
+from handsim.files import write_atomic
 from handsim.report.frames import DEFAULT_EMBED_BUDGET, FrameBudget
 from handsim.report.html_doc import render_html
 from handsim.report.markdown import HTML_NAME, render_markdown
 from handsim.report.records import read_run
 from handsim.report.summary import build_summary
-from handsim.runner.records import write_atomic
 
 MARKDOWN_NAME = "report.md"
 JSON_NAME = "summary.json"

@@ -22,6 +22,7 @@ from pathlib import Path
 from typing import Any
 
 from handsim.errors import HandsimError
+from handsim.files import write_atomic
 
 RECORDS_FILE = "records.jsonl"
 RUN_FILE = "run.json"
@@ -235,30 +236,6 @@ class RecordWriter:
 
     def __exit__(self, *exc: object) -> None:
         self.close()
-
-
-def write_atomic(path: str | Path, data: bytes) -> Path:
-    """Write a file so that readers see the old or the new content, never a part (temp file + rename).
-
-    Raises:
-        OSError: The file cannot be written; its ``filename`` is ``path`` (not the temporary file's).
-    """
-    target = Path(path)
-    tmp = target.with_name(f".{target.name}.tmp{os.getpid()}")
-    try:
-        target.parent.mkdir(parents=True, exist_ok=True)
-        with open(tmp, "wb") as f:
-            f.write(data)
-            f.flush()
-            os.fsync(f.fileno())
-        os.replace(tmp, target)
-    except BaseException as exc:  # a full disk, Ctrl-C: no partial file left behind
-        with contextlib.suppress(OSError):
-            tmp.unlink(missing_ok=True)
-        if isinstance(exc, OSError) and exc.errno is not None:
-            raise OSError(exc.errno, exc.strerror, str(target)) from exc
-        raise
-    return target
 
 
 def write_run_info(out: str | Path, info: dict) -> Path:

@@ -24,8 +24,9 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from handsim import lifeline
+from handsim.files import write_atomic
 from handsim.runner.portable import portable_traceback
-from handsim.runner.records import SCHEMA, json_ready, write_atomic
+from handsim.runner.records import SCHEMA, json_ready
 from handsim.sim.replay import ReplayConfig
 from handsim.trials import TrialEntry
 

@@ -29,8 +29,8 @@ import mujoco
 import numpy as np
 
 from handsim.errors import FormatError
+from handsim.files import write_atomic
 from handsim.io.safe_pickle import loads_restricted_pickle
-from handsim.runner.records import write_atomic
 from handsim.sim.compiled import SimScene
 from handsim.sim.grasp_frame import GraspFrame
 from handsim.trajectory import Trajectory
@@ -130,7 +130,7 @@ def read_entry(path: Path, key: str, allowed: dict) -> object:
 
 
 def write_entry(path: Path, key: str, placement: object) -> None:
-    """Write an entry atomically (:func:`handsim.runner.records.write_atomic`).
+    """Write an entry atomically (:func:`handsim.files.write_atomic`).
 
     Raises:
         OSError: It cannot be written.

@@ -1,0 +1,34 @@
+"""Files written whole or not at all: what the records, caches, reports and CLI outputs share.
+
+A bottom-layer module (no handsim imports), so every layer that writes a result can use it.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import os
+from pathlib import Path
+
+
+def write_atomic(path: str | Path, data: bytes) -> Path:
+    """Write a file so that readers see the old or the new content, never a part (temp file + rename).
+
+    Raises:
+        OSError: The file cannot be written; its ``filename`` is ``path`` (not the temporary file's).
+    """
+    target = Path(path)
+    tmp = target.with_name(f".{target.name}.tmp{os.getpid()}")
+    try:
+        target.parent.mkdir(parents=True, exist_ok=True)
+        with open(tmp, "wb") as f:
+            f.write(data)
+            f.flush()
+            os.fsync(f.fileno())
+        os.replace(tmp, target)
+    except BaseException as exc:  # a full disk, Ctrl-C: no partial file left behind
+        with contextlib.suppress(OSError):
+            tmp.unlink(missing_ok=True)
+        if isinstance(exc, OSError) and exc.errno is not None:
+            raise OSError(exc.errno, exc.strerror, str(target)) from exc
+        raise
+    return target
