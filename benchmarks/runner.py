@@ -5,7 +5,13 @@ Run: python benchmarks/runner.py [--copies N] [--frames N]
 The dataset is synthesised by repeating the real GraspDB14 recordings of ``../shared/data/graspdb14``
 (each copy renamed to another trial number, its annotation file copied alongside); without ``../shared``
 the bundled Tzionas sequence is used. A first, untimed run of one copy of each recording warms the hull
-cache on disk.
+cache on disk (a cache folder of the benchmark's own, ``HANDSIM_CACHE_DIR``).
+
+The placement search is content-cached (:mod:`handsim.sim.placement_cache`): byte-identical copies would
+share one search, which a real dataset, whose recordings all differ, never does. So every copy differs
+from the others in one sample (the first row's last sensor value moved by ``copy × 1e-5`` rad, far below
+the glove's resolution), and every timed run starts with no placement cache (the hulls kept): each trial
+pays its own placement search, as in a first run over GraspDB14.
 
 Each run is a fresh process (imports and in-memory caches cold, as for a user's command), timed from
 its start to the last record. Printed, per worker count: wall time, trials per minute and the scaling
@@ -62,13 +68,27 @@ def synthesise(root: Path, copies: int) -> Path:
             for c in range(copies):
                 number = 100 + c
                 name = _TRIAL_NUMBER.sub(f"-{number:03d}-grasp-", path.name)
-                shutil.copy(path, data / name)
+                (data / name).write_text(_perturbed(path.read_text(), c))
                 if annotation.is_file():
                     target = name.removeprefix("r_").removesuffix(".txt") + "_annot-.txt"
                     shutil.copy(annotation, data / target)
     tzionas = root / "tzionas"
     shutil.copytree(TZIONAS_DIR, tzionas)
     return data if SHARED.is_dir() else tzionas
+
+
+def _perturbed(text: str, copy: int) -> str:
+    """The recording with its first row's last value moved by ``copy × 1e-5`` rad (copy 0: unchanged)."""
+    if copy == 0:
+        return text
+    first, rest = text.split("\n", 1)
+    head, last = first.rstrip().rsplit(" ", 1)
+    return f"{head} {float(last) + copy * 1e-5:.5f} \n{rest}"
+
+
+def _without_placements() -> None:
+    """Remove the benchmark cache's placement entries (the hull entries stay)."""
+    shutil.rmtree(Path(os.environ["HANDSIM_CACHE_DIR"]) / "placement", ignore_errors=True)
 
 
 _RUN = """
@@ -168,18 +188,21 @@ def main() -> None:
     print(f"load average (1, 5, 15 min) at the start: {_load()} on {os.cpu_count()} cores")
     with tempfile.TemporaryDirectory() as tmp:
         root = Path(tmp)
+        os.environ["HANDSIM_CACHE_DIR"] = str(root / "cache")  # inherited by every run and the Ray cluster
         dataset = synthesise(root, args.copies)
         trials = len(discover(dataset).entries)
         (root / "one").mkdir()
         run(synthesise(root / "one", 1), root / "warm", 1, 0)  # warms the hull cache on disk; not timed
         results = {}
         for workers in (1, 2):
+            _without_placements()
             wall, records = run(dataset, root / f"out{workers}", workers, args.frames)
             results[workers] = (wall, records)
             rate = trials / wall * 60
             print(f"{workers} worker(s): {trials} trials in {wall:.1f} s = {rate:.1f} trials/min")
         scaling = results[1][0] / results[2][0]
         print(f"scaling 2 vs 1 worker: {scaling:.2f}×")
+        _without_placements()
         ray_wall, ray_records = ray_run(dataset, root / "ray", args.frames, root / "ray.log")
         same = _without_timing(ray_records) == _without_timing(results[2][1])
         print(
