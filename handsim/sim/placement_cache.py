@@ -24,6 +24,7 @@ import json
 import pickle
 from functools import lru_cache
 from pathlib import Path
+from typing import Protocol
 
 import mujoco
 import numpy as np
@@ -40,6 +41,13 @@ _MAGIC = b"handsim-placement\n"
 _PACKAGE = Path(__file__).resolve().parents[1]
 
 
+class _Hasher(Protocol):
+    """What :func:`_update_array` needs of a :mod:`hashlib` object (whose class hashlib does not export)."""
+
+    def update(self, data: bytes, /) -> None:
+        """Feed ``data`` to the hash."""
+
+
 class CorruptEntryError(Exception):
     """A placement cache entry that cannot be trusted; the message says why."""
 
@@ -54,7 +62,7 @@ def _code_fingerprint() -> str:
     return h.hexdigest()
 
 
-def _update_array(h: hashlib._Hash, name: str, array: np.ndarray | None) -> None:
+def _update_array(h: _Hasher, name: str, array: np.ndarray | None) -> None:
     if array is None:
         h.update(f"{name} none\n".encode())
         return
