@@ -14,6 +14,9 @@ from __future__ import annotations
 
 import functools
 import math
+import os
+from collections.abc import Sequence
+from typing import Any
 
 import gymnasium as gym
 import numpy as np
@@ -22,6 +25,7 @@ from gymnasium import spaces
 
 from handsim.envs._base import DEFAULT_CAMERA, DEFAULT_SIZE, HandEnv
 from handsim.envs._observation import POSE_LABELS, ContactSummary, ObservationLayout, add_state
+from handsim.envs.recordings import RecordingError, check_trial_options, load_recording, recording_paths
 from handsim.sim.compiled import SimScene
 from handsim.sim.control import DEFAULT_CONTROL_RATE, ControlSchedule, control_schedule
 from handsim.sim.drive import ScheduleDriver, scenario_switches
@@ -78,6 +82,56 @@ def _positive(name: str, value: float) -> float:
     return value
 
 
+RecordingsArg = str | os.PathLike | Sequence[str | os.PathLike]
+
+
+def _recordings(
+    scene: SimScene | None, trajectory: Trajectory | RecordingsArg | None, trial_options: dict[str, Any]
+) -> tuple[tuple[SimScene, Trajectory], ...]:
+    """The (scene, trajectory) pairs an environment samples from, from its ``scene``/``trajectory`` keywords.
+
+    Raises:
+        RecordingError: Unknown keywords, an empty list, trial options without recording paths, or a
+            scene with recording paths.
+        ValueError: Only one of ``scene`` and a :class:`Trajectory` is given.
+    """
+    check_trial_options(trial_options, "ReplayEnv")
+    if trajectory is not None and not isinstance(trajectory, Trajectory):
+        if scene is not None:
+            raise RecordingError(
+                "give a scene with a Trajectory, or recording paths without a scene (each recording builds "
+                "its own)"
+            )
+        return tuple(load_recording(p, **trial_options) for p in recording_paths(trajectory))
+    if trial_options:
+        raise RecordingError(
+            f"trial options {sorted(trial_options)} need recording paths: trajectory=PATH or a list of paths"
+        )
+    if scene is None and trajectory is None:
+        return (default_replay_inputs(),)
+    if scene is None or trajectory is None:
+        raise ValueError(
+            "pass both scene and trajectory, or neither for the bundled Tzionas sequence 20; "
+            f"got scene={'None' if scene is None else 'a scene'}, "
+            f"trajectory={'None' if trajectory is None else 'a trajectory'}"
+        )
+    return ((scene, trajectory),)
+
+
+def _layout_mismatch(recordings: Sequence, names: tuple[str, ...], other: tuple[str, ...]) -> str:
+    """Why recordings cannot share one environment: their observations differ (the first difference)."""
+    first = next(
+        (i for i, (a, b) in enumerate(zip(names, other, strict=False)) if a != b), min(len(names), len(other))
+    )
+    a = names[first] if first < len(names) else "(end)"
+    b = other[first] if first < len(other) else "(end)"
+    return (
+        f"the {len(recordings)} recordings do not share one observation layout ({len(other)} and "
+        f"{len(names)} elements; element {first} is {b!r} in one and {a!r} in another): sample only "
+        "recordings of the same hand and objects in one environment"
+    )
+
+
 class ReplayEnv(HandEnv):
     """Follow a recorded hand trajectory in a scene with free objects (``handsim/Replay-v0``).
 
@@ -115,7 +169,9 @@ class ReplayEnv(HandEnv):
     Args:
         scene: A compiled scene (:mod:`handsim.sim.scenarios`), or None with ``trajectory`` None for the
             bundled Tzionas sequence 20 (:func:`default_replay_inputs`).
-        trajectory: The trajectory the scene replays.
+        trajectory: The trajectory the scene replays; or, without a scene, a recording path or a list of
+            them (any trial kind, :mod:`handsim.envs.recordings`): each episode follows one, drawn from
+            the seeded ``np_random`` at reset (or ``options={"recording": i}``).
         control_rate: Control frames (environment steps) per second; rounded to whole MuJoCo steps.
         residual_scale: Largest residual, rad: a number or one per DoF.
         tracking_weight: Weight of the joint tracking term.
@@ -133,9 +189,13 @@ class ReplayEnv(HandEnv):
         width: Rendered image width, pixels.
         height: Rendered image height, pixels.
         camera: Scene camera to render from (``"hand_cam"``, ``"overview"``) or None (free camera).
+        **trial_options: With recording paths: :func:`handsim.trials.find_trial`'s keywords.
 
     Raises:
         ValueError: A parameter is out of range, or only one of ``scene`` and ``trajectory`` is given.
+        RecordingError: A bad recording keyword (unknown option, empty list, a two-hand scene, recordings
+            whose observations differ).
+        HandsimError: A recording cannot be found, read or built (the subclass says why).
         TrajectoryError: The trajectory does not fit the scene (see
             :func:`~handsim.sim.control.control_schedule`).
     """
@@ -162,22 +222,11 @@ class ReplayEnv(HandEnv):
         width: int = DEFAULT_SIZE,
         height: int = DEFAULT_SIZE,
         camera: str | None = DEFAULT_CAMERA,
+        **trial_options: Any,
     ) -> None:
-        if scene is None and trajectory is None:
-            scene, trajectory = default_replay_inputs()
-        elif scene is None or trajectory is None:
-            raise ValueError(
-                "pass both scene and trajectory, or neither for the bundled Tzionas sequence 20; "
-                f"got scene={'None' if scene is None else 'a scene'}, "
-                f"trajectory={'None' if trajectory is None else 'a trajectory'}"
-            )
-        schedule = control_schedule(scene, trajectory, control_rate)
-        if schedule.frames < 2:
-            raise ValueError(f"the trajectory gives {schedule.frames} control frame; an episode needs ≥ 2")
-        self._setup_sim(
-            scene, schedule.substeps, render_mode=render_mode, width=width, height=height, camera=camera
-        )
-        self._schedule = schedule
+        recordings = _recordings(scene, trajectory, trial_options)
+        self._control_rate = float(control_rate)
+        self._render_args = {"render_mode": render_mode, "width": width, "height": height, "camera": camera}
         self._w_track = _nonnegative("tracking_weight", tracking_weight)
         self._inv_sigma2_track = 1.0 / _positive("tracking_sigma", tracking_sigma) ** 2
         self._w_object = _nonnegative("object_weight", object_weight)
@@ -187,9 +236,36 @@ class ReplayEnv(HandEnv):
             math.inf if max_object_drift is None else _positive("max_object_drift", max_object_drift)
         )
         self._random_start = bool(random_start)
+        self._action_weight = _nonnegative("action_weight", action_weight)
+        self._residual_scale = residual_scale
+        self._release_delay = _nonnegative("release_delay", release_delay)
+        self._recordings = recordings
+        self._recording = -1
+        names = None
+        # every recording is configured once here: its errors surface now, and all must observe alike
+        for index in reversed(range(len(recordings))):
+            self._configure(index)
+            if names is not None and names != self.observation_names:
+                raise RecordingError(_layout_mismatch(recordings, names, self.observation_names))
+            names = self.observation_names
+
+    def _configure(self, index: int) -> None:
+        """Build the simulation, references and observation layout of recording ``index``."""
+        if index == self._recording:
+            return
+        if self._recording >= 0:
+            self.close()
+        scene, trajectory = self._recordings[index]
+        schedule = control_schedule(scene, trajectory, self._control_rate)
+        if schedule.frames < 2:
+            raise ValueError(f"the trajectory gives {schedule.frames} control frame; an episode needs ≥ 2")
+        self._setup_sim(scene, schedule.substeps, **self._render_args)
+        self._recording = index
+        self._schedule = schedule
         layout = self._scene.layout
         nu = len(layout.dof_names)
-        self._w_action = _nonnegative("action_weight", action_weight) / max(nu, 1)
+        self._w_action = self._action_weight / max(nu, 1)
+        residual_scale = self._residual_scale
         scale = np.asarray(residual_scale, dtype=float)
         if scale.shape not in ((), (nu,)) or not np.all(np.isfinite(scale)) or np.any(scale < 0):
             raise ValueError(
@@ -209,7 +285,7 @@ class ReplayEnv(HandEnv):
         self._last = schedule.frames - 1
         self._times = schedule.times
         root = schedule.root_pose
-        switches = scenario_switches(self._scene, schedule, _nonnegative("release_delay", release_delay))
+        switches = scenario_switches(self._scene, schedule, self._release_delay)
         self._driver = ScheduleDriver(self._stepper, schedule, switches)
 
         obs = ObservationLayout()
@@ -270,6 +346,16 @@ class ReplayEnv(HandEnv):
         return self._schedule
 
     @property
+    def recording(self) -> int:
+        """Index of the recording the episode follows (in the order given; 0 with one)."""
+        return self._recording
+
+    @property
+    def recordings(self) -> int:
+        """How many recordings the environment samples from."""
+        return len(self._recordings)
+
+    @property
     def frame(self) -> int:
         """Index of the control frame the simulation is at."""
         return self._driver.frame
@@ -283,6 +369,14 @@ class ReplayEnv(HandEnv):
         """
         super().reset(seed=seed)
         options = options or {}
+        count = len(self._recordings)
+        if "recording" in options:
+            index = int(options["recording"])
+            if not 0 <= index < count:
+                raise ValueError(f"options['recording'] must be in [0, {count - 1}], got {index}")
+        else:
+            index = int(self.np_random.integers(0, count)) if count > 1 else 0
+        self._configure(index)
         if "frame" in options:
             start = int(options["frame"])
             if not 0 <= start < self._last:
@@ -294,7 +388,7 @@ class ReplayEnv(HandEnv):
         self._driver.reset(start)
         self._started = True
         self._observe()
-        return self._obs.copy(), {"frame": start, "time": float(self._times[start])}
+        return self._obs.copy(), {"frame": start, "time": float(self._times[start]), "recording": index}
 
     def step(self, action: npt.ArrayLike) -> tuple[np.ndarray, float, bool, bool, dict]:
         """Advance one control frame with the recorded targets plus the residual ``action``.

@@ -34,6 +34,7 @@ from gymnasium.vector import AutoresetMode
 from gymnasium.vector.utils import batch_space
 from mujoco import batch as mjbatch
 
+from handsim.envs.recordings import RecordingError
 from handsim.envs.replay_env import STEP_NUMBERS, ReplayEnv
 from handsim.sim.stepper import warning_events
 
@@ -93,6 +94,11 @@ class ReplayVectorEnv(gym.vector.VectorEnv):
         # one ReplayEnv holds the configuration, the per-world functions and the reset states
         self._env = ReplayEnv(**kwargs)
         env = self._env
+        if env.recordings > 1:
+            raise RecordingError(
+                f"ReplayVectorEnv steps every world on one model and so follows one recording; for "
+                f"{env.recordings} recordings use vectorization_mode='sync' or 'async' (each world samples)"
+            )
         self.single_observation_space = env.observation_space
         self.single_action_space = env.action_space
         self.observation_space = batch_space(env.observation_space, self.num_envs)
@@ -193,6 +199,8 @@ class ReplayVectorEnv(gym.vector.VectorEnv):
             "_frame": np.ones(self.num_envs, bool),
             "time": self._times[frames],
             "_time": np.ones(self.num_envs, bool),
+            "recording": np.zeros(self.num_envs, np.int64),  # one recording (several are refused)
+            "_recording": np.ones(self.num_envs, bool),
         }
 
     def step(
@@ -232,6 +240,7 @@ class ReplayVectorEnv(gym.vector.VectorEnv):
                 self._reset_world(i, None)
         else:
             ids, sel = self._everyone, slice(None)
+            reset_ids = None
         if ids.size:
             if in_range:
                 clipped = np.zeros(n, np.int64)
@@ -284,6 +293,8 @@ class ReplayVectorEnv(gym.vector.VectorEnv):
         everyone = np.ones(n, bool)
         infos["frame"], infos["_frame"] = frame_info, everyone
         infos["time"], infos["_time"] = self._times[frame_info], everyone
+        if reset_ids is not None:  # the reset worlds' info has the reset's recording
+            infos["recording"], infos["_recording"] = np.zeros(n, np.int64), self._autoreset.copy()
         ended = terminated | truncated
         self._autoreset = ended
         self._pending = bool(ended.any())
