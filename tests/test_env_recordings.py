@@ -32,7 +32,7 @@ def test_a_recording_path_gives_the_scene_of_its_trial_and_is_built_once():
     # the bundled default is the same sequence: the same observation layout
     assert env.unwrapped.observation_names == ReplayEnv().observation_names
     obs, info = env.reset(seed=0)
-    assert info == {"frame": 0, "time": 0.0, "recording": 0}
+    assert (info["frame"], info["time"], info["recording"]) == (0, 0.0, 0)
     assert obs.shape == env.observation_space.shape
 
 

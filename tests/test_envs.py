@@ -29,8 +29,16 @@ from tests.helpers import glove_switch_inputs
 ROOT = Path(__file__).resolve().parents[1]
 REPLAY, GRASP = "handsim/Replay-v0", "handsim/Grasp-v0"
 IDS = (REPLAY, GRASP)
-REPLAY_REWARDS = ("reward_tracking", "reward_object", "reward_penetration", "reward_action")
-GRASP_REWARDS = ("reward_reach", "reward_contact", "reward_lift", "reward_hold")
+REPLAY_REWARDS = (
+    "reward_tracking",
+    "reward_object",
+    "reward_rotation",
+    "reward_articulation",
+    "reward_held",
+    "reward_penetration",
+    "reward_action",
+)
+GRASP_REWARDS = ("reward_reach", "reward_contact", "reward_lift", "reward_hold", "reward_penetration")
 
 
 @functools.lru_cache(maxsize=1)
@@ -272,7 +280,7 @@ def test_replay_reset_rejects_a_frame_outside_the_schedule():
 
 
 def test_grasp_closing_and_lifting_succeeds():
-    env = GraspEnv()
+    env = GraspEnv(zero_action="mid")  # the actions below map −1 … 1 onto each joint's range
     env.reset(seed=0)
     layout = env.scene.layout
     lo, hi = layout.ctrl_range.T
