@@ -198,3 +198,24 @@ def test_grasp_penalises_penetration_per_millimetre():
     for _ in range(60):
         _, _, _, _, info = env.step(np.concatenate([np.ones(len(env.dof_names)), [0.0, 0.0, -1.0]]))
         assert info["reward_penetration"] == pytest.approx(-300.0 * info["penetration"], abs=1e-15)
+
+
+def test_fingertip_errors_are_zero_at_a_recorded_state_and_follow_the_sites():
+    env = ReplayEnv()
+    s = env.observation_slices
+    assert env.observation_names[s["err_fingertips"]][:3] == tuple(
+        f"err_fingertips/RFing_0_2_tip/{a}" for a in "xyz"
+    )
+    sites = env.scene.layout.tip_sites
+    for frame in (0, 250):
+        obs, _ = env.reset(options={"frame": frame})
+        assert not obs[s["err_fingertips"]].any()
+        recorded = env.data.site_xpos[sites].ravel().copy()
+        for _ in range(20):
+            obs, *_, info = env.step(np.full(env.action_space.shape, 0.7))
+        # the sensors read the state one substep before the frame's: within 1 mm of the sites now
+        now = env.data.site_xpos[sites].ravel()
+        expected = env._ref_tips[info["frame"]] - now
+        assert np.abs(obs[s["err_fingertips"]] - expected).max() < 1e-3
+        assert np.abs(obs[s["err_fingertips"]]).max() > 1e-3  # the residual moved the fingers
+        assert not np.array_equal(recorded, env._ref_tips[info["frame"]])

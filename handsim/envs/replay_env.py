@@ -385,6 +385,11 @@ class ReplayEnv(HandEnv):
         # a track without any valid sample may hold NaN: observed as 0 (its reward term skips those frames)
         self._refs = np.nan_to_num(np.hstack(refs).astype(float), nan=0.0, posinf=0.0, neginf=0.0)
         self._err_hand = obs.add("err_hand_qpos", layout.dof_names)
+        # fingertips: recorded positions by forward kinematics of each frame's recorded state
+        self._tip_sensors = (np.asarray(layout.tip_adr, dtype=np.int64)[:, None] + np.arange(3)).ravel()
+        self._ref_tips = self._recorded_tips(layout.tip_sites)
+        tip_labels = [f"{name}/{axis}" for name in layout.tip_names for axis in "xyz"]
+        self._err_tips = obs.add("err_fingertips", tip_labels)
         self._tracks = []  # per recorded object: what _features and _reward read, see _Track
         for obj, track, hinge, valid in tracks:
             pose = obs.slices[f"{obj.prefix}pose"].start
@@ -424,6 +429,15 @@ class ReplayEnv(HandEnv):
             "_obs_force",
         )
         self._bind()
+
+    def _recorded_tips(self, sites: np.ndarray) -> np.ndarray:
+        """World positions of the fingertip sites in each frame's recorded state (frames, tips · 3), m."""
+        data = self._stepper.data
+        tips = np.empty((self._schedule.frames, 3 * len(sites)))
+        for frame in range(self._schedule.frames):
+            self._driver.reset(frame)  # hand at its targets, root at its recorded pose (mj_forward)
+            tips[frame] = data.site_xpos[sites].ravel()
+        return tips
 
     def _bind(self) -> None:
         data, obs = self._stepper.data, self._obs
@@ -564,7 +578,7 @@ class ReplayEnv(HandEnv):
         np.maximum(out, self._ctrl_lo[frame], out=out)
         np.minimum(out, self._ctrl_hi[frame], out=out)
 
-    def _features(self, obs: np.ndarray, frame: int) -> None:
+    def _features(self, obs: np.ndarray, frame: int, sensordata: np.ndarray) -> None:
         """Fill the reference window, the errors to the reference and the contact state of one world.
 
         Reads the world's state and contact forces already in ``obs``; the single environment and the
@@ -573,9 +587,12 @@ class ReplayEnv(HandEnv):
         Args:
             obs: The world's observation (obs_size,), changed in place.
             frame: The frame the world is at.
+            sensordata: The world's sensor values (the fingertip positions MuJoCo's position sensors
+                took in the last ``mj_step``, i.e. at the start of its last substep).
         """
         obs[self._ref_slice] = self._refs[np.minimum(frame + self._window_steps, self._last)].ravel()
         np.subtract(self._ref_ctrl[frame], obs[self._hand_slice], out=obs[self._err_hand])
+        np.subtract(self._ref_tips[frame], sensordata[self._tip_sensors], out=obs[self._err_tips])
         for t in self._tracks:
             if t.valid[frame]:
                 ref = t.ref[frame]
@@ -647,6 +664,6 @@ class ReplayEnv(HandEnv):
         obs = self._obs
         penetration = self._observe_state()
         frame = self._driver.frame
-        self._features(obs, frame)
+        self._features(obs, frame, self._sensordata)
         obs[self._progress_index] = frame / self._last
         return penetration

@@ -383,7 +383,7 @@ class ReplayVectorEnv(gym.vector.VectorEnv):
             row = obs[i]
             contacts.link_forces(sensordata[i], row[force_slice])
             penetration[i] = row[env._pen_index] = contacts.penetration(sensordata[i])
-            env._features(row, int(frames[i]))  # the single environment's own
+            env._features(row, int(frames[i]), sensordata[i])  # the single environment's own
         obs[sel, env._progress_index] = frames[sel] / self._last
         return penetration
 
