@@ -202,9 +202,14 @@ class ReplayEnv(HandEnv):
       the world frame, angular rad/s in the body frame) and ``<prefix>hinge_velocity``;
     * the references of the next step: ``ref_ctrl`` (nu, the recorded targets clipped to the joint
       ranges), ``ref_root_pose`` (7), per recorded object ``ref_<prefix>pose`` (7) and
-      ``ref_<prefix>hinge``;
+      ``ref_<prefix>hinge``; with ``reference_window=K`` the same groups for the K − 1 frames after it
+      (``ref2_ctrl`` …);
+    * errors to the reference of the frame reached: ``err_hand_qpos`` (nu, rad), ``err_fingertips`` (3 per
+      fingertip, m), per recorded object ``err_<prefix>position`` (3, m), ``err_<prefix>rotation`` (3: the
+      rotation vector of ``q_ref ⊗ q⁻¹``, rad) and ``err_<prefix>hinge`` (rad);
     * ``contact_force`` (one per hand link with collision geometry: the total contact normal force on
-      every object part, N), ``penetration`` (the deepest hand–object penetration, m);
+      every object part, N), ``penetration`` (the deepest hand–object penetration, m),
+      ``contact_state`` (fraction of links touching; ``held``: 1 when at least 2 links touch);
     * ``progress``: frame index / last frame index, in [0, 1].
 
     **Reward** = the sum of the terms in ``info`` (errors measured at the frame reached):
@@ -212,10 +217,16 @@ class ReplayEnv(HandEnv):
     * ``reward_tracking = tracking_weight · exp(−mean((q − ref)²) / tracking_sigma²)``;
     * ``reward_object = object_weight · mean over recorded objects of exp(−d² / object_sigma²)``, d the
       distance of the object's origin from its recording (0 on frames where no track is valid);
+    * ``reward_rotation = rotation_weight · mean over recorded objects of exp(−θ² / rotation_sigma²)``;
+    * ``reward_articulation = articulation_weight · mean over articulated ones of exp(−e² / sigma²)``;
+    * ``reward_held = held_weight · held`` in scenes without recorded object tracks (glove scenes);
     * ``reward_penetration = −penetration_weight · penetration in mm``;
     * ``reward_action = −action_weight · mean(action²)``.
 
-    **Episode**: starts at frame 0 (or a random frame with ``random_start``, or ``options={"frame": k}``);
+    ``reset`` info carries the reset state's values of :data:`STEP_NUMBERS` too.
+
+    **Episode**: starts at frame 0 (or a random frame with ``random_start``, or ``options={"frame": k}``),
+    the hand joints moved by seeded noise with ``reset_noise_scale``;
     truncated at the schedule's last frame; terminated when MuJoCo diverges (``info["diverged"]``) or a
     recorded object ends up more than ``max_object_drift`` from its recording (``info["object_drift"]``).
 
@@ -233,11 +244,18 @@ class ReplayEnv(HandEnv):
         object_sigma: Distance scale of the object term, m.
         penetration_weight: Penalty per millimetre of penetration.
         action_weight: Penalty on the mean squared action.
+        rotation_weight: Weight of the object rotation term.
+        rotation_sigma: Angle scale of the rotation term, rad.
+        articulation_weight: Weight of the articulation term.
+        articulation_sigma: Angle scale of the articulation term, rad.
+        held_weight: Weight of the held term (scenes without recorded object tracks).
         max_object_drift: Terminate when a recorded object is farther than this from its recording, m;
-            None never terminates for it.
+            None never terminates for it (settable later: :meth:`set_max_object_drift`).
         release_delay: Scenes with supports (glove scenario): they are switched off this long after the
             scene's ``release_time``, s (:attr:`handsim.sim.metrics.MetricSpec.release_delay`).
         random_start: Reset to a frame drawn from the environment's seeded ``np_random``.
+        reference_window: How many future frames of references the observation holds (≥ 1).
+        reset_noise_scale: Half-width of the uniform noise on each hand joint at reset, rad.
         render_mode: None or ``"rgb_array"``.
         width: Rendered image width, pixels.
         height: Rendered image height, pixels.
