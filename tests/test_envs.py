@@ -21,7 +21,7 @@ import handsim  # noqa: F401  registers the environments
 from handsim.builders.graspdb_objects import UnknownObjectError
 from handsim.envs import ENVS, register_envs
 from handsim.envs.grasp_env import GraspEnv
-from handsim.envs.replay_env import ReplayEnv, default_replay_inputs
+from handsim.envs.replay_env import REWARD_TERMS, ReplayEnv, default_replay_inputs
 from handsim.sim.drive import scenario_switches
 from handsim.sim.replay import ReplayConfig, replay
 from tests.helpers import glove_switch_inputs
@@ -29,8 +29,8 @@ from tests.helpers import glove_switch_inputs
 ROOT = Path(__file__).resolve().parents[1]
 REPLAY, GRASP = "handsim/Replay-v0", "handsim/Grasp-v0"
 IDS = (REPLAY, GRASP)
-REPLAY_REWARDS = ("reward_tracking", "reward_object", "reward_penetration", "reward_action")
-GRASP_REWARDS = ("reward_reach", "reward_contact", "reward_lift", "reward_hold")
+REPLAY_REWARDS = REWARD_TERMS  # tracking, object, rotation, articulation, held, penetration, action
+GRASP_REWARDS = ("reward_reach", "reward_contact", "reward_lift", "reward_hold", "reward_penetration")
 
 
 @functools.lru_cache(maxsize=1)
@@ -272,7 +272,7 @@ def test_replay_reset_rejects_a_frame_outside_the_schedule():
 
 
 def test_grasp_closing_and_lifting_succeeds():
-    env = GraspEnv()
+    env = GraspEnv(zero_action="mid")  # the actions below map −1 … 1 onto each joint's range
     env.reset(seed=0)
     layout = env.scene.layout
     lo, hi = layout.ctrl_range.T

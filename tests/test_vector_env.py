@@ -86,7 +86,10 @@ def test_native_vector_env_resets_terminated_worlds_on_the_next_step_like_gymnas
         assert reward.tolist() == [0.0, 0.0]
         assert not terminated.any() and not truncated.any()
         assert info["frame"].tolist() == [0, 0]
-        assert "reward_tracking" not in info  # only the reset's frame and time
+        # the reset's info: frame, time, recording and the numbers of the reset state (issue 17), no step's
+        assert info["reward_tracking"].tolist() == [1.0, 1.0]  # at the recorded state: no joint error
+        assert info["_reward_tracking"].tolist() == [True, True]
+        assert "diverged" not in info and "action_clipped" not in info
         assert _run_both(native, sync, steps=6, seed=2) == 6  # terminated every other step, in both worlds
     finally:
         native.close()

@@ -34,6 +34,8 @@ from handsim.sim.compiled import SceneSetup, SimScene, compile_scene
 from handsim.sim.control import DEFAULT_CONTROL_RATE, substeps_for
 
 ROOT_CONTROLS = ("velocity", "scripted")
+ZERO_ACTIONS = ("open", "mid")
+"""What a zero joint action means: the open hand of the reset, or the middle of each joint's range."""
 GRASP_AHEAD = 0.03
 """The object's centre starts under the point this far ahead of the palm's centre along the fingers, m."""
 CONTACT_LINKS = 3
@@ -172,9 +174,11 @@ class GraspEnv(HandEnv):
     """Lift a catalogue object off the table and hold it (``handsim/Grasp-v0``).
 
     **Action** ``Box(-1, 1, (nu + 3,), float32)`` (``root_control="velocity"``) or ``(nu,)``
-    (``"scripted"``): per hand DoF (actuator order, :attr:`dof_names`) a joint target, −1 … 1 mapped
-    linearly onto the joint's range; then the root target's velocity along world x, y, z as a fraction
-    of ``root_speed``. Values are clipped to [−1, 1].
+    (``"scripted"``): per hand DoF (actuator order, :attr:`dof_names`) a joint target; then the root
+    target's velocity along world x, y, z as a fraction of ``root_speed``. Values are clipped to [−1, 1].
+    ``zero_action="open"`` (default): 0 is the open hand of the reset (each DoF at 0 rad or its nearest
+    limit), 0 … 1 goes linearly to the joint's upper limit and 0 … −1 to its lower one, so a policy's
+    initial mean action holds the hand open; ``"mid"``: −1 … 1 mapped linearly onto the joint's range.
 
     **Observation** ``Box(-inf, inf, (n,), float64)``, named in :attr:`observation_names` and
     :attr:`observation_slices`: ``hand_qpos`` (nu, rad), ``root_pose`` (7), ``obj/pose`` (7: position m,
@@ -189,7 +193,8 @@ class GraspEnv(HandEnv):
     * ``reward_reach = reach_weight · (1 − tanh(10 · |object_to_grasp|))``;
     * ``reward_contact = contact_weight · min(links touching, 3) / 3``;
     * ``reward_lift = lift_weight · clip(lift / lift_height, 0, 1)``;
-    * ``reward_hold = hold_weight`` while the object is ``lift_height`` up and touched, else 0.
+    * ``reward_hold = hold_weight`` while the object is ``lift_height`` up and touched, else 0;
+    * ``reward_penetration = −penetration_weight · penetration in mm`` (the deepest hand–object one).
 
     **Success** (``info["success"]``, also ``info["is_success"]``): the object has been ``lift_height``
     above its start, touched by the hand, for the last ``hold_time`` seconds.
@@ -214,6 +219,8 @@ class GraspEnv(HandEnv):
         contact_weight: Weight of the contact term.
         lift_weight: Weight of the lift term.
         hold_weight: Reward per step while holding.
+        penetration_weight: Penalty per millimetre of hand–object penetration.
+        zero_action: What a zero joint action means, one of :data:`ZERO_ACTIONS`.
         terminate_on_success: End the episode at success.
         render_mode: None or ``"rgb_array"``.
         width: Rendered image width, pixels.
@@ -242,6 +249,8 @@ class GraspEnv(HandEnv):
         contact_weight: float = 0.1,
         lift_weight: float = 1.0,
         hold_weight: float = 1.0,
+        penetration_weight: float = 0.2,
+        zero_action: str = "open",
         terminate_on_success: bool = False,
         render_mode: str | None = None,
         width: int = DEFAULT_SIZE,
@@ -250,6 +259,8 @@ class GraspEnv(HandEnv):
     ) -> None:
         if root_control not in ROOT_CONTROLS:
             raise ValueError(f"unknown root_control {root_control!r}; expected one of {list(ROOT_CONTROLS)}")
+        if zero_action not in ZERO_ACTIONS:
+            raise ValueError(f"unknown zero_action {zero_action!r}; expected one of {list(ZERO_ACTIONS)}")
         extent = np.asarray(root_range, dtype=float)
         if extent.shape != (3,) or not np.all(np.isfinite(extent)) or np.any(extent < 0):
             raise ValueError(f"root_range must be 3 finite numbers ≥ 0 (x, y, z), got {extent.tolist()}")
@@ -271,11 +282,18 @@ class GraspEnv(HandEnv):
         self._w_contact = _check("contact_weight", contact_weight) / CONTACT_LINKS
         self._w_lift = _check("lift_weight", lift_weight) / self._lift_height
         self._w_hold = _check("hold_weight", hold_weight)
+        self._w_pen = _check("penetration_weight", penetration_weight) * 1000.0  # per m
+        self.zero_action = zero_action
         self._terminate_on_success = bool(terminate_on_success)
         self._scripted = root_control == "scripted"
         self.root_control = root_control
         lo, hi = layout.ctrl_range[:, 0], layout.ctrl_range[:, 1]
-        self._ctrl_mid, self._ctrl_half = (lo + hi) / 2, (hi - lo) / 2
+        if zero_action == "open":  # 0: the reset's open hand; ±1: the limits
+            rest = np.clip(0.0, lo, hi)
+            self._ctrl_mid, self._ctrl_up, self._ctrl_down = rest, hi - rest, rest - lo
+        else:
+            self._ctrl_mid, self._ctrl_up = (lo + hi) / 2, (hi - lo) / 2
+            self._ctrl_down = self._ctrl_up
         self._ctrl = np.zeros(nu)
         self._mocap = layout.mocap
         self._obj = layout.objects[0]
@@ -375,8 +393,17 @@ class GraspEnv(HandEnv):
         self._step_count = 0
         self._held = 0
         self._started = True
-        self._observe()
-        return self._obs.copy(), {"success": False, "is_success": False}
+        penetration, touching = self._observe()
+        lift = float(self._obs[self._lift_index])
+        terms = self._terms(lift, penetration, touching, lifted=False)
+        return self._obs.copy(), {
+            **terms,
+            "success": False,
+            "is_success": False,
+            "lift": lift,
+            "links_touching": touching,
+            "penetration": penetration,
+        }
 
     def step(self, action: npt.ArrayLike) -> tuple[np.ndarray, float, bool, bool, dict]:
         """Set the joint targets (and move the root target), then advance one control frame.
@@ -389,7 +416,8 @@ class GraspEnv(HandEnv):
         if not self._started:
             raise gym.error.ResetNeeded("the episode is over or was never started: call reset()")
         nu = self._nu
-        np.multiply(a[:nu], self._ctrl_half, out=self._ctrl)
+        joints = a[:nu]
+        np.multiply(joints, np.where(joints >= 0.0, self._ctrl_up, self._ctrl_down), out=self._ctrl)
         np.add(self._ctrl, self._ctrl_mid, out=self._data_ctrl)
         n = self._step_count + 1
         target = self._target
@@ -403,19 +431,14 @@ class GraspEnv(HandEnv):
         events = self._stepper.step()  # the controls are in data.ctrl already
         self._step_count = n
 
-        rel = self._obs_rel
         lift = self._object_lift()
         penetration, touching = self._observe(lift)
-        distance = math.sqrt(float(np.dot(rel, rel)))
         lifted = lift >= self._lift_height and touching > 0
         self._held = self._held + 1 if lifted else 0
         self._obs[self._hold_index] = min(1.0, self._held / self._hold_steps)
         success = self._held >= self._hold_steps
-        r_reach = self._w_reach * (1.0 - math.tanh(REACH_SCALE * distance))
-        r_contact = self._w_contact * min(touching, CONTACT_LINKS)
-        r_lift = self._w_lift * min(max(lift, 0.0), self._lift_height)
-        r_hold = self._w_hold if lifted else 0.0
-        reward = r_reach + r_contact + r_lift + r_hold
+        terms = self._terms(lift, penetration, touching, lifted)
+        reward = sum(terms.values())
 
         diverged = any(e.diverged for e in events) if events else False
         fell = float(self._obs_object[2]) < FALL_HEIGHT
@@ -424,10 +447,7 @@ class GraspEnv(HandEnv):
         if terminated or truncated:
             self._started = False
         info = {
-            "reward_reach": r_reach,
-            "reward_contact": r_contact,
-            "reward_lift": r_lift,
-            "reward_hold": r_hold,
+            **terms,
             "success": success,
             "is_success": success,
             "lift": lift,
@@ -440,6 +460,18 @@ class GraspEnv(HandEnv):
         if events:
             info["warnings"] = tuple(e.describe() for e in events)
         return self._obs.copy(), reward, terminated, truncated, info
+
+    def _terms(self, lift: float, penetration: float, touching: int, lifted: bool) -> dict[str, float]:
+        """The reward terms, by name, in the order they are summed (see the class)."""
+        rel = self._obs_rel
+        distance = math.sqrt(float(np.dot(rel, rel)))
+        return {
+            "reward_reach": self._w_reach * (1.0 - math.tanh(REACH_SCALE * distance)),
+            "reward_contact": self._w_contact * min(touching, CONTACT_LINKS),
+            "reward_lift": self._w_lift * min(max(lift, 0.0), self._lift_height),
+            "reward_hold": self._w_hold if lifted else 0.0,
+            "reward_penetration": -self._w_pen * penetration,
+        }
 
     def _object_lift(self) -> float:
         return float(self._qpos[self._obj.free_qpos + 2]) - self._object_start_z

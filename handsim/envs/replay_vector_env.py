@@ -21,7 +21,6 @@ truncated, its info the reset's ``frame`` and ``time``). ``reset(seed=s)`` seeds
 
 from __future__ import annotations
 
-import math
 import os
 from typing import Any
 
@@ -34,6 +33,7 @@ from gymnasium.vector import AutoresetMode
 from gymnasium.vector.utils import batch_space
 from mujoco import batch as mjbatch
 
+from handsim.envs.recordings import RecordingError
 from handsim.envs.replay_env import STEP_NUMBERS, ReplayEnv
 from handsim.sim.stepper import warning_events
 
@@ -93,6 +93,11 @@ class ReplayVectorEnv(gym.vector.VectorEnv):
         # one ReplayEnv holds the configuration, the per-world functions and the reset states
         self._env = ReplayEnv(**kwargs)
         env = self._env
+        if env.recordings > 1:
+            raise RecordingError(
+                f"ReplayVectorEnv steps every world on one model and so follows one recording; for "
+                f"{env.recordings} recordings use vectorization_mode='sync' or 'async' (each world samples)"
+            )
         self.single_observation_space = env.observation_space
         self.single_action_space = env.action_space
         self.observation_space = batch_space(env.observation_space, self.num_envs)
@@ -138,7 +143,6 @@ class ReplayVectorEnv(gym.vector.VectorEnv):
         self._started = False
         self._pending = False  # some world ended on the last step and is reset on the next
         self._autoreset = np.zeros(self.num_envs, dtype=bool)
-        self._max_drift = env._max_drift
         self._all_mocap = driver._all_mocap
         self._obs = np.zeros((self.num_envs, *env.observation_space.shape))
         self._actions = np.zeros((self.num_envs, len(env.dof_names)))
@@ -150,6 +154,10 @@ class ReplayVectorEnv(gym.vector.VectorEnv):
     def frame_skip(self) -> int:
         """MuJoCo steps per environment step."""
         return self._substeps
+
+    def set_max_object_drift(self, value: float | None) -> None:
+        """Set every world's :attr:`ReplayEnv.max_object_drift` (m; None: never), e.g. for a curriculum."""
+        self._env.max_object_drift = value
 
     @property
     def nthread(self) -> int:
@@ -184,16 +192,23 @@ class ReplayVectorEnv(gym.vector.VectorEnv):
             if s is not None or self._world_rng[i] is None:
                 self._world_rng[i] = seeding.np_random(s)[0]
         frames = np.empty(self.num_envs, dtype=np.int64)
+        numbers = np.empty((self.num_envs, len(STEP_NUMBERS)))
         for i in range(self.num_envs):
-            frames[i] = self._reset_world(i, options)
+            frames[i], numbers[i] = self._reset_world(i, options)
         self._autoreset[:] = False
         self._started, self._pending = True, False
-        return self._obs.copy(), {
+        everyone = np.ones(self.num_envs, bool)
+        infos: dict[str, Any] = {
             "frame": frames,
-            "_frame": np.ones(self.num_envs, bool),
+            "_frame": everyone,
             "time": self._times[frames],
-            "_time": np.ones(self.num_envs, bool),
+            "_time": everyone.copy(),
+            "recording": np.zeros(self.num_envs, np.int64),  # one recording (several are refused)
+            "_recording": everyone.copy(),
         }
+        for key, column in zip(STEP_NUMBERS, numbers.T, strict=True):
+            infos[key], infos[f"_{key}"] = column.copy(), everyone.copy()
+        return self._obs.copy(), infos
 
     def step(
         self, actions: npt.ArrayLike
@@ -228,10 +243,10 @@ class ReplayVectorEnv(gym.vector.VectorEnv):
             reset_ids = np.flatnonzero(self._autoreset)
             ids = np.flatnonzero(~self._autoreset)
             sel: slice | np.ndarray = ids
-            for i in reset_ids.tolist():
-                self._reset_world(i, None)
+            reset_numbers = {i: self._reset_world(i, None)[1] for i in reset_ids.tolist()}
         else:
             ids, sel = self._everyone, slice(None)
+            reset_ids = None
         if ids.size:
             if in_range:
                 clipped = np.zeros(n, np.int64)
@@ -247,10 +262,8 @@ class ReplayVectorEnv(gym.vector.VectorEnv):
             for i in ids.tolist():
                 action = actions[i]
                 depth = float(penetration[i])
-                terms = reward_of(obs[i], int(frames[i]), float(np.dot(action, action)), depth)
-                r_track, r_object, r_pen, r_action, mean_sq, drift = terms
-                reward = r_track + r_object + r_pen + r_action  # in the single env's order
-                table.append((reward, r_track, r_object, r_pen, r_action, math.sqrt(mean_sq), drift, depth))
+                reward, numbers = reward_of(obs[i], int(frames[i]), float(np.dot(action, action)), depth)
+                table.append((reward, *numbers))
             if self._pending:
                 columns = np.zeros((len(STEP_NUMBERS) + 1, n))
                 columns[:, ids] = np.array(table).T
@@ -264,7 +277,7 @@ class ReplayVectorEnv(gym.vector.VectorEnv):
             for i, events in warnings.items():
                 diverged[i] = any(e.diverged for e in events)
             terminated[sel] = diverged[sel] | (
-                columns[1 + STEP_NUMBERS.index("object_drift")][sel] > self._max_drift
+                columns[1 + STEP_NUMBERS.index("object_drift")][sel] > self._env._max_drift
             )
             for key, column in zip(STEP_NUMBERS, columns[1:], strict=True):
                 infos[key], infos[f"_{key}"] = column, mask
@@ -279,11 +292,21 @@ class ReplayVectorEnv(gym.vector.VectorEnv):
             rewards = columns[0]
         else:
             rewards = np.zeros(n)
+        if reset_ids is not None:  # a reset world's info has the reset's numbers (as SyncVectorEnv gives)
+            for column, key in enumerate(STEP_NUMBERS):
+                if key not in infos:
+                    infos[key], infos[f"_{key}"] = np.zeros(n), np.zeros(n, bool)
+                values, mask = infos[key], infos[f"_{key}"].copy()
+                for i, numbers in reset_numbers.items():
+                    values[i], mask[i] = numbers[column], True
+                infos[f"_{key}"] = mask
         frame_info = self._frames.copy()  # a reset world's start frame is before the last: not truncated
         truncated = (frame_info >= self._last) & ~terminated
         everyone = np.ones(n, bool)
         infos["frame"], infos["_frame"] = frame_info, everyone
         infos["time"], infos["_time"] = self._times[frame_info], everyone
+        if reset_ids is not None:  # the reset worlds' info has the reset's recording
+            infos["recording"], infos["_recording"] = np.zeros(n, np.int64), self._autoreset.copy()
         ended = terminated | truncated
         self._autoreset = ended
         self._pending = bool(ended.any())
@@ -294,8 +317,12 @@ class ReplayVectorEnv(gym.vector.VectorEnv):
         self._env.close()
 
     # ---- worlds -------------------------------------------------------------------------------------------
-    def _reset_world(self, i: int, options: dict | None) -> int:
-        """Put world ``i`` in the recorded state of its start frame; its observation in row ``i``."""
+    def _reset_world(self, i: int, options: dict | None) -> tuple[int, tuple[float, ...]]:
+        """Put world ``i`` in the recorded state of its start frame; its observation in row ``i``.
+
+        Returns:
+            The start frame and the reset's values of :data:`STEP_NUMBERS`.
+        """
         env = self._env
         env._np_random = self._world_rng[i]
         obs, info = env.reset(options=options)
@@ -308,7 +335,7 @@ class ReplayVectorEnv(gym.vector.VectorEnv):
         self._seen[i] = self._warning[i, :, 1]
         self._obs[i] = obs
         self._frames[i] = info["frame"]
-        return int(info["frame"])
+        return int(info["frame"]), tuple(info[key] for key in STEP_NUMBERS)
 
     def _advance(self, ids: np.ndarray, sel: slice | np.ndarray) -> None:
         """One control frame of worlds ``ids`` (``sel``: the same, or ``slice(None)`` for every world).
@@ -351,13 +378,13 @@ class ReplayVectorEnv(gym.vector.VectorEnv):
         obs[sel, env._vel_slice] = self._qvel[rows, self._qvel_adr]
         penetration = np.zeros(self.num_envs)
         contacts, force_slice, sensordata = env._contacts, env._force_slice, self._sensordata
+        frames = self._frames
         for i in ids.tolist():
-            contacts.link_forces(sensordata[i], obs[i, force_slice])
-            penetration[i] = contacts.penetration(sensordata[i])
-        frames = self._frames[sel]
-        obs[sel, env._pen_index] = penetration[sel]
-        obs[sel, env._ref_slice] = env._refs[np.minimum(frames + 1, self._last)]
-        obs[sel, env._progress_index] = frames / self._last
+            row = obs[i]
+            contacts.link_forces(sensordata[i], row[force_slice])
+            penetration[i] = row[env._pen_index] = contacts.penetration(sensordata[i])
+            env._features(row, int(frames[i]), sensordata[i])  # the single environment's own
+        obs[sel, env._progress_index] = frames[sel] / self._last
         return penetration
 
     def _warnings(self, ids: np.ndarray) -> dict[int, tuple]:

@@ -44,7 +44,12 @@ INFO_DOCS = {
     "tracking_error": "RMS of joint angle minus recorded target over the hand DoFs, rad (NaN at reset)",
     "object_drift": "largest distance of a recorded object from its recording, m (NaN at reset)",
     "reward_tracking": "reward term: joint tracking (NaN at reset)",
+    "object_rotation_error": "largest rotation angle of a recorded object from its recording, rad "
+    "(NaN at reset)",
     "reward_object": "reward term: recorded object following its recording (NaN at reset)",
+    "reward_rotation": "reward term: recorded object's orientation following its recording (NaN at reset)",
+    "reward_articulation": "reward term: articulated object's angle following its recording (NaN at reset)",
+    "reward_held": "reward term: object held, scenes without recorded objects (NaN at reset)",
     "reward_penetration": "reward term: penetration penalty (NaN at reset)",
     "reward_action": "reward term: residual action penalty, 0 here (NaN at reset)",
     "diverged": "MuJoCo diverged during the step that reached this row (the episode terminates there)",
