@@ -496,7 +496,9 @@ def test_ctrl_c_during_a_dataset_run_exits_130_with_complete_records_and_no_work
         [*argv, "--workers", "2", "--frames", "0"],
         stdout=subprocess.DEVNULL,
         stderr=subprocess.PIPE,
-        env=child_env(),
+        # no placement cache: every trial runs its search (seconds), so the Ctrl-C lands mid-run; with the
+        # placements cached by an earlier test the whole run can end before the signal
+        env={**child_env(), "HANDSIM_CACHE_DIR": str(tmp_path / "cache")},
         start_new_session=True,
     )
     with reaped(process) as children:
