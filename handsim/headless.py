@@ -142,7 +142,20 @@ def prefer_headless_gl() -> str | None:
     Returns:
         The backend this call selected, or None when it left ``MUJOCO_GL`` alone.
     """
+    choice = headless_gl_default()
+    if choice is not None:
+        os.environ["MUJOCO_GL"] = choice
+    return choice
+
+
+def headless_gl_default() -> str | None:
+    """The backend :func:`prefer_headless_gl` would set, without setting it.
+
+    For another process's environment (a Ray worker's), leaving this process's own alone.
+
+    Returns:
+        ``HEADLESS_GL`` on Linux without a display and without ``MUJOCO_GL``; else None.
+    """
     if not sys.platform.startswith("linux") or "MUJOCO_GL" in os.environ or has_display():
         return None
-    os.environ["MUJOCO_GL"] = HEADLESS_GL
     return HEADLESS_GL

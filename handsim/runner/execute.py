@@ -37,6 +37,7 @@ from pathlib import Path
 from types import ModuleType
 
 from handsim.errors import HandsimError
+from handsim.headless import headless_gl_default
 from handsim.runner.portable import dataset_root, portable_record
 from handsim.runner.records import (
     RecordWriter,
@@ -420,10 +421,9 @@ def _ray_trial(entry: TrialEntry, config: ReplayConfig, frames: int) -> TrialOut
 
 
 def _gl_env() -> dict[str, str]:
-    from handsim.headless import prefer_headless_gl
-
-    prefer_headless_gl()
-    return {"MUJOCO_GL": os.environ["MUJOCO_GL"]} if "MUJOCO_GL" in os.environ else {}
+    """``MUJOCO_GL`` for the Ray workers: the user's, else the headless default; ours stays untouched."""
+    choice = os.environ.get("MUJOCO_GL") or headless_gl_default()
+    return {"MUJOCO_GL": choice} if choice else {}
 
 
 def _counts(records: Sequence[dict], ids: set[str]) -> dict:
