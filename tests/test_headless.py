@@ -127,3 +127,18 @@ def test_renders_headless_after_mujoco_was_imported_first():
     assert rest.startswith("(24, 32, 3) [")
     red, green, blue = (int(v) for v in rest.split(" [", 1)[1].rstrip("]").split(", "))
     assert red > 200 and green < 100 and blue < 100  # the red sphere fills the image centre
+
+
+@pytest.mark.skipif(not sys.platform.startswith("linux"), reason="the headless default is Linux's")
+def test_the_ray_workers_gl_setting_leaves_this_process_environment_alone(monkeypatch):
+    from handsim.runner.execute import _gl_env
+
+    for name in ("MUJOCO_GL", "DISPLAY", "WAYLAND_DISPLAY"):
+        monkeypatch.delenv(name, raising=False)
+    assert _gl_env() == {"MUJOCO_GL": "egl"}
+    assert "MUJOCO_GL" not in os.environ
+    monkeypatch.setenv("MUJOCO_GL", "osmesa")
+    assert _gl_env() == {"MUJOCO_GL": "osmesa"}
+    monkeypatch.delenv("MUJOCO_GL")
+    monkeypatch.setenv("DISPLAY", ":0")
+    assert _gl_env() == {}
