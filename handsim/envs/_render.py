@@ -8,13 +8,14 @@ from __future__ import annotations
 
 from typing import TYPE_CHECKING
 
+import mujoco
+
 from handsim.errors import RenderError
-from handsim.headless import offscreen_renderer, prefer_headless_gl
+from handsim.headless import offscreen_renderer
 
-__all__ = ["OffscreenRenderer", "RenderError", "camera_id", "prefer_headless_gl"]
+__all__ = ["OffscreenRenderer", "RenderError", "camera_id"]
 
-if TYPE_CHECKING:  # mujoco is imported lazily: MUJOCO_GL must be set before its first import
-    import mujoco
+if TYPE_CHECKING:
     import numpy as np
 
 
@@ -24,8 +25,6 @@ def camera_id(model: mujoco.MjModel, camera: str | None) -> int:
     Raises:
         ValueError: No camera of that name; the message lists the model's cameras.
     """
-    import mujoco
-
     if camera is None:
         return -1
     cam = int(mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_CAMERA, camera))

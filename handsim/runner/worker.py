@@ -25,6 +25,7 @@ from pathlib import Path
 
 from handsim import lifeline
 from handsim.files import write_atomic
+from handsim.headless import prefer_headless_gl
 from handsim.runner.portable import portable_traceback
 from handsim.runner.records import SCHEMA, json_ready
 from handsim.sim.replay import ReplayConfig
@@ -58,8 +59,6 @@ def prepare_worker_process() -> None:
     ends the workers itself.
     """
     os.environ["OMP_NUM_THREADS"] = "1"
-    from handsim.headless import prefer_headless_gl
-
     prefer_headless_gl()
     if sys.platform != "win32":
         signal.signal(signal.SIGINT, signal.SIG_IGN)
