@@ -27,8 +27,8 @@ from pathlib import Path
 
 import numpy as np
 
+from handsim.datatypes.trajectory_ops import limit_violations, resample
 from handsim.io import read_skeleton, read_trajectory
-from handsim.trajectory_ops import limit_violations, resample
 
 GRASPDB = Path(__file__).resolve().parents[1].parent / "shared" / "data" / "graspdb14"
 TRIAL = GRASPDB / "r_01_11_ex03-rad-004-grasp-su04.txt"

@@ -24,8 +24,8 @@ import trimesh
 from timing import median_seconds  # benchmarks/timing.py (scripts run from benchmarks/)
 
 from handsim.builders.decompose import DecompositionError, DecompositionParams, decompose
+from handsim.datatypes.mesh import validate_mesh
 from handsim.io.graspdb import read_graspdb_glove, read_graspdb_raw
-from handsim.mesh import validate_mesh
 
 ROWS = 10_000
 PARAMS = DecompositionParams(resolution=500, preprocess_resolution=30, mcts_iterations=60)

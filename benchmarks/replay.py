@@ -73,6 +73,7 @@ from handsim.builders.arctic_objects import arctic_object
 from handsim.builders.catalog import get, get_graspdb
 from handsim.builders.mano_hand import build_mano_hand, mano_hand_skeleton
 from handsim.builders.objects import build_object
+from handsim.datatypes.trajectory import ObjectTrack, Trajectory
 from handsim.io import read_skeleton, read_trajectory
 from handsim.io.tzionas_motion import read_tzionas_sequence
 from handsim.io.tzionas_objects import read_tzionas_object
@@ -84,7 +85,6 @@ from handsim.sim.metrics import MetricSpec
 from handsim.sim.replay import ReplayConfig, replay, run_schedule
 from handsim.sim.scenarios import glove_scene, recorded_scene
 from handsim.sim.stepper import Stepper
-from handsim.trajectory import ObjectTrack, Trajectory
 
 GRASPDB = Path(__file__).resolve().parents[1].parent / "shared" / "data" / "graspdb14"
 CLOCK = time.process_time

@@ -17,9 +17,9 @@ import numpy as np
 import scipy.io
 
 from handsim.builders import build_hand
+from handsim.datatypes.skeleton import mj_name
 from handsim.io import read_skeleton, read_trajectory
 from handsim.sim import compile_spec
-from handsim.skeleton import mj_name
 
 TOLERANCE_MM = 0.1
 

@@ -5,7 +5,7 @@ from __future__ import annotations
 import mujoco
 import numpy as np
 
-from handsim.skeleton import Skeleton, mj_name
+from handsim.datatypes.skeleton import Skeleton, mj_name
 
 
 def set_pose(model: mujoco.MjModel, data: mujoco.MjData, skeleton: Skeleton, q: np.ndarray) -> None:
@@ -38,9 +38,9 @@ def glove_switch_inputs():
     """
     from handsim.builders import build_object, build_scene, default_hand
     from handsim.builders.catalog import get
+    from handsim.datatypes.trajectory import Phase, Trajectory
     from handsim.sim.compiled import compile_scene
     from handsim.sim.scenarios import glove_scene
-    from handsim.trajectory import Phase, Trajectory
 
     hand, ball = default_hand(), build_object(get("tennis_ball"))
     layout = compile_scene(build_scene(hand, ball)).layout

@@ -39,9 +39,9 @@ import numpy as np
 from scipy.spatial import ConvexHull
 from scipy.spatial.transform import Rotation
 
+from handsim.datatypes.skeleton import mj_name
 from handsim.io.mano import MEAN_JOINTS_FILE
 from handsim.sim import compile_spec
-from handsim.skeleton import mj_name
 
 PARENTS = (-1, 0, 1, 2, 0, 4, 5, 0, 7, 8, 0, 10, 11, 0, 13, 14)
 NAMES = ("wrist", *(f"{f}{k}" for f in ("index", "middle", "pinky", "ring", "thumb") for k in (1, 2, 3)))

@@ -16,12 +16,12 @@ import trimesh
 from scipy.spatial.transform import Rotation
 
 from handsim.builders.mano_hand import build_mano_hands
+from handsim.datatypes.mesh import validate_mesh
+from handsim.datatypes.object_model import Hinge, ObjectModel, ObjectPart
 from handsim.errors import InputFileError, ModelError, TrajectoryError
 from handsim.io.arctic_hands import arctic_hand_trajectory, hand_side_check
 from handsim.io.arctic_motion import HANDS, read_arctic_sequence
 from handsim.io.mano import MANO_JOINT_NAMES, find_mano_files
-from handsim.mesh import validate_mesh
-from handsim.object_model import Hinge, ObjectModel, ObjectPart
 from handsim.sim import compile_spec, warning_counts
 from tests.mano_fixtures import (
     arctic_object_values,

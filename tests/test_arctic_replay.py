@@ -16,6 +16,8 @@ import pytest
 from scipy.spatial.transform import Rotation
 
 from handsim.cli import main
+from handsim.datatypes.skeleton import mj_name
+from handsim.datatypes.trajectory import Trajectory
 from handsim.errors import TrajectoryError
 from handsim.io.arctic_motion import HANDS
 from handsim.io.mano import MANO_DIR_ENV, MANO_JOINT_NAMES
@@ -25,8 +27,6 @@ from handsim.sim.drive import ScenarioSwitches, ScheduleDriver
 from handsim.sim.replay import replay
 from handsim.sim.stepper import Stepper
 from handsim.sim.summary import HAND_KEYS
-from handsim.skeleton import mj_name
-from handsim.trajectory import Trajectory
 from handsim.trials import TrialError, load_trial
 from tests.arctic_fixtures import UPRIGHT, block, template_vertices_mm, write_template
 from tests.mano_fixtures import (

@@ -7,10 +7,10 @@ import numpy as np
 import pytest
 
 from handsim.builders import build_hand, default_skeleton
+from handsim.datatypes.skeleton import mj_name
 from handsim.errors import ModelError, SkeletonError
 from handsim.io import read_skeleton
 from handsim.sim import compile_spec, warning_counts
-from handsim.skeleton import mj_name
 from tests.conftest import GRASPDB, TZIONAS
 from tests.helpers import random_in_limits, set_pose, site_positions
 

@@ -176,7 +176,7 @@ def test_replay_with_an_unknown_video_format_exits_1_before_replaying(capsys, tm
 
 def test_check_video_names_the_video_extra_when_pyav_is_missing(monkeypatch, tmp_path):
     from handsim.errors import HandsimError
-    from handsim.sim.render import check_video
+    from handsim.viz.render import check_video
 
     monkeypatch.setitem(sys.modules, "av", None)  # import av raises ImportError
     with pytest.raises(HandsimError, match=r'\.mp4 videos need PyAV: pip install "handsim\[video\]"'):
@@ -185,7 +185,7 @@ def test_check_video_names_the_video_extra_when_pyav_is_missing(monkeypatch, tmp
 
 def test_check_video_raises_error_for_an_odd_h264_size(tmp_path):
     from handsim.errors import HandsimError
-    from handsim.sim.render import check_video
+    from handsim.viz.render import check_video
 
     with pytest.raises(HandsimError, match=r"H\.264 needs an even image size, got 161 × 120"):
         check_video(tmp_path / "a.mp4", 161, 120)
@@ -193,7 +193,7 @@ def test_check_video_raises_error_for_an_odd_h264_size(tmp_path):
 
 @pytest.mark.parametrize(("frame_dt", "stride"), [(0.01, 3), (1 / 30, 1), (0.002, 17), (0.5, 1)])
 def test_frame_stride_plays_videos_in_real_time_near_30_fps(frame_dt, stride):
-    from handsim.sim.render import frame_stride
+    from handsim.viz.render import frame_stride
 
     assert frame_stride(frame_dt) == stride
 
@@ -204,7 +204,7 @@ def test_render_states_raises_error_listing_the_cameras_for_an_unknown_one():
     from handsim.builders import build_scene, default_hand
     from handsim.errors import HandsimError
     from handsim.sim.compiled import compile_scene
-    from handsim.sim.render import render_states
+    from handsim.viz.render import render_states
 
     scene = compile_scene(build_scene(default_hand()))
     states = np.zeros((2, scene.model.nq))
@@ -240,7 +240,7 @@ def test_write_video_leaves_no_partial_file_when_rendering_is_interrupted(monkey
     pytest.importorskip("PIL.Image", reason="GIF videos need Pillow")
     import numpy as np
 
-    from handsim.sim import render
+    from handsim.viz import render
 
     def interrupted(*args: object, **kwargs: object):
         yield np.zeros((8, 8, 3), dtype=np.uint8)

@@ -26,8 +26,8 @@ from handsim.builders.decompose import (
     decompose,
     default_cache_dir,
 )
+from handsim.datatypes.mesh import Mesh, validate_mesh
 from handsim.errors import MeshError
-from handsim.mesh import Mesh, validate_mesh
 
 R_MIN, R_MAX, HEIGHT = 0.02, 0.04, 0.02
 PARAMS = DecompositionParams(resolution=500, preprocess_resolution=30, mcts_iterations=60)

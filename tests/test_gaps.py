@@ -10,9 +10,9 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 from hypothesis.extra.numpy import arrays
 
+from handsim.datatypes.skeleton import Dof, Joint, Skeleton
+from handsim.datatypes.trajectory import Trajectory
 from handsim.glove.gaps import GAP_METHODS, REFERENCE_METHODS, fill_gaps, find_gaps, reference_dofs
-from handsim.skeleton import Dof, Joint, Skeleton
-from handsim.trajectory import Trajectory
 
 _AXES = {"flex": (1.0, 0.0, 0.0), "abd": (0.0, 0.0, 1.0)}
 

@@ -12,6 +12,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
+from handsim.datatypes.trajectory import ObjectTrack, Phase, Trajectory
 from handsim.errors import FormatError, InputFileError, TrajectoryError
 from handsim.glove import (
     AnnotationMatch,
@@ -26,7 +27,6 @@ from handsim.glove import (
     switch_segments,
 )
 from handsim.io.graspdb import read_graspdb_glove
-from handsim.trajectory import ObjectTrack, Phase, Trajectory
 
 MOTION = "r_01_11_ex03-rad-004-grasp-su04.txt"
 ANNOTATION = "01_11_ex03-rad-004-grasp-su04_annot-.txt"

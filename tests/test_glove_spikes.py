@@ -8,6 +8,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from handsim.datatypes.trajectory import Trajectory
 from handsim.glove.spikes import (
     MAX_JOINT_SPEED,
     MIN_SPIKE_DOFS,
@@ -16,7 +17,6 @@ from handsim.glove.spikes import (
     remove_spikes,
 )
 from handsim.io.graspdb import read_graspdb_glove
-from handsim.trajectory import Trajectory
 
 DT = 1.0 / 60.0
 NAMES = ("a_flex", "b_flex", "c_flex", "d_abd")

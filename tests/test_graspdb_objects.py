@@ -17,8 +17,8 @@ from handsim.builders.graspdb_objects import (
     clear_mesh_cache,
     graspdb_object,
 )
+from handsim.datatypes.mesh import validate_mesh
 from handsim.errors import HandsimError
-from handsim.mesh import validate_mesh
 
 # Report (GraspDB14 technical report) Table 4.1, object id -> object name, copied by hand from the spec;
 # the carton's "($7.6 \times 26 \times 37.5$ cm^3)" written in Unicode.

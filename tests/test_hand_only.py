@@ -16,8 +16,8 @@ import pytest
 
 from handsim.assets import TZIONAS_DIR
 from handsim.cli import main
-from handsim.poses import compose
-from handsim.rotations import quat_rotate
+from handsim.datatypes.poses import compose
+from handsim.datatypes.rotations import quat_rotate
 from handsim.runner.execute import run_dataset
 from handsim.runner.records import read_records
 from handsim.sim.replay import replay

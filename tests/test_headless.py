@@ -1,4 +1,4 @@
-"""OpenGL backend choice (handsim.headless): made when a renderer is made, never on ``import handsim``."""
+"""OpenGL backend choice (handsim.viz.headless): made when a renderer is made, never on ``import handsim``."""
 
 from __future__ import annotations
 
@@ -11,8 +11,8 @@ from pathlib import Path
 import mujoco
 import pytest
 
-from handsim import headless
 from handsim.errors import RenderError
+from handsim.viz import headless
 
 ROOT = Path(__file__).resolve().parents[1]
 SPHERE = (
@@ -42,7 +42,7 @@ def test_import_handsim_sets_no_environment_variable():
         """
         import os, gymnasium
         before = dict(os.environ)
-        import handsim, handsim.envs, handsim.cli, handsim.headless
+        import handsim, handsim.envs, handsim.cli, handsim.viz.headless
         after = dict(os.environ)
         print(sorted(set(after.items()) ^ set(before.items())), "MUJOCO_GL" in after)
         """
@@ -100,7 +100,7 @@ def test_renders_headless_after_mujoco_was_imported_first():
         import sys
         import mujoco
         from mujoco.rendering.classic import gl_context
-        from handsim.headless import gl_backend, offscreen_renderer
+        from handsim.viz.headless import gl_backend, offscreen_renderer
         from handsim.errors import RenderError
         model = mujoco.MjModel.from_xml_string(sys.argv[1])
         data = mujoco.MjData(model)

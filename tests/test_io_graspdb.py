@@ -12,6 +12,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
+from handsim.datatypes.skeleton import Dof, Joint, Skeleton
 from handsim.errors import FormatError, InputFileError, TrajectoryError
 from handsim.glove import (
     SENSOR_NAMES,
@@ -30,7 +31,6 @@ from handsim.io.graspdb import (
     read_graspdb_glove,
     read_graspdb_raw,
 )
-from handsim.skeleton import Dof, Joint, Skeleton
 
 REAL_TRIALS = {
     "r_01_11_ex03-rad-004-grasp-su04.txt": 282,

@@ -17,6 +17,8 @@ from hypothesis import strategies as st
 from scipy.spatial.transform import Rotation
 
 from handsim.builders import build_hand
+from handsim.datatypes.rotations import rotation_about_axis
+from handsim.datatypes.skeleton import mj_name
 from handsim.errors import FormatError, InputFileError, TrajectoryError
 from handsim.io import read_trajectory
 from handsim.io.tzionas import read_tzionas_skeleton
@@ -31,8 +33,6 @@ from handsim.io.tzionas_motion import (
     read_tzionas_object_motion,
     read_tzionas_sequence,
 )
-from handsim.rotations import rotation_about_axis
-from handsim.skeleton import mj_name
 
 MM = 1e-3
 HAND_FRAMES = 186  # Configs/20/INDEX_BOUNDS.txt: TotalAlligned

@@ -12,6 +12,7 @@ import scipy.sparse
 from scipy.spatial.transform import Rotation
 
 from handsim.builders.mano_hand import build_mano_hand, mano_hand_skeleton, mano_model_skeleton, mano_skeleton
+from handsim.datatypes.rotations import axis_angle_to_matrix, matrix_to_zyx, rotation_error, zyx_to_matrix
 from handsim.errors import FormatError, ModelError, SkeletonError, TrajectoryError
 from handsim.io.mano import (
     FINGERS,
@@ -26,7 +27,6 @@ from handsim.io.mano import (
     read_mano_model,
 )
 from handsim.io.safe_pickle import load_restricted_pickle
-from handsim.rotations import axis_angle_to_matrix, matrix_to_zyx, rotation_error, zyx_to_matrix
 from handsim.sim import compile_spec, warning_counts
 from tests.mano_fixtures import (
     PARENTS,

@@ -6,9 +6,9 @@ import numpy as np
 import pytest
 import trimesh
 
+from handsim.datatypes.mesh import boundary_loops, cap_loops, principal_extents, validate_mesh
 from handsim.errors import FormatError, InputFileError, MeshError
 from handsim.io.mesh import read_mesh
-from handsim.mesh import boundary_loops, cap_loops, principal_extents, validate_mesh
 
 BOX = trimesh.creation.box((0.05, 0.04, 0.03))
 

@@ -13,10 +13,10 @@ from scipy.spatial.transform import Rotation
 
 from handsim.builders.decompose import DecompositionParams
 from handsim.builders.objects import build_object, object_bounds, prepare_object
+from handsim.datatypes.object_model import Hinge, ObjectModel, ObjectPart, Primitive, mesh_object
 from handsim.errors import FormatError, InputFileError, ModelError
 from handsim.io.arctic import read_arctic_template
 from handsim.io.tzionas_objects import read_tzionas_object
-from handsim.object_model import Hinge, ObjectModel, ObjectPart, Primitive, mesh_object
 from handsim.sim import compile_spec
 from handsim.sim.drop import drop_test
 
@@ -191,7 +191,7 @@ def test_object_model_needs_exactly_one_of_density_and_mass():
 
 
 def read_mesh_box():
-    from handsim.mesh import validate_mesh
+    from handsim.datatypes.mesh import validate_mesh
 
     box = trimesh.creation.box((0.04, 0.05, 0.06))
     return validate_mesh(box.vertices, box.faces, "box")
@@ -210,7 +210,7 @@ def test_box_object_has_the_analytic_mass_and_inertia():
 
 
 def test_open_mesh_with_density_raises_error_suggesting_a_mass():
-    from handsim.mesh import validate_mesh
+    from handsim.datatypes.mesh import validate_mesh
 
     sphere = trimesh.creation.icosphere(subdivisions=4, radius=0.03)
     keep = sphere.triangles_center[:, 2] < 0.0

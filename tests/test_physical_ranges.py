@@ -13,10 +13,10 @@ from handsim.assets import TZIONAS_DIR
 from handsim.builders import build_hand, catalog, default_hand, default_skeleton
 from handsim.builders.objects import build_object, prepare_object
 from handsim.cli import main
+from handsim.datatypes.mesh import validate_mesh
+from handsim.datatypes.object_model import mesh_object
+from handsim.datatypes.physical_ranges import DENSITY, HAND_MASS, OBJECT_MASS, PhysicalRange
 from handsim.errors import OutOfRangeError
-from handsim.mesh import validate_mesh
-from handsim.object_model import mesh_object
-from handsim.physical_ranges import DENSITY, HAND_MASS, OBJECT_MASS, PhysicalRange
 
 RANGES = "see docs/objects.md"
 

@@ -8,6 +8,7 @@ import numpy as np
 import pytest
 
 from handsim.assets import TZIONAS_DIR
+from handsim.datatypes.trajectory import Trajectory
 from handsim.sim.metrics import MetricSpec
 from handsim.sim.plausibility import (
     check_control_rate,
@@ -16,7 +17,6 @@ from handsim.sim.plausibility import (
     track_jumps,
 )
 from handsim.sim.replay import replay
-from handsim.trajectory import Trajectory
 from handsim.trials import load_trial
 
 

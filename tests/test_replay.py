@@ -13,6 +13,7 @@ from handsim.assets import TZIONAS_DIR
 from handsim.builders import build_hand, build_scene, default_hand
 from handsim.builders.catalog import get, get_graspdb
 from handsim.builders.objects import build_object
+from handsim.datatypes.trajectory import Phase, Trajectory
 from handsim.errors import SimulationError, TrajectoryError
 from handsim.glove.phases import attach_phases, find_annotation_file
 from handsim.io import read_skeleton, read_trajectory
@@ -25,7 +26,6 @@ from handsim.sim.replay import ReplayConfig, replay
 from handsim.sim.scenarios import glove_scene, recorded_scene
 from handsim.sim.stepper import Stepper
 from handsim.sim.warnings import WARNING_NAMES
-from handsim.trajectory import Phase, Trajectory
 
 SEQ20 = TZIONAS_DIR / "Models" / "20"
 

@@ -1,4 +1,4 @@
-"""handsim.rotations against independent computations: MuJoCo's mju_* functions and explicit matrices."""
+"""The rotation module against independent computations: MuJoCo's mju_* functions and explicit matrices."""
 
 from __future__ import annotations
 
@@ -8,7 +8,7 @@ import mujoco
 import numpy as np
 import pytest
 
-from handsim.rotations import (
+from handsim.datatypes.rotations import (
     axis_angle_to_matrix,
     axis_angle_to_quat,
     matrix_to_quat,

@@ -20,7 +20,7 @@ import pytest
 
 from handsim.assets import TZIONAS_DIR
 from handsim.cli import main
-from handsim.fingers import FINGER_GROUPS, TZIONAS_FINGERS, finger_groups, finger_of
+from handsim.datatypes.fingers import FINGER_GROUPS, TZIONAS_FINGERS, finger_groups, finger_of
 from handsim.io import read_skeleton
 from handsim.io.graspdb import parse_graspdb_filename
 from handsim.io.mano import MANO_DIR_ENV

@@ -8,9 +8,9 @@ import numpy as np
 import pytest
 
 from handsim.builders import default_skeleton
+from handsim.datatypes.trajectory import Trajectory
 from handsim.errors import TrajectoryError
 from handsim.glove import THUMB_REST_DOFS, apply_thumb_rest, driven_dofs
-from handsim.trajectory import Trajectory
 from handsim.trials import Trial, find_trial
 
 

@@ -3,8 +3,8 @@
 import numpy as np
 import pytest
 
+from handsim.datatypes.trajectory import ObjectTrack, Phase, Trajectory
 from handsim.errors import TrajectoryError
-from handsim.trajectory import ObjectTrack, Phase, Trajectory
 
 
 def _trajectory(**kwargs) -> Trajectory:

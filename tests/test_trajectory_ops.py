@@ -10,19 +10,19 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from handsim.errors import TrajectoryError
-from handsim.glove.phases import attach_phases
-from handsim.io import read_skeleton, read_trajectory
-from handsim.rotations import slerp
-from handsim.skeleton import Dof, Joint, Skeleton
-from handsim.trajectory import ObjectTrack, Phase, Trajectory
-from handsim.trajectory_ops import (
+from handsim.datatypes.rotations import slerp
+from handsim.datatypes.skeleton import Dof, Joint, Skeleton
+from handsim.datatypes.trajectory import ObjectTrack, Phase, Trajectory
+from handsim.datatypes.trajectory_ops import (
     RESAMPLE_METHODS,
     clamp_to_limits,
     limit_violations,
     resample,
     uniform_times,
 )
+from handsim.errors import TrajectoryError
+from handsim.glove.phases import attach_phases
+from handsim.io import read_skeleton, read_trajectory
 
 _X = np.array([1.0, 0.0, 0.0])
 

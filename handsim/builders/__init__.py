@@ -3,7 +3,8 @@
 * :func:`build_hand`, :func:`default_hand` — hands from skeletons, or the parametric default.
 * :func:`build_mano_hand` — the MANO hand from a user's ``MANO_RIGHT.pkl`` or the bundled mean shape;
   :func:`handsim.builders.mano_hand.build_mano_hands` — both hands from a MANO folder, each with its betas.
-* :func:`build_object` — objects (:class:`handsim.object_model.ObjectModel`), with cached CoACD hulls.
+* :func:`build_object` — objects (:class:`handsim.datatypes.object_model.ObjectModel`), with cached CoACD
+  hulls.
 * :func:`build_scene` — a hand and objects on a table.
 * :mod:`handsim.builders.catalog` — GraspDB14 objects, bundled Tzionas objects, ARCTIC templates
   (:func:`handsim.builders.arctic_objects.arctic_object`: hinge range, colliding parts, per-object mass).

@@ -21,9 +21,9 @@ from pathlib import Path
 import numpy as np
 import numpy.typing as npt
 
+from handsim.datatypes.object_model import ObjectModel
 from handsim.errors import ModelError
 from handsim.io.arctic import read_arctic_template
-from handsim.object_model import ObjectModel
 
 HINGE_MARGIN = math.radians(10.0)
 """Added to each side of a recorded articulation range, radians: room for the hand to push a lid a little

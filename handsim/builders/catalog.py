@@ -7,7 +7,8 @@
 * :func:`resolve` — what the command line accepts: a catalogue name, an ARCTIC template folder, a
   Tzionas ``.SKEL`` or a mesh file.
 
-All return :class:`handsim.object_model.ObjectModel`; :func:`handsim.builders.build_object` builds them.
+All return :class:`handsim.datatypes.object_model.ObjectModel`; :func:`handsim.builders.build_object` builds
+them.
 """
 
 from __future__ import annotations
@@ -22,12 +23,12 @@ from handsim.builders.graspdb_objects import (
     UnknownObjectError,
     graspdb_object,
 )
+from handsim.datatypes.object_model import ObjectModel, mesh_object
+from handsim.datatypes.physical_ranges import DENSITY, OBJECT_MASS
 from handsim.errors import InputFileError
 from handsim.io._text import require_file
 from handsim.io.arctic_motion import ARCTIC_OBJECTS as ARCTIC_NAMES
 from handsim.io.mesh import MESH_SUFFIXES
-from handsim.object_model import ObjectModel, mesh_object
-from handsim.physical_ranges import DENSITY, OBJECT_MASS
 
 DEFAULT_DENSITY = 1000.0
 """kg/m³ for a mesh file given neither density nor mass (water; plastics are 900–1400)."""
@@ -150,7 +151,8 @@ def resolve(
             ARCTIC or Tzionas object's own.
         mass: Total mass in kg instead of a density (the mesh may then be open).
         force: Accept a ``density`` or ``mass`` outside its documented range
-            (:mod:`handsim.physical_ranges`); checked before any file is read. The built object's total
+            (:mod:`handsim.datatypes.physical_ranges`); checked before any file is read. The built object's
+            total
             mass is checked again by :func:`handsim.builders.objects.prepare_object`.
 
     Returns:

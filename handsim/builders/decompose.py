@@ -51,9 +51,9 @@ from scipy.spatial import QhullError
 from tqdm import tqdm
 
 from handsim.assets import ASSETS_DIR
+from handsim.datatypes.mesh import FLATNESS_TOL, Mesh
 from handsim.errors import MeshError
 from handsim.files import write_atomic
-from handsim.mesh import FLATNESS_TOL, Mesh
 
 CACHE_FORMAT_VERSION = 1  # bump when the entry layout or the hull post-processing changes
 CONVEX_RTOL = 1e-3  # within 0.1 % of its hull's volume a mesh counts as convex (tessellation dents)
@@ -280,7 +280,7 @@ def decompose(
     """Split a mesh into convex hulls with CoACD (or return its hull if it is convex).
 
     Args:
-        mesh: A validated mesh (see :func:`handsim.mesh.validate_mesh`); its ``source`` names it in
+        mesh: A validated mesh (see :func:`handsim.datatypes.mesh.validate_mesh`); its ``source`` names it in
             messages.
         params: CoACD settings and the timeout.
         cache_dir: Root of the cache; :func:`default_cache_dir` when None.

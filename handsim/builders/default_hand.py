@@ -19,9 +19,9 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from handsim.datatypes.skeleton import Dof, Joint, Skeleton, mj_name
 from handsim.errors import SkeletonError
 from handsim.io.xmlskel import AXIS_KINDS, AXIS_TAGS, DOF_CHAIN_ORDER, local_frame
-from handsim.skeleton import Dof, Joint, Skeleton, mj_name
 
 if TYPE_CHECKING:
     import mujoco

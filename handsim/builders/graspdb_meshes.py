@@ -23,8 +23,8 @@ from handsim.builders.graspdb_shapes import (
     Q_Z_TO_X,
     crate_boxes,
 )
+from handsim.datatypes.object_model import Primitive
 from handsim.errors import MeshError
-from handsim.object_model import Primitive
 
 SECTIONS = 64  # segments around a revolved body; a multiple of 4 puts vertices on the ±x and ±y extremes
 SPHERE_RINGS = 32  # meridian segments of a sphere (pole to pole)

@@ -8,7 +8,8 @@ dimension and every mass is a typical real-world value, chosen and explained in 
 Frame of every object: origin at the centre of the mesh's axis-aligned bounding box, z up as the object
 stands or lies on the table in the recordings, x along the longest horizontal extent (the mug's handle
 points to +x), units metres. Meshes are generated (no files, no randomness), watertight without any repair
-by :func:`handsim.mesh.validate_mesh`, and cached per process. Objects whose collision shape is exactly a
+by :func:`handsim.datatypes.mesh.validate_mesh`, and cached per process. Objects whose collision shape is
+exactly a
 set of MuJoCo primitives carry them in ``primitives`` (no convex decomposition needed); the hollow or
 waisted ones have ``primitives == ()`` and must be decomposed.
 
@@ -24,9 +25,9 @@ from dataclasses import dataclass
 import numpy as np
 
 from handsim.builders.graspdb_shapes import Q_Z_TO_X, box_primitive, crate_boxes
+from handsim.datatypes.mesh import Mesh, validate_mesh
+from handsim.datatypes.object_model import ObjectModel, ObjectPart, Primitive
 from handsim.errors import HandsimError
-from handsim.mesh import Mesh, validate_mesh
-from handsim.object_model import ObjectModel, ObjectPart, Primitive
 
 __all__ = [
     "GRASPDB_OBJECTS",
@@ -82,7 +83,7 @@ class GraspDBObject:
         return self.mass_kg / self.mesh().volume
 
     def object_model(self) -> ObjectModel:
-        """The object as a one-part :class:`~handsim.object_model.ObjectModel` for the object builder.
+        """The object as a one-part `ObjectModel` for the object builder.
 
         The density is chosen so that mesh volume × density equals ``mass_kg``.
         """

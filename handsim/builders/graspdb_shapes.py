@@ -11,7 +11,7 @@ import math
 
 import numpy as np
 
-from handsim.object_model import Primitive
+from handsim.datatypes.object_model import Primitive
 
 MM = 1e-3  # metres per millimetre: all geometry is written in mm
 Q_Z_TO_X = (math.sqrt(0.5), 0.0, math.sqrt(0.5), 0.0)  # 90° about y: a cylinder's local z along object x

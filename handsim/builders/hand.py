@@ -1,4 +1,4 @@
-"""Build a MuJoCo hand (:class:`mujoco.MjSpec`) from a :class:`~handsim.skeleton.Skeleton`.
+"""Build a MuJoCo hand (:class:`mujoco.MjSpec`) from a :class:`~handsim.datatypes.skeleton.Skeleton`.
 
 The model reads like a document (Menagerie style): default classes first (``visual``, ``collision``, one
 class per DoF kind carrying armature, damping and actuator gains), then one body per joint that has
@@ -27,10 +27,10 @@ from scipy.spatial import ConvexHull, QhullError
 from handsim.builders.geom_classes import add_geom_classes
 from handsim.builders.hand_geometry import Capsule, default_hand_mass, finger_chains, hand_geometry
 from handsim.builders.surfaces import SKIN
+from handsim.datatypes.physical_ranges import HAND_MASS
+from handsim.datatypes.rotations import matrix_to_quat
+from handsim.datatypes.skeleton import Skeleton, mj_name
 from handsim.errors import ModelError
-from handsim.physical_ranges import HAND_MASS
-from handsim.rotations import matrix_to_quat
-from handsim.skeleton import Skeleton, mj_name
 
 SKIN_RGBA = (0.87, 0.70, 0.60, 1.0)
 COLLISION_RGBA = (0.3, 0.5, 0.9, 0.4)
@@ -141,7 +141,7 @@ def build_hand(
             whose hulls intersect in the rest pose do not collide with each other).
         name: Model name; the skeleton's name by default.
         timestep: Simulation timestep in seconds.
-        force: Accept a ``mass`` outside :data:`handsim.physical_ranges.HAND_MASS` (0.1 to 1 kg).
+        force: Accept a ``mass`` outside :data:`handsim.datatypes.physical_ranges.HAND_MASS` (0.1 to 1 kg).
 
     Returns:
         An uncompiled spec. The root body sits at the skeleton's root rest position and frame; DoFs of

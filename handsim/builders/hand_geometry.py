@@ -24,7 +24,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.spatial import ConvexHull, QhullError
 
-from handsim.skeleton import Skeleton
+from handsim.datatypes.skeleton import Skeleton
 
 REFERENCE_HAND_LENGTH_M = 0.19
 REFERENCE_HAND_MASS_KG = 0.45

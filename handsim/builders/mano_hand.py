@@ -36,6 +36,7 @@ import numpy as np
 import numpy.typing as npt
 
 from handsim.builders.hand import build_hand
+from handsim.datatypes.skeleton import Dof, Joint, Skeleton, SkinnedMesh
 from handsim.errors import ModelError, SkeletonError
 from handsim.io.mano import (
     FINGERS,
@@ -52,7 +53,6 @@ from handsim.io.mano import (
     padded_betas,
     read_mano_model,
 )
-from handsim.skeleton import Dof, Joint, Skeleton, SkinnedMesh
 
 ROOT_OPTIONS = ("fixed", "mocap")
 """``build_mano_hand(root=…)``: the wrist welded to the world, or a mocap body."""

@@ -32,11 +32,11 @@ import trimesh
 from handsim.builders.decompose import Decomposition, DecompositionParams, decompose
 from handsim.builders.geom_classes import add_geom_classes
 from handsim.builders.surfaces import CONTACT_CONDIM, OBJECT, Surface
+from handsim.datatypes.mesh import Mesh
+from handsim.datatypes.object_model import Hinge, ObjectModel, Primitive
+from handsim.datatypes.physical_ranges import DENSITY, OBJECT_MASS
+from handsim.datatypes.rotations import quat_to_matrix
 from handsim.errors import ModelError
-from handsim.mesh import Mesh
-from handsim.object_model import Hinge, ObjectModel, Primitive
-from handsim.physical_ranges import DENSITY, OBJECT_MASS
-from handsim.rotations import quat_to_matrix
 
 OBJECT_RGBA = (0.55, 0.60, 0.68, 1.0)
 HULL_RGBA = (0.9, 0.5, 0.2, 0.4)
@@ -108,8 +108,8 @@ def prepare_object(
         cache_dir: Decomposition cache directory (default: ``default_cache_dir()``).
         use_cache: Read and write the decomposition cache.
         progress: Show a progress bar while CoACD runs.
-        force: Accept a density or total mass outside :data:`handsim.physical_ranges.DENSITY` /
-            :data:`~handsim.physical_ranges.OBJECT_MASS`.
+        force: Accept a density or total mass outside :data:`handsim.datatypes.physical_ranges.DENSITY` /
+            :data:`~handsim.datatypes.physical_ranges.OBJECT_MASS`.
 
     Returns:
         The prepared object.

@@ -17,8 +17,8 @@ import numpy.typing as npt
 
 from handsim.builders.objects import object_points
 from handsim.builders.surfaces import CONTACT_CONDIM, ENVIRONMENT
+from handsim.datatypes.rotations import matrix_to_quat, quat_multiply, quat_rotate, quat_to_matrix
 from handsim.errors import ModelError
-from handsim.rotations import matrix_to_quat, quat_multiply, quat_rotate, quat_to_matrix
 
 HAND_PREFIX = "hand/"
 OBJECT_PREFIX = "obj/"

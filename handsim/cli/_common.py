@@ -12,11 +12,11 @@ import sys
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, NoReturn, Protocol
 
+from handsim.datatypes.physical_ranges import DENSITY, OBJECT_MASS
 from handsim.files import write_atomic
-from handsim.physical_ranges import DENSITY, OBJECT_MASS
 
 if TYPE_CHECKING:
-    from handsim.physical_ranges import PhysicalRange
+    from handsim.datatypes.physical_ranges import PhysicalRange
 
 EXIT_INTERRUPTED = 130
 """Exit code after Ctrl-C or SIGTERM (128 + SIGINT, as a shell reports it)."""

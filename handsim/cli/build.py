@@ -16,7 +16,7 @@ from handsim.cli._common import (
     usage_error,
     write_text,
 )
-from handsim.physical_ranges import HAND_MASS
+from handsim.datatypes.physical_ranges import HAND_MASS
 
 
 def _hand_spec(skeleton_path: str | None, args: argparse.Namespace):

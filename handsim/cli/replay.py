@@ -290,7 +290,7 @@ def _stability_at(text: str) -> float | str:
 def _replay(args: argparse.Namespace) -> int:
     if args.video:
         # lazy: MuJoCo and the video encoders, only with --video
-        from handsim.sim.render import check_video
+        from handsim.viz.render import check_video
 
         check_video(args.video, *args.size)  # before the replay: a missing encoder is known at once
     # lazy: the simulation stack (MuJoCo, trimesh), only when replaying
@@ -337,8 +337,8 @@ def _replay(args: argparse.Namespace) -> int:
         _line("note", note)
     if args.json:
         # lazy: the record stack, only with --json
-        from handsim.replay_plots import replay_curves
         from handsim.runner.trial_record import recording_checks
+        from handsim.viz.replay_plots import replay_curves
 
         record = {
             **result.to_dict(),
@@ -350,12 +350,12 @@ def _replay(args: argparse.Namespace) -> int:
         _line("wrote", str(write_text(args.json, text + "\n")))
     if args.plot:
         # lazy: matplotlib (an optional extra), only with --plot
-        from handsim.replay_plots import plot_replay
+        from handsim.viz.replay_plots import plot_replay
 
         _line("plot", str(plot_replay(result, args.plot)))
     if args.video:
         # lazy: the renderer and encoders, only with --video
-        from handsim.sim.render import write_video
+        from handsim.viz.render import write_video
 
         width, height = args.size
         video = write_video(

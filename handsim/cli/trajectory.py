@@ -36,7 +36,7 @@ def load_trajectory(path: str, skeleton_path: str | None, calibration_path: str 
 def _inspect_arctic(args: argparse.Namespace) -> int:
     # lazy: the ARCTIC and MANO readers, only for ARCTIC sequences
     from handsim.io.arctic_motion import read_arctic_sequence
-    from handsim.trajectory_report import describe_arctic
+    from handsim.viz.trajectory_report import describe_arctic
 
     given = [flag for flag, value in (("--skeleton", args.skeleton), ("--calibration", args.calibration),
                                       ("--plot", args.plot)) if value]  # fmt: skip
@@ -52,7 +52,7 @@ def _inspect_arctic(args: argparse.Namespace) -> int:
 
 def _inspect(args: argparse.Namespace) -> int:
     # lazy: the recording summaries, only for this command
-    from handsim.trajectory_report import describe
+    from handsim.viz.trajectory_report import describe
 
     if args.trajectory.endswith(".mano.npy"):
         return _inspect_arctic(args)
@@ -66,7 +66,7 @@ def _inspect(args: argparse.Namespace) -> int:
             print(f"spike      {spike.describe()}")
     if args.plot:
         # lazy: matplotlib (an optional extra), only with --plot
-        from handsim.plotting import plot_trajectory
+        from handsim.viz.plotting import plot_trajectory
 
         print(f"plot       {plot_trajectory(trajectory, args.plot, skeleton)}")
     return 0

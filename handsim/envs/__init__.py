@@ -7,7 +7,7 @@
 
 Importing this package is cheap and changes no environment variable: it registers entry points by name
 and imports neither ``mujoco`` nor the environment modules. ``render()`` chooses its OpenGL backend when it
-first renders (:mod:`handsim.headless`: EGL on Linux without a display unless ``MUJOCO_GL`` is set).
+first renders (:mod:`handsim.viz.headless`: EGL on Linux without a display unless ``MUJOCO_GL`` is set).
 """
 
 from __future__ import annotations

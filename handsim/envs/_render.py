@@ -1,6 +1,6 @@
 """Headless rendering for the environments: MuJoCo's offscreen renderer, never a window.
 
-The backend choice and the renderer itself are :mod:`handsim.headless`'s; this module adds the cameras and
+The backend choice and the renderer itself are :mod:`handsim.viz.headless`'s; this module adds the cameras and
 a renderer that is created on first use and dropped when pickled.
 """
 
@@ -11,7 +11,7 @@ from typing import TYPE_CHECKING
 import mujoco
 
 from handsim.errors import RenderError
-from handsim.headless import offscreen_renderer
+from handsim.viz.headless import offscreen_renderer
 
 __all__ = ["OffscreenRenderer", "RenderError", "camera_id"]
 

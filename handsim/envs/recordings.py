@@ -18,9 +18,9 @@ from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
+from handsim.datatypes.trajectory import Trajectory
 from handsim.errors import HandsimError
 from handsim.sim.compiled import SimScene
-from handsim.trajectory import Trajectory
 
 
 class RecordingError(HandsimError, ValueError):

@@ -24,6 +24,7 @@ import numpy as np
 import numpy.typing as npt
 from gymnasium import spaces
 
+from handsim.datatypes.trajectory import Trajectory
 from handsim.envs._base import DEFAULT_CAMERA, DEFAULT_SIZE, HandEnv
 from handsim.envs._observation import POSE_LABELS, ContactSummary, ObservationLayout, add_state
 from handsim.envs.recordings import RecordingError, check_trial_options, load_recording, recording_paths
@@ -31,7 +32,6 @@ from handsim.sim.compiled import SimScene
 from handsim.sim.control import DEFAULT_CONTROL_RATE, ControlSchedule, control_schedule
 from handsim.sim.drive import ScheduleDriver, scenario_switches
 from handsim.sim.metrics import MetricSpec
-from handsim.trajectory import Trajectory
 
 DEFAULT_SEQUENCE = ("Models", "20")
 """The bundled Tzionas sequence under :data:`handsim.assets.TZIONAS_DIR`."""

@@ -10,9 +10,9 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+from handsim.datatypes.trajectory import Trajectory
 from handsim.glove.phases import AnnotationMatch, attach_phases
 from handsim.glove.spikes import MAX_JOINT_SPEED, Spike, remove_spikes
-from handsim.trajectory import Trajectory
 
 CHECK_FIELDS = ("annotation", "annotation_note", "spikes", "spike_frames", "spike_max_speed_rad_s")
 """The keys of :meth:`RecordingChecks.to_dict`."""

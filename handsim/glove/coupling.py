@@ -11,7 +11,7 @@ flexion:
   files (:func:`cyberglove_dip`);
 * None — off: keep the values the trajectory has (the glove software's, for a ``rad`` file).
 
-Angles are joint targets (flexion positive, radians), as in :class:`~handsim.trajectory.Trajectory`.
+Angles are joint targets (flexion positive, radians), as in :class:`~handsim.datatypes.trajectory.Trajectory`.
 """
 
 from __future__ import annotations
@@ -22,8 +22,8 @@ from collections.abc import Mapping
 import numpy as np
 import numpy.typing as npt
 
+from handsim.datatypes.trajectory import Trajectory
 from handsim.errors import TrajectoryError
-from handsim.trajectory import Trajectory
 
 DIP_PIP_RATIO = 2.0 / 3.0
 """Default coupling ratio: DIP flexion = 2/3 of PIP flexion (spec 001, §2.3)."""

@@ -61,8 +61,8 @@ from typing import Literal, get_args
 import numpy as np
 import numpy.typing as npt
 
-from handsim.skeleton import Dof, Skeleton
-from handsim.trajectory import Trajectory
+from handsim.datatypes.skeleton import Dof, Skeleton
+from handsim.datatypes.trajectory import Trajectory
 
 GapMethod = Literal[
     "previous_value",

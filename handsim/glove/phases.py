@@ -4,7 +4,7 @@ Two sources name frame intervals of a recording:
 
 * The glove's **switch** (spec §3.5–3.7): the actors toggled it to mark poses of the calibration
   sequence and the start and end of each task. :func:`switch_segments` / :func:`split_by_switch` turn
-  the switch state into ``on``/``off`` :class:`~handsim.trajectory.Phase` intervals.
+  the switch state into ``on``/``off`` :class:`~handsim.datatypes.trajectory.Phase` intervals.
 * **Phase annotation files** (``<motion name>_annot-.txt``, not described in the spec; format read off
   the GraspDB14 sample ``01_11_ex03-rad-004-grasp-su04_annot-.txt``)::
 
@@ -20,7 +20,7 @@ Two sources name frame intervals of a recording:
   holds a pose); ``-`` separates a phase name from qualifiers (``reach`` with ``overopen``, ``closing``).
   Lines starting with ``#`` are comments.
 
-Phases become named frame intervals of a :class:`~handsim.trajectory.Trajectory` (``start`` 0-based,
+Phases become named frame intervals of a :class:`~handsim.datatypes.trajectory.Trajectory` (``start`` 0-based,
 ``stop`` exclusive) with :func:`attach_phases`; :func:`cut` slices a trajectory to one phase.
 """
 
@@ -35,8 +35,8 @@ from pathlib import Path
 import numpy as np
 import numpy.typing as npt
 
+from handsim.datatypes.trajectory import ObjectTrack, Phase, Trajectory
 from handsim.errors import FormatError, TrajectoryError
-from handsim.trajectory import ObjectTrack, Phase, Trajectory
 
 SWITCH_ON = "on"
 """Name of a phase during which the glove switch is ON."""
@@ -147,7 +147,7 @@ class PhaseAnnotation:
         return tuple(self.label.lstrip(".").split("-")[1:])
 
     def to_phase(self) -> Phase:
-        """The interval as a trajectory :class:`~handsim.trajectory.Phase` named :attr:`name`."""
+        """The interval as a trajectory :class:`~handsim.datatypes.trajectory.Phase` named :attr:`name`."""
         return Phase(self.name, self.start, self.stop)
 
 
@@ -427,7 +427,8 @@ def cut(trajectory: Trajectory, phase: Phase | str) -> Trajectory:
 
     Args:
         trajectory: The recording.
-        phase: A :class:`~handsim.trajectory.Phase`, or the name of one of the trajectory's phases (the
+        phase: A :class:`~handsim.datatypes.trajectory.Phase`, or the name of one of the trajectory's phases
+        (the
             first with that name).
 
     Returns:

@@ -7,7 +7,8 @@ Table 4.3). This module lists them in file order with what each one measures (Ta
 The sensor → DoF map reproduces the GraspDB14 MATLAB tools (``constructSensor2JointMap``,
 ``calcJointTrajectories``) exactly:
 
-* A DoF is named after its skeleton joint with ``-`` replaced by ``_`` (:func:`handsim.skeleton.mj_name`),
+* A DoF is named after its skeleton joint with ``-`` replaced by ``_``
+  (:func:`handsim.datatypes.skeleton.mj_name`),
   followed by ``_flex`` (rotation about the joint's local x axis), ``_pron`` (local y) or ``_abd``
   (local z).
 * Every sensor angle is negated: ``target = -value``.

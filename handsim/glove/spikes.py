@@ -27,8 +27,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from handsim.datatypes.trajectory import Trajectory
 from handsim.glove.gaps import fill_gaps
-from handsim.trajectory import Trajectory
 
 FASTEST_FINGER_MOVEMENT_S = 0.09
 """Duration of the fastest voluntary finger movements, s: rapid finger–thumb pinches from an open hand

@@ -18,10 +18,10 @@ import math
 
 import numpy as np
 
+from handsim.datatypes.skeleton import Skeleton
+from handsim.datatypes.trajectory import Trajectory
 from handsim.errors import TrajectoryError
 from handsim.glove.sensors import driven_dofs
-from handsim.skeleton import Skeleton
-from handsim.trajectory import Trajectory
 
 THUMB_REST_DOFS = ("th_tmc_abd", "th_tmc_flex")
 """The thumb DoFs no glove sensor drives, in the order :func:`apply_thumb_rest` takes their angles."""

@@ -18,10 +18,10 @@ from __future__ import annotations
 from pathlib import Path
 from typing import TYPE_CHECKING
 
+from handsim.datatypes.skeleton import Skeleton
+from handsim.datatypes.trajectory import Trajectory
 from handsim.errors import InputFileError
 from handsim.io._text import require_file
-from handsim.skeleton import Skeleton
-from handsim.trajectory import Trajectory
 
 if TYPE_CHECKING:
     from handsim.glove.calibration import GloveCalibration

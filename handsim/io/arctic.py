@@ -22,11 +22,11 @@ from pathlib import Path
 
 import numpy as np
 
+from handsim.datatypes.mesh import Mesh, validate_mesh
+from handsim.datatypes.object_model import Hinge, ObjectModel, ObjectPart
 from handsim.errors import FormatError, InputFileError, MeshError
 from handsim.io._text import read_text
 from handsim.io.mesh import read_mesh, read_mesh_arrays
-from handsim.mesh import Mesh, validate_mesh
-from handsim.object_model import Hinge, ObjectModel, ObjectPart
 
 ARCTIC_HINGE_AXIS = (0.0, 0.0, -1.0)
 """Articulation axis in the object frame: the top part turns by R_z(−θ)."""
@@ -55,7 +55,7 @@ def read_arctic_template(
     Raises:
         InputFileError: The folder is missing, or holds neither layout.
         FormatError: ``parts.json`` is malformed, or its length differs from ``mesh.obj``'s vertex count.
-        MeshError: A part's mesh is invalid (see :func:`handsim.mesh.validate_mesh`).
+        MeshError: A part's mesh is invalid (see :func:`handsim.datatypes.mesh.validate_mesh`).
     """
     root = Path(folder)
     if not root.is_dir():

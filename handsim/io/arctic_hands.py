@@ -1,7 +1,8 @@
 """ARCTIC hands → joint targets and root poses, and a check that each entry holds the hand it claims.
 
 * :func:`arctic_hand_trajectory` — one hand of an :class:`~handsim.io.arctic_motion.ArcticSequence` as a
-  :class:`~handsim.trajectory.Trajectory` for the MuJoCo MANO hand built from the user's model file with the
+  :class:`~handsim.datatypes.trajectory.Trajectory` for the MuJoCo MANO hand built from the user's model
+  file with the
   subject's betas: hinge targets (Z·Y·X angles of the full pose ``pose + hands_mean``, ARCTIC's
   ``flat_hand_mean=False``), the wrist's root pose ``(J0 + trans, exp(rot))`` and the object track.
 * :func:`hand_side_check` — a heuristic for left-hand data stored under ``right`` (entries swapped).
@@ -29,6 +30,11 @@ import numpy as np
 import trimesh
 from scipy.spatial import cKDTree
 
+from handsim.datatypes.object_model import ObjectModel
+from handsim.datatypes.rotations import axis_angle_to_matrix, quat_to_matrix
+from handsim.datatypes.skeleton import Skeleton
+from handsim.datatypes.trajectory import ObjectTrack, Trajectory
+from handsim.datatypes.trajectory_ops import join_hands
 from handsim.errors import TrajectoryError
 from handsim.io.arctic_motion import ARCTIC_FPS, HANDS, ArcticSequence
 from handsim.io.mano import (
@@ -38,11 +44,6 @@ from handsim.io.mano import (
     mano_joints,
     mano_pose_to_trajectory,
 )
-from handsim.object_model import ObjectModel
-from handsim.rotations import axis_angle_to_matrix, quat_to_matrix
-from handsim.skeleton import Skeleton
-from handsim.trajectory import ObjectTrack, Trajectory
-from handsim.trajectory_ops import join_hands
 
 BETAS_TOLERANCE_M = 1e-9
 """The wrist of the hand a sequence drives must sit at the sequence's J0 (its betas) within this, metres."""
@@ -344,7 +345,8 @@ def arctic_trajectory(
 ) -> Trajectory:
     """Both hands of an ARCTIC sequence as one trajectory for a two-hand scene.
 
-    Each hand's :func:`arctic_hand_trajectory`, joined by :func:`handsim.trajectory_ops.join_hands`: its DoF
+    Each hand's :func:`arctic_hand_trajectory`, joined by
+    :func:`handsim.datatypes.trajectory_ops.join_hands`: its DoF
     columns renamed ``<side>/<dof>`` and its root pose under ``hand_roots[side]``; the object track under
     ``sequence.object_name``.
 

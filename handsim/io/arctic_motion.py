@@ -37,11 +37,11 @@ from typing import Any
 
 import numpy as np
 
+from handsim.datatypes.rotations import axis_angle_to_quat
+from handsim.datatypes.trajectory import ObjectTrack
 from handsim.errors import FormatError, HandsimError, InputFileError
 from handsim.io.mano import MANOSequence
 from handsim.io.safe_pickle import load_npy
-from handsim.rotations import axis_angle_to_quat
-from handsim.trajectory import ObjectTrack
 
 ARCTIC_FPS = 30.0
 """Frames per second of ARCTIC's ``raw_seqs`` (one row per image frame of its 30 fps videos). Used for time

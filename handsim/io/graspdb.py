@@ -29,13 +29,13 @@ from typing import NamedTuple
 
 import numpy as np
 
+from handsim.datatypes.skeleton import Skeleton
+from handsim.datatypes.trajectory import Trajectory
+from handsim.datatypes.trajectory_ops import with_limit_note
 from handsim.errors import FormatError, TrajectoryError
 from handsim.glove.calibration import GloveCalibration, apply_calibration
 from handsim.glove.sensors import SENSOR_NAMES, SENSORS, computed_dofs, discarded_sensors, driven_dofs
 from handsim.io._text import decode_text, parse_float, read_bytes, sha256_of
-from handsim.skeleton import Skeleton
-from handsim.trajectory import Trajectory
-from handsim.trajectory_ops import with_limit_note
 
 NTOKENS = 30
 """Entries per motion row: 6 time-stamp fields, the switch, 23 sensors."""

@@ -38,17 +38,17 @@ import numpy as np
 import numpy.typing as npt
 
 from handsim.assets import ASSETS_DIR
-from handsim.errors import FormatError, InputFileError, ModelError, SkeletonError, TrajectoryError
-from handsim.io.safe_pickle import load_restricted_pickle
-from handsim.rotations import (
+from handsim.datatypes.rotations import (
     axis_angle_to_matrix,
     axis_angle_to_quat,
     matrix_to_zyx,
     rotation_error,
     zyx_to_matrix,
 )
-from handsim.skeleton import Skeleton
-from handsim.trajectory import ObjectTrack, Trajectory
+from handsim.datatypes.skeleton import Skeleton
+from handsim.datatypes.trajectory import ObjectTrack, Trajectory
+from handsim.errors import FormatError, InputFileError, ModelError, SkeletonError, TrajectoryError
+from handsim.io.safe_pickle import load_restricted_pickle
 
 MANO_JOINT_NAMES: tuple[str, ...] = (
     "wrist",

@@ -9,11 +9,11 @@ from pathlib import Path
 
 import numpy as np
 
+from handsim.datatypes.mesh import Mesh, principal_extents, validate_mesh
 from handsim.errors import InputFileError, MeshError
 from handsim.io._text import UTF8_BOM, decode_text, read_bytes
 from handsim.io.mesh_counts import check_ascii_ply, check_stl
 from handsim.io.off import parse_off
-from handsim.mesh import Mesh, principal_extents, validate_mesh
 
 MESH_SUFFIXES = (".obj", ".off", ".stl", ".ply")
 UNIT_SCALES = {"m": 1.0, "mm": 1e-3}
@@ -30,7 +30,7 @@ def read_mesh(path: str | Path, units: str, *, require_watertight: bool = True) 
         path: An ``.obj``, ``.off``, ``.stl`` or ``.ply`` file.
         units: The unit the file's coordinates are in: ``"m"`` or ``"mm"`` (ARCTIC and Tzionas meshes are
             mm). There is no default: a wrong guess would silently scale the object by 1000.
-        require_watertight: See :func:`handsim.mesh.validate_mesh`.
+        require_watertight: See :func:`handsim.datatypes.mesh.validate_mesh`.
 
     Returns:
         The validated, repaired mesh in metres.
@@ -50,7 +50,8 @@ def read_mesh_arrays(path: str | Path, units: str) -> tuple[np.ndarray, np.ndarr
     """Read a mesh file's vertices (converted to metres, file order kept) and faces, without validation.
 
     For readers that index vertices in file order (ARCTIC's ``parts.json``) before validating the mesh
-    with :func:`handsim.mesh.validate_mesh`. Text files may start with a UTF-8 byte-order mark and use
+    with :func:`handsim.datatypes.mesh.validate_mesh`. Text files may start with a UTF-8 byte-order mark and
+    use
     CRLF line ends; OFF files are read by :func:`handsim.io.off.parse_off` (counts checked), the other
     formats by trimesh.
 

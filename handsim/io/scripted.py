@@ -37,12 +37,12 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from handsim.datatypes.trajectory import Phase, Trajectory
 from handsim.errors import FormatError
 from handsim.io._text import decode_utf8, read_bytes, sha256_of
-from handsim.trajectory import Phase, Trajectory
 
 if TYPE_CHECKING:
-    from handsim.skeleton import Skeleton
+    from handsim.datatypes.skeleton import Skeleton
 
 SUFFIX = ".grasp.json"
 """File name ending of a scripted grasp."""

@@ -27,10 +27,10 @@ from pathlib import Path
 
 import numpy as np
 
+from handsim.datatypes.skeleton import Dof, Joint, Skeleton, SkinnedMesh, mj_name
 from handsim.errors import FormatError, InputFileError
 from handsim.io._text import numbered_lines, parse_float, parse_floats, parse_int, read_text
 from handsim.io.off import read_off
-from handsim.skeleton import Dof, Joint, Skeleton, SkinnedMesh, mj_name
 
 ROOT_PARENT = "Root_NULL_Bone_0"
 MM = 1e-3

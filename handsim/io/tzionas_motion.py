@@ -1,4 +1,4 @@
-"""Tzionas/Ballan ``.MOTION`` files as a hand :class:`~handsim.trajectory.Trajectory` and object pose tracks.
+"""Tzionas/Ballan ``.MOTION`` files as a hand `Trajectory` and object pose tracks.
 
 Rows and times. ``.MOTION`` row 0 is the rigging (rest) pose. Aligned frame k (k = 0 … TotalAlligned − 1)
 uses row k + MotionnOffset and shows video frame k + VideoooOffset, both offsets from the sequence's
@@ -16,7 +16,8 @@ its rest frame (row 0, as in :func:`~handsim.io.tzionas.read_tzionas_skeleton`):
   ``pos``/``quat``. Quaternion signs are kept continuous over time, the first with w ≥ 0.
 * DoF angles: the rotation of bone b relative to its parent p, in b's rest frame,
   ``L_b,k = F_bᵀ F_p R_p,kᵀ R_b,k`` (= ``F_bᵀ A_p,k⁻¹ A_b,k F_b`` with ``A = M_k M_0⁻¹``), is exactly what
-  :meth:`~handsim.skeleton.Skeleton.forward_kinematics` composes (``R_b = R_p F_pᵀ F_b L_b``). It is split
+  :meth:`~handsim.datatypes.skeleton.Skeleton.forward_kinematics` composes (``R_b = R_p F_pᵀ F_b L_b``). It
+  is split
   into the bone's DoF chain ``Rot(a_1, q_1) ⋯ Rot(a_n, q_n)`` (the ``.LIMITS`` axes, outermost first) by
   :func:`fit_dof_angles`, which minimises the angle between ``L`` and its reconstruction.
 * Residuals (:class:`MotionFit`): per bone and frame, that angle; per skeleton joint and frame, the distance
@@ -47,10 +48,7 @@ from pathlib import Path
 import numpy as np
 import numpy.typing as npt
 
-from handsim.errors import FormatError, InputFileError, TrajectoryError
-from handsim.io._text import numbered_lines, parse_int, read_bytes, read_text, sha256_of
-from handsim.io.tzionas import SkelBone, read_motion, read_skel, read_tzionas_skeleton
-from handsim.rotations import (
+from handsim.datatypes.rotations import (
     matrix_to_quat,
     quat_about,
     quat_conjugate,
@@ -58,9 +56,12 @@ from handsim.rotations import (
     quat_to_axis_angle,
     rotation_about_axis,
 )
-from handsim.skeleton import Skeleton
-from handsim.trajectory import ObjectTrack, Trajectory
-from handsim.trajectory_ops import join_hands, with_limit_note
+from handsim.datatypes.skeleton import Skeleton
+from handsim.datatypes.trajectory import ObjectTrack, Trajectory
+from handsim.datatypes.trajectory_ops import join_hands, with_limit_note
+from handsim.errors import FormatError, InputFileError, TrajectoryError
+from handsim.io._text import numbered_lines, parse_int, read_bytes, read_text, sha256_of
+from handsim.io.tzionas import SkelBone, read_motion, read_skel, read_tzionas_skeleton
 
 DEFAULT_FPS = 30.0
 """Frame rate assumed when none is given, Hz: the dataset's Kinect-class RGB-D sensor streams at 30 Hz."""
@@ -836,7 +837,8 @@ def read_tzionas_hands(models_dir: str | Path, *, fps: float | None = None) -> T
     """Read a Tzionas/Ballan sequence with two hands: both hands' trajectories and every object's track.
 
     Each hand is read as :func:`read_tzionas_motion` reads it (aligned frames from the sequence's
-    ``INDEX_BOUNDS.txt``) and the two are joined (:func:`handsim.trajectory_ops.join_hands`): DoF columns
+    ``INDEX_BOUNDS.txt``) and the two are joined (:func:`handsim.datatypes.trajectory_ops.join_hands`): DoF
+    columns
     ``right/<dof>`` and ``left/<dof>``, root poses under ``hand_roots["right"]`` and ``["left"]``.
 
     Args:

@@ -17,10 +17,10 @@ from pathlib import Path
 
 import numpy as np
 
+from handsim.datatypes.mesh import boundary_loops, cap_loops, validate_mesh
+from handsim.datatypes.object_model import Hinge, ObjectModel, ObjectPart
+from handsim.datatypes.skeleton import SkinnedMesh, mj_name
 from handsim.errors import MeshError, SkeletonError
-from handsim.mesh import boundary_loops, cap_loops, validate_mesh
-from handsim.object_model import Hinge, ObjectModel, ObjectPart
-from handsim.skeleton import SkinnedMesh, mj_name
 
 TZIONAS_DENSITIES = {"Model_Object_Cube": 600.0, "Model_Object_Pipe_Gray": 150.0}
 """Assumed densities in kg/m³: the 53 mm cube as wood (~89 g); the 350 × 48 mm grey bendable pipe as

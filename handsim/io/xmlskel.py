@@ -30,10 +30,10 @@ from xml.parsers import expat
 
 import numpy as np
 
+from handsim.datatypes.rotations import rotation_about_axis
+from handsim.datatypes.skeleton import Dof, Joint, Skeleton, mj_name
 from handsim.errors import FormatError
 from handsim.io._text import parse_floats, read_bytes
-from handsim.rotations import rotation_about_axis
-from handsim.skeleton import Dof, Joint, Skeleton, mj_name
 
 AXIS_TAGS = ("rotx", "roty", "rotz")
 AXIS_KINDS = {"rotx": "flex", "roty": "pron", "rotz": "abd"}

@@ -5,7 +5,7 @@ from __future__ import annotations
 import json
 from collections.abc import Sequence
 
-from handsim.fingers import FINGER_GROUPS
+from handsim.datatypes.fingers import FINGER_GROUPS
 from handsim.report import fmt
 from handsim.report.aggregate import number
 from handsim.report.charts import Markers, Series, area_chart, line_chart

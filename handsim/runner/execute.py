@@ -37,7 +37,6 @@ from pathlib import Path
 from types import ModuleType
 
 from handsim.errors import HandsimError
-from handsim.headless import headless_gl_default
 from handsim.runner.portable import dataset_root, portable_record
 from handsim.runner.records import (
     RecordWriter,
@@ -58,6 +57,7 @@ from handsim.runner.worker import (
 )
 from handsim.sim.replay import ReplayConfig
 from handsim.trials import Discovery, TrialEntry
+from handsim.viz.headless import headless_gl_default
 
 __all__ = [
     "BACKENDS",

@@ -3,7 +3,7 @@
 Which frames (:func:`key_frames`), in this order of choice: the frame with the most hand links touching
 the object, the grasp (glove trials: the start of the hold window; recorded trials: the first frame with
 hand–object contact), the first and the last; more frames, when asked, evenly between. Rendering needs an
-OpenGL context (without a display EGL, unless ``MUJOCO_GL`` says otherwise: :mod:`handsim.headless`); when
+OpenGL context (without a display EGL, unless ``MUJOCO_GL`` says otherwise: :mod:`handsim.viz.headless`); when
 there is none the trial gets a note and no frames, not an error.
 """
 
@@ -15,11 +15,11 @@ import re
 import numpy as np
 
 from handsim.errors import HandsimError
-from handsim.headless import offscreen_backend
 from handsim.runner.png import encode_png
 from handsim.runner.trial_record import touching_links
 from handsim.sim.compiled import SimScene
 from handsim.sim.replay import ReplayResult
+from handsim.viz.headless import offscreen_backend
 
 FRAMES_DIR = "frames"
 RENDER_CAMERA = "track"
@@ -71,7 +71,7 @@ def headless_glfw() -> bool:
     """True when ``MUJOCO_GL=glfw`` was chosen on Linux without a display: no offscreen context can be made.
 
     Trying GLFW without a display can abort the process, so it is not tried; with ``MUJOCO_GL`` unset the
-    renderer takes EGL itself (:func:`handsim.headless.offscreen_backend`).
+    renderer takes EGL itself (:func:`handsim.viz.headless.offscreen_backend`).
     """
     return offscreen_backend() is None
 
@@ -80,10 +80,10 @@ def render_pngs(scene: SimScene, result: ReplayResult, frames: list[int]) -> lis
     """Render frames of a replay (``result.states`` needed) as PNG files' bytes.
 
     Raises:
-        HandsimError: No OpenGL context (or any error of :func:`handsim.sim.render.render_states`).
+        HandsimError: No OpenGL context (or any error of :func:`handsim.viz.render.render_states`).
         ValueError: The result kept no states.
     """
-    from handsim.sim.render import render_states
+    from handsim.viz.render import render_states
 
     if headless_glfw():
         raise HandsimError(

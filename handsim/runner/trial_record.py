@@ -14,12 +14,12 @@ from pathlib import Path
 
 import numpy as np
 
-from handsim.fingers import finger_groups
+from handsim.datatypes.fingers import finger_groups
+from handsim.datatypes.trajectory import Trajectory
 from handsim.glove.checks import CHECK_FIELDS, RecordingChecks
 from handsim.sim.compiled import SimScene
 from handsim.sim.plausibility import limit_violations
 from handsim.sim.replay import ReplayResult
-from handsim.trajectory import Trajectory
 from handsim.trials import TrialEntry
 
 MAX_CURVE_POINTS = 600

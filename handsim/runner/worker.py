@@ -25,11 +25,11 @@ from pathlib import Path
 
 from handsim import lifeline
 from handsim.files import write_atomic
-from handsim.headless import prefer_headless_gl
 from handsim.runner.portable import portable_traceback
 from handsim.runner.records import SCHEMA, json_ready
 from handsim.sim.replay import ReplayConfig
 from handsim.trials import TrialEntry
+from handsim.viz.headless import prefer_headless_gl
 
 
 @dataclass(frozen=True)

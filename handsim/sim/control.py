@@ -1,6 +1,7 @@
 """Trajectory → control frames: joint targets per actuator and a root pose per frame, in the scene's world.
 
-The trajectory is resampled (linear, slerp for poses; :func:`handsim.trajectory_ops.resample`) at the
+The trajectory is resampled (linear, slerp for poses; :func:`handsim.datatypes.trajectory_ops.resample`) at
+the
 control rate; a control frame lasts a whole number of simulation steps, so the rate is rounded to
 ``1 / (substeps · timestep)`` (noted when it changes). Frame ``k`` holds the targets of time
 ``t0 + k / rate`` for its ``substeps`` steps; the state after frame ``k`` is compared with those targets.
@@ -12,12 +13,12 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from handsim.datatypes.poses import compose
+from handsim.datatypes.trajectory import ObjectTrack, Trajectory
+from handsim.datatypes.trajectory_ops import resample
 from handsim.errors import TrajectoryError
-from handsim.poses import compose
 from handsim.sim.compiled import SimScene
 from handsim.sim.stepper import check_controls
-from handsim.trajectory import ObjectTrack, Trajectory
-from handsim.trajectory_ops import resample
 
 DEFAULT_CONTROL_RATE = 100.0
 """Hz: 5 steps of 2 ms per frame; above the GraspDB14 glove's ~60 Hz and Tzionas' 30 Hz."""

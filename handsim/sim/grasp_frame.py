@@ -21,8 +21,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from handsim.datatypes.trajectory import Trajectory
 from handsim.errors import TrajectoryError
-from handsim.trajectory import Trajectory
 
 GRASP_PHASE = "grasp"
 PEAK_WINDOW = 0.8

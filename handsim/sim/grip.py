@@ -21,12 +21,12 @@ import mujoco
 import numpy as np
 import numpy.typing as npt
 
+from handsim.datatypes.trajectory import Trajectory
 from handsim.sim.compiled import SimScene
 from handsim.sim.control import control_schedule
 from handsim.sim.drive import ScenarioSwitches, ScheduleDriver
 from handsim.sim.stability import StabilityResult, StabilitySpec, stability_test
 from handsim.sim.stepper import Stepper
-from handsim.trajectory import Trajectory
 
 _STATE = mujoco.mjtState.mjSTATE_INTEGRATION
 _NEVER = 1 << 62

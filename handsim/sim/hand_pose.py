@@ -5,9 +5,9 @@ from __future__ import annotations
 import mujoco
 import numpy as np
 
-from handsim.rotations import matrix_to_quat
+from handsim.datatypes.rotations import matrix_to_quat
+from handsim.datatypes.trajectory import Trajectory
 from handsim.sim.compiled import SimScene
-from handsim.trajectory import Trajectory
 
 
 def targets_qpos(scene: SimScene, trajectory: Trajectory, frame: int) -> np.ndarray:

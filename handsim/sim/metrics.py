@@ -16,8 +16,8 @@ from dataclasses import asdict, dataclass, field
 import mujoco
 import numpy as np
 
-from handsim.poses import compose, inverse
-from handsim.rotations import quat_angle
+from handsim.datatypes.poses import compose, inverse
+from handsim.datatypes.rotations import quat_angle
 from handsim.sim.compiled import SimScene
 from handsim.sim.control import ControlSchedule
 from handsim.sim.layout import _SLOT, CONTACT_SLOTS

@@ -47,8 +47,9 @@ import numpy as np
 from scipy.spatial import cKDTree
 
 from handsim.builders.decompose import default_cache_dir
-from handsim.fingers import finger_of
-from handsim.rotations import quat_multiply
+from handsim.datatypes.fingers import finger_of
+from handsim.datatypes.rotations import quat_multiply
+from handsim.datatypes.trajectory import Trajectory
 from handsim.sim.collide import CLEAR, DEEP, HandObjectCollider
 from handsim.sim.compiled import SimScene
 from handsim.sim.grasp_frame import GraspFrame, closing_frames, flexion_fraction
@@ -57,7 +58,6 @@ from handsim.sim.hand_pose import targets_qpos
 from handsim.sim.placement_cache import CorruptEntryError, entry_path, placement_key, read_entry, write_entry
 from handsim.sim.self_contact import SelfCollider, SelfPenetration
 from handsim.sim.stability import DIRECTIONS, DirectionResult, StabilityResult, StabilitySpec
-from handsim.trajectory import Trajectory
 
 PLACEMENT_SPEC_VERSION = "2"
 SCREEN_MARGIN = 0.0005

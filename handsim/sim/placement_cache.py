@@ -29,12 +29,12 @@ from typing import Protocol
 import mujoco
 import numpy as np
 
+from handsim.datatypes.trajectory import Trajectory
 from handsim.errors import FormatError
 from handsim.files import write_atomic
 from handsim.io.safe_pickle import loads_restricted_pickle
 from handsim.sim.compiled import SimScene
 from handsim.sim.grasp_frame import GraspFrame
-from handsim.trajectory import Trajectory
 
 CACHE_FORMAT_VERSION = 1  # bump when the entry layout changes
 _MAGIC = b"handsim-placement\n"

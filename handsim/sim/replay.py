@@ -11,6 +11,7 @@ from dataclasses import asdict, dataclass, field, replace
 
 import numpy as np
 
+from handsim.datatypes.trajectory import Trajectory
 from handsim.sim.compiled import SimScene
 from handsim.sim.control import DEFAULT_CONTROL_RATE, ControlSchedule, control_schedule
 from handsim.sim.drive import ScheduleDriver, scenario_switches
@@ -20,7 +21,6 @@ from handsim.sim.robustness import HoldRobustness, hold_robustness
 from handsim.sim.stability import StabilityResult, stability_test
 from handsim.sim.stepper import Stepper, WarningEvent
 from handsim.sim.summary import HoldOutcome, hand_only_summary, hold_outcome, not_judged, summarize
-from handsim.trajectory import Trajectory
 
 
 @dataclass(frozen=True)

@@ -26,16 +26,16 @@ import numpy.typing as npt
 
 from handsim.builders.objects import object_points
 from handsim.builders.scene import attach_hand, build_scene
+from handsim.datatypes.poses import compose, transform_points
+from handsim.datatypes.rotations import quat_multiply, quat_rotate, rotation_onto
+from handsim.datatypes.trajectory import Trajectory
 from handsim.errors import ModelError, TrajectoryError
-from handsim.poses import compose, transform_points
-from handsim.rotations import quat_multiply, quat_rotate, rotation_onto
 from handsim.sim.compiled import SceneSetup, SimScene, compile_scene
 from handsim.sim.control import DEFAULT_CONTROL_RATE
 from handsim.sim.grasp_frame import GraspFrame, grasp_frame
 from handsim.sim.hand_pose import hand_frame
 from handsim.sim.metrics import MetricSpec
 from handsim.sim.placement import Candidate, place_object
-from handsim.trajectory import Trajectory
 
 CAMERA_DOWN = (0.0, 1.0, 0.0)
 """Image down (+y) of a pinhole camera frame, e.g. the Tzionas rigging world (extrinsics identity)."""

@@ -30,8 +30,8 @@ import mujoco
 import numpy as np
 import numpy.typing as npt
 
+from handsim.datatypes.rotations import quat_angle
 from handsim.errors import SimulationError
-from handsim.rotations import quat_angle
 from handsim.sim.compiled import SimScene
 from handsim.sim.stepper import Stepper
 

@@ -27,11 +27,11 @@ from handsim.builders.default_hand import DEFAULT_HAND_LENGTH_M
 from handsim.errors import HandsimError, InputFileError
 
 if TYPE_CHECKING:
+    from handsim.datatypes.object_model import ObjectModel
+    from handsim.datatypes.trajectory import Trajectory
     from handsim.glove.checks import RecordingChecks
-    from handsim.object_model import ObjectModel
     from handsim.sim.compiled import SimScene
     from handsim.sim.metrics import MetricSpec
-    from handsim.trajectory import Trajectory
     from handsim.trials.discovery import Sorting
 
 HAND_COLLISIONS = ("capsules", "mesh")
@@ -82,7 +82,7 @@ class Trial:
         thumb_rest: Glove recordings: ``(abduction, flexion)`` in degrees of the thumb TMC DoFs no sensor
             drives, or None to leave them at the skeleton's rest pose (the GraspDB14 tools' choice).
         force: Accept an object density or mass outside its documented range
-            (:mod:`handsim.physical_ranges`).
+            (:mod:`handsim.datatypes.physical_ranges`).
         notes: Decisions made while finding the files.
         mano_dir: The folder with the user's ``MANO_RIGHT.pkl`` / ``MANO_LEFT.pkl`` (ARCTIC), or None.
     """

@@ -13,10 +13,10 @@ from handsim.trials.base import LoadedTrial, Trial, build_objects
 if TYPE_CHECKING:
     import mujoco
 
+    from handsim.datatypes.skeleton import Skeleton
+    from handsim.datatypes.trajectory import Trajectory
     from handsim.glove.checks import RecordingChecks
     from handsim.sim.metrics import MetricSpec
-    from handsim.skeleton import Skeleton
-    from handsim.trajectory import Trajectory
 
 
 def parametric_hand(trial: Trial) -> tuple[Skeleton, mujoco.MjSpec, str]:

@@ -27,8 +27,8 @@ from functools import cached_property
 import numpy as np
 import numpy.typing as npt
 
+from handsim.datatypes.rotations import rotation_about_axis
 from handsim.errors import SkeletonError
-from handsim.rotations import rotation_about_axis
 
 _ORTHONORMAL_TOL = 1e-6
 

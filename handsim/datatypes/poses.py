@@ -1,6 +1,6 @@
 """Rigid poses as numpy arrays: position (m) + unit quaternion (w, x, y, z), as in MuJoCo.
 
-The quaternion algebra is in :mod:`handsim.rotations`.
+The quaternion algebra is in :mod:`handsim.datatypes.rotations`.
 
 Every function broadcasts over leading axes: a pose array has shape (..., 7), a quaternion (..., 4).
 """
@@ -10,7 +10,7 @@ from __future__ import annotations
 import numpy as np
 import numpy.typing as npt
 
-from handsim.rotations import quat_conjugate, quat_multiply, quat_rotate
+from handsim.datatypes.rotations import quat_conjugate, quat_multiply, quat_rotate
 
 
 def compose(a: npt.ArrayLike, b: npt.ArrayLike) -> np.ndarray:

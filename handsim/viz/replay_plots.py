@@ -13,8 +13,8 @@ from pathlib import Path
 
 import numpy as np
 
-from handsim.plotting import _pyplot, save_figure
 from handsim.sim.replay import ReplayResult
+from handsim.viz.plotting import _pyplot, save_figure
 
 MM, DEG = 1000.0, 180.0 / math.pi
 

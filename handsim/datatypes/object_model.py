@@ -11,8 +11,8 @@ from pathlib import Path
 
 import numpy as np
 
+from handsim.datatypes.mesh import Mesh
 from handsim.errors import ModelError
-from handsim.mesh import Mesh
 
 PRIMITIVE_KINDS = ("sphere", "box", "cylinder", "capsule")
 

@@ -10,7 +10,7 @@ of the scene (``hand_cam``, ``overview``) or from a camera tracking the hand (``
   ``video`` extra: ``pip install "handsim[video]"``;
 * ``.gif`` — an animated GIF through Pillow (a dependency of matplotlib, the ``plot`` extra).
 
-Rendering needs an OpenGL context, chosen when the renderer is made (:mod:`handsim.headless`): on Linux
+Rendering needs an OpenGL context, chosen when the renderer is made (:mod:`handsim.viz.headless`): on Linux
 without a display, EGL (GPU, or Mesa's software EGL) unless ``MUJOCO_GL`` is set; set ``MUJOCO_GL``
 (e.g. ``osmesa``) in the environment to choose another.
 """
@@ -29,8 +29,8 @@ import numpy as np
 import numpy.typing as npt
 
 from handsim.errors import HandsimError
-from handsim.headless import offscreen_renderer
 from handsim.sim.compiled import SimScene
+from handsim.viz.headless import offscreen_renderer
 
 DEFAULT_FPS = 30.0
 """Target frame rate of a video, Hz; the exact rate is the control rate over a whole stride."""

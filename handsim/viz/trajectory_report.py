@@ -1,6 +1,6 @@
 """A readable account of a trajectory: timing, columns, phases, gaps and joint-limit violations.
 
-What ``handsim inspect`` prints; plain data in, lines out (no plotting here, see :mod:`handsim.plotting`).
+What ``handsim inspect`` prints; plain data in, lines out (no plotting here, see :mod:`handsim.viz.plotting`).
 An ARCTIC sequence (two MANO hands and an object, no joint angles until the MANO models convert them) has its
 own account, :func:`describe_arctic`.
 """
@@ -12,11 +12,11 @@ from pathlib import Path
 
 import numpy as np
 
+from handsim.datatypes.skeleton import Skeleton
+from handsim.datatypes.trajectory import Trajectory
+from handsim.datatypes.trajectory_ops import LimitReport, limit_violations
 from handsim.glove.gaps import find_gaps
 from handsim.io.arctic_motion import ArcticSequence
-from handsim.skeleton import Skeleton
-from handsim.trajectory import Trajectory
-from handsim.trajectory_ops import LimitReport, limit_violations
 
 
 @dataclass(frozen=True)

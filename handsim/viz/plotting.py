@@ -8,9 +8,9 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from handsim.datatypes.skeleton import Skeleton
+from handsim.datatypes.trajectory import Trajectory
 from handsim.errors import HandsimError
-from handsim.skeleton import Skeleton
-from handsim.trajectory import Trajectory
 
 if TYPE_CHECKING:
     from matplotlib.figure import Figure

@@ -51,10 +51,10 @@ from typing import Literal, get_args
 
 import numpy as np
 
+from handsim.datatypes.rotations import slerp
+from handsim.datatypes.skeleton import Skeleton
+from handsim.datatypes.trajectory import ObjectTrack, Phase, Trajectory
 from handsim.errors import TrajectoryError
-from handsim.rotations import slerp
-from handsim.skeleton import Skeleton
-from handsim.trajectory import ObjectTrack, Phase, Trajectory
 
 ResampleMethod = Literal["linear"]
 """Name of a resampling method."""

@@ -1,0 +1,12 @@
+"""The plain data types every layer above shares, and the math on them.
+
+:mod:`~handsim.datatypes.skeleton` (joints, degrees of freedom, forward kinematics),
+:mod:`~handsim.datatypes.trajectory` (times × DoF targets, root and object poses, phases),
+:mod:`~handsim.datatypes.trajectory_ops` (resampling, limits, slicing), :mod:`~handsim.datatypes.mesh`,
+:mod:`~handsim.datatypes.object_model`, :mod:`~handsim.datatypes.poses`, :mod:`~handsim.datatypes.rotations`
+(the one rotation module, quaternions ``w, x, y, z``), :mod:`~handsim.datatypes.fingers` (finger of a link)
+and :mod:`~handsim.datatypes.physical_ranges` (plausible masses and densities).
+
+Frozen dataclasses holding NumPy arrays, SI units; nothing here imports MuJoCo or any other handsim layer
+(only :mod:`handsim.errors`).
+"""
