@@ -6,9 +6,9 @@ import numpy as np
 import pytest
 
 from handsim.builders import default_hand, default_skeleton
-from handsim.builders.default_hand import SEGMENT_RATIOS
 from handsim.errors import SkeletonError
 from handsim.io import read_skeleton, read_trajectory
+from handsim.io.parametric_skeleton import SEGMENT_RATIOS
 from handsim.sim import compile_spec
 
 

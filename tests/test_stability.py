@@ -14,11 +14,11 @@ import pytest
 
 from handsim.builders import default_hand
 from handsim.builders.catalog import get
-from handsim.builders.default_hand import DEFAULT_BREADTH_RATIO, DEFAULT_HAND_LENGTH_M, default_skeleton
 from handsim.builders.hand import build_hand
 from handsim.builders.objects import build_object
 from handsim.builders.scene import build_scene
 from handsim.errors import SimulationError
+from handsim.io.parametric_skeleton import DEFAULT_BREADTH_RATIO, DEFAULT_HAND_LENGTH_M, default_skeleton
 from handsim.sim.compiled import SimScene, compile_scene
 from handsim.sim.stability import (
     DIRECTIONS,

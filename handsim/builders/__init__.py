@@ -13,7 +13,8 @@ The builders are imported from their modules on first use, so that importing one
 catalogue for ``handsim catalog``, the object builder for ``handsim build object``) does not import the
 others (the hand builder needs SciPy's optimiser; the catalogue needs neither MuJoCo nor trimesh).
 :func:`default_hand` and :func:`default_skeleton` are bound at once (cheap): ``default_hand`` is also the
-name of their module, which the import system would otherwise bind here when it is first imported.
+name of its module, which the import system would otherwise bind here when it is first imported;
+``default_skeleton`` is plain data from :mod:`handsim.io.parametric_skeleton`, exported here beside the hand.
 """
 
 from __future__ import annotations
@@ -21,7 +22,8 @@ from __future__ import annotations
 import importlib
 from typing import TYPE_CHECKING, Any
 
-from handsim.builders.default_hand import default_hand, default_skeleton
+from handsim.builders.default_hand import default_hand
+from handsim.io.parametric_skeleton import default_skeleton
 
 if TYPE_CHECKING:
     from handsim.builders.hand import build_hand

@@ -72,8 +72,8 @@ class GraspScene:
 
 def _wristless_default_hand() -> mujoco.MjSpec:
     """The default hand without its wrist DoFs (the mocap weld moves and turns the root instead)."""
-    from handsim.builders.default_hand import DEFAULT_BREADTH_RATIO, DEFAULT_HAND_LENGTH_M, default_skeleton
     from handsim.builders.hand import build_hand
+    from handsim.io.parametric_skeleton import DEFAULT_BREADTH_RATIO, DEFAULT_HAND_LENGTH_M, default_skeleton
 
     skeleton = default_skeleton()
     root = skeleton.joints[0].name

@@ -40,6 +40,7 @@ import numpy as np
 from handsim.datatypes.trajectory import Phase, Trajectory
 from handsim.errors import FormatError
 from handsim.io._text import decode_utf8, read_bytes, sha256_of
+from handsim.io.parametric_skeleton import DEFAULT_HAND_LENGTH_M, default_skeleton
 
 if TYPE_CHECKING:
     from handsim.datatypes.skeleton import Skeleton
@@ -113,8 +114,6 @@ def _fields(path: Path, raw: bytes) -> dict:
 
 def _validated(path: Path, raw: bytes) -> dict:
     """Every field checked; numbers as floats; ``hand_length`` filled in when left out."""
-    from handsim.builders.default_hand import DEFAULT_HAND_LENGTH_M
-
     data = _fields(path, raw)
     data.setdefault("hand_length", DEFAULT_HAND_LENGTH_M)
     data["hand_length"] = _number(data, "hand_length", path, 0.08, 0.30)
@@ -137,7 +136,7 @@ def read_scripted_grasp(path: str | Path, skeleton: Skeleton | None = None) -> T
     Args:
         path: The scripted grasp file.
         skeleton: The hand whose DoFs become the columns; default the parametric default hand of the
-            file's ``hand_length`` (:func:`handsim.builders.default_skeleton`).
+            file's ``hand_length`` (:func:`handsim.io.parametric_skeleton.default_skeleton`).
 
     Returns:
         The trajectory: times in s, targets in rad, phases ``rest``, ``close``, ``grasp`` (first contact
@@ -154,8 +153,6 @@ def read_scripted_grasp(path: str | Path, skeleton: Skeleton | None = None) -> T
     hand_length, rate, closure = data["hand_length"], data["rate_hz"], data["closure"]
     counts = [round(data[key] * rate) for key in DURATIONS]
     if skeleton is None:
-        from handsim.builders.default_hand import default_skeleton
-
         skeleton = default_skeleton(hand_length)
     n_rest, n_close, n_hold, n_open = counts
     level = np.concatenate(

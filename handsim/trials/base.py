@@ -23,8 +23,8 @@ from dataclasses import asdict, dataclass, field
 from pathlib import Path, PurePosixPath
 from typing import TYPE_CHECKING
 
-from handsim.builders.default_hand import DEFAULT_HAND_LENGTH_M
 from handsim.errors import HandsimError, InputFileError
+from handsim.io.parametric_skeleton import DEFAULT_HAND_LENGTH_M
 
 if TYPE_CHECKING:
     from handsim.datatypes.object_model import ObjectModel

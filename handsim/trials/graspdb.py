@@ -14,8 +14,8 @@ from __future__ import annotations
 from pathlib import Path, PurePosixPath
 from typing import TYPE_CHECKING
 
-from handsim.builders.default_hand import DEFAULT_HAND_LENGTH_M
 from handsim.errors import HandsimError
+from handsim.io.parametric_skeleton import DEFAULT_HAND_LENGTH_M
 from handsim.trials.base import (
     LoadedTrial,
     Trial,
