@@ -108,7 +108,7 @@ def tzionas_case():
 
 def glove_case():
     if GRASPDB.exists():
-        from handsim.glove.phases import attach_phases, find_annotation_file
+        from handsim.io.graspdb_annotations import attach_phases, find_annotation_file
 
         path = GRASPDB / "r_01_11_ex03-rad-004-grasp-su04.txt"
         skeleton = read_skeleton(GRASPDB / "default.xmlskel")

@@ -7,6 +7,7 @@ GraspDB14 row layout); no GraspDB14 file is copied.
 from __future__ import annotations
 
 import json
+import re
 from datetime import datetime, timedelta
 from pathlib import Path
 
@@ -14,7 +15,11 @@ import numpy as np
 import pytest
 
 from handsim.cli import main
-from handsim.glove.checks import CHECK_FIELDS
+from handsim.errors import TrajectoryError
+from handsim.glove.checks import CHECK_FIELDS, check_recording
+from handsim.glove.phases import AnnotationMatch
+from handsim.io.graspdb import read_graspdb_glove
+from handsim.io.graspdb_annotations import match_annotation, read_phase_annotations
 from handsim.runner.trial_record import recording_checks, trajectory_quality
 from handsim.sim.replay import ReplayConfig, replay
 from handsim.trials import find_trial, load_trial
@@ -99,6 +104,32 @@ def test_annotation_covering_the_recordings_frames_gives_the_phases(tmp_path):
     assert found["annotation_note"] == (
         f"phase annotation {annotation.name}: {FRAMES} frames, as many as {recording.name} has"
     )
+
+
+def test_matched_annotation_carries_the_intervals_read_from_its_file(tmp_path):
+    recording = _write_recording(tmp_path / f"r_{STEM}.txt", _closing())
+    annotation = _write_annotation(tmp_path, FRAMES)
+    match = match_annotation(recording, FRAMES)
+    assert match.path == annotation
+    assert match.intervals == read_phase_annotations(annotation)
+    checked, _ = check_recording(read_graspdb_glove(recording), match)
+    assert [(p.name, p.start, p.stop) for p in checked.phases] == [
+        ("rest", 0, 20),
+        ("reach", 20, 70),
+        ("grasp", 70, 110),
+        ("retract", 110, FRAMES),
+    ]
+
+
+def test_check_recording_refuses_an_annotation_match_without_its_intervals(tmp_path):
+    recording = _write_recording(tmp_path / f"r_{STEM}.txt", _closing())
+    annotation = _write_annotation(tmp_path, FRAMES)
+    message = (
+        f"phase annotation {annotation}: the match carries none of its intervals; match it with "
+        "handsim.io.graspdb_annotations.match_annotation or check_annotation, which read them"
+    )
+    with pytest.raises(TrajectoryError, match=re.escape(message)):
+        check_recording(read_graspdb_glove(recording), AnnotationMatch(annotation, "given by hand"))
 
 
 def test_same_bytes_under_another_prefix_state_the_phase_source_they_got(tmp_path):

@@ -15,8 +15,8 @@ from handsim.builders.catalog import get, get_graspdb
 from handsim.builders.objects import build_object
 from handsim.datatypes.trajectory import Phase, Trajectory
 from handsim.errors import SimulationError, TrajectoryError
-from handsim.glove.phases import attach_phases, find_annotation_file
 from handsim.io import read_skeleton, read_trajectory
+from handsim.io.graspdb_annotations import attach_phases, find_annotation_file
 from handsim.io.tzionas_motion import read_tzionas_sequence
 from handsim.io.tzionas_objects import read_tzionas_object
 from handsim.sim.compiled import compile_scene

@@ -21,8 +21,8 @@ from handsim.datatypes.trajectory_ops import (
     uniform_times,
 )
 from handsim.errors import TrajectoryError
-from handsim.glove.phases import attach_phases
 from handsim.io import read_skeleton, read_trajectory
+from handsim.io.graspdb_annotations import attach_phases
 
 _X = np.array([1.0, 0.0, 0.0])
 

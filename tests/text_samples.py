@@ -16,8 +16,9 @@ from pathlib import Path
 import trimesh
 
 from handsim.assets import TZIONAS_DIR
-from handsim.glove import GloveCalibration, load_calibration, read_phase_annotations
+from handsim.glove import GloveCalibration, load_calibration
 from handsim.io.graspdb import read_graspdb_glove, read_graspdb_raw
+from handsim.io.graspdb_annotations import read_phase_annotations
 from handsim.io.mesh import read_mesh_arrays
 from handsim.io.off import read_off
 from handsim.io.scripted import read_scripted_grasp

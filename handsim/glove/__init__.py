@@ -22,10 +22,11 @@ interpolation (:data:`GAP_METHODS`), :func:`find_gaps`.
 Thumb rest posture (:mod:`handsim.glove.thumb_rest`): :func:`apply_thumb_rest` holds the thumb TMC DoFs
 no sensor drives (:data:`THUMB_REST_DOFS`) at a constant posture.
 
-Phases (:mod:`handsim.glove.phases`): :func:`split_by_switch`, :func:`read_phase_annotations`,
-:func:`find_annotation_file` (the recording's own annotation only: :func:`annotation_names`),
-:func:`match_annotation` / :func:`check_annotation` (used only when it covers the recording's frames),
-:func:`attach_phases`, :func:`cut`.
+Phases (:mod:`handsim.glove.phases`, on plain data): :func:`split_by_switch`, :func:`switch_segments`,
+:class:`PhaseAnnotation` and :class:`AnnotationMatch`, :func:`with_phases`, :func:`cut`. The GraspDB14
+phase annotation files are read, found beside a recording and matched to its frames by
+:mod:`handsim.io.graspdb_annotations` (``read_phase_annotations``, ``find_annotation_file``,
+``match_annotation``, ``attach_phases``).
 
 Spikes (:mod:`handsim.glove.spikes`): :func:`find_spikes`, :func:`remove_spikes` (single-sample jumps beyond
 :data:`MAX_JOINT_SPEED` that revert, marked invalid and filled); :mod:`handsim.glove.checks` runs the
@@ -52,15 +53,10 @@ from handsim.glove.gaps import GAP_METHODS, fill_gaps, find_gaps
 from handsim.glove.phases import (
     AnnotationMatch,
     PhaseAnnotation,
-    annotation_names,
-    attach_phases,
-    check_annotation,
     cut,
-    find_annotation_file,
-    match_annotation,
-    read_phase_annotations,
     split_by_switch,
     switch_segments,
+    with_phases,
 )
 from handsim.glove.sensors import (
     SENSOR_NAMES,
@@ -92,11 +88,8 @@ __all__ = [
     "PhaseAnnotation",
     "ReferencePose",
     "Spike",
-    "annotation_names",
     "apply_calibration",
     "apply_thumb_rest",
-    "attach_phases",
-    "check_annotation",
     "computed_dofs",
     "couple_dip",
     "cut",
@@ -105,15 +98,13 @@ __all__ = [
     "driven_dofs",
     "estimate_calibration",
     "fill_gaps",
-    "find_annotation_file",
     "find_gaps",
     "find_spikes",
     "load_calibration",
-    "match_annotation",
-    "read_phase_annotations",
     "remove_spikes",
     "save_calibration",
     "split_by_switch",
     "switch_segments",
     "thumb_rest_note",
+    "with_phases",
 ]

@@ -1,9 +1,10 @@
 """Checks of a glove recording before it is judged: which phase annotation is used, and its spikes.
 
-:func:`check_recording` is what a GraspDB14 trial and ``handsim inspect`` do with a recording as read: attach
-the phases of the annotation that belongs to it (:func:`handsim.glove.phases.match_annotation`) and remove
-single-sample spikes (:func:`handsim.glove.spikes.remove_spikes`). :class:`RecordingChecks` says what was
-done, for notes, records and the command line.
+:func:`check_recording` is what a GraspDB14 trial and ``handsim inspect`` do with a recording as read:
+attach the phases of the annotation that belongs to it (as matched by
+:func:`handsim.io.graspdb_annotations.match_annotation`) and remove single-sample spikes
+(:func:`handsim.glove.spikes.remove_spikes`). :class:`RecordingChecks` says what was done, for notes,
+records and the command line.
 """
 
 from __future__ import annotations
@@ -11,7 +12,8 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 from handsim.datatypes.trajectory import Trajectory
-from handsim.glove.phases import AnnotationMatch, attach_phases
+from handsim.errors import TrajectoryError
+from handsim.glove.phases import AnnotationMatch, with_phases
 from handsim.glove.spikes import MAX_JOINT_SPEED, Spike, remove_spikes
 
 CHECK_FIELDS = ("annotation", "annotation_note", "spikes", "spike_frames", "spike_max_speed_rad_s")
@@ -65,19 +67,26 @@ def check_recording(
 
     Args:
         trajectory: A glove recording as read (every sample valid).
-        annotation: The phase annotation it uses (:func:`handsim.glove.phases.match_annotation`); the
-            phases it attaches add their note to the trajectory's.
+        annotation: The phase annotation it uses, with its intervals as read
+            (:func:`handsim.io.graspdb_annotations.match_annotation`); the phases it attaches add their
+            note to the trajectory's.
 
     Returns:
         The checked trajectory and what the checks did.
 
     Raises:
-        FormatError: The annotation file is malformed.
-        TrajectoryError: An annotated interval ends after the recording's last frame.
+        TrajectoryError: An annotated interval ends after the recording's last frame, or the annotation names
+            a file but carries none of its intervals (it was not made by ``match_annotation`` or
+            ``check_annotation``).
     """
     checked = trajectory
+    if annotation.path is not None and not annotation.intervals:
+        raise TrajectoryError(
+            f"phase annotation {annotation.path}: the match carries none of its intervals; match it with "
+            "handsim.io.graspdb_annotations.match_annotation or check_annotation, which read them"
+        )
     if annotation.path is not None and not checked.phases:
-        checked = attach_phases(checked, annotation.path)
+        checked = with_phases(checked, annotation.intervals, source=str(annotation.path))
     checked, spikes = remove_spikes(checked)
     return checked, RecordingChecks(annotation, spikes)
 

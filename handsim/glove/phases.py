@@ -1,54 +1,36 @@
-"""Trial phases of CyberGlove recordings: switch segments, GraspDB14 phase annotations, cutting.
+"""Trial phases of CyberGlove recordings on plain data: switch segments, annotated intervals, cutting.
 
 Two sources name frame intervals of a recording:
 
 * The glove's **switch** (spec §3.5–3.7): the actors toggled it to mark poses of the calibration
   sequence and the start and end of each task. :func:`switch_segments` / :func:`split_by_switch` turn
   the switch state into ``on``/``off`` :class:`~handsim.datatypes.trajectory.Phase` intervals.
-* **Phase annotation files** (``<motion name>_annot-.txt``, not described in the spec; format read off
-  the GraspDB14 sample ``01_11_ex03-rad-004-grasp-su04_annot-.txt``)::
-
-      # interval   annotation
-         1   24    .rest
-        25   81    reach-overopen-closing
-        82  164    .grasp
-       165  233    retract-opening
-       234  282    .rest
-
-  One interval per line: first frame, last frame (1-based, inclusive: the sample's five intervals tile
-  frames 1..282 of its 282-frame motion exactly), label. A leading ``.`` marks a static phase (the hand
-  holds a pose); ``-`` separates a phase name from qualifiers (``reach`` with ``overopen``, ``closing``).
-  Lines starting with ``#`` are comments.
+* **Phase annotation files** (``<motion name>_annot-.txt``), read by
+  :mod:`handsim.io.graspdb_annotations` into :class:`PhaseAnnotation` intervals (label, 0-based start,
+  exclusive stop); :class:`AnnotationMatch` says which annotation a recording uses, and why.
 
 Phases become named frame intervals of a :class:`~handsim.datatypes.trajectory.Trajectory` (``start`` 0-based,
-``stop`` exclusive) with :func:`attach_phases`; :func:`cut` slices a trajectory to one phase.
+``stop`` exclusive) with :func:`with_phases`; :func:`cut` slices a trajectory to one phase.
 """
 
 from __future__ import annotations
 
 import dataclasses
-import re
 from collections.abc import Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
 import numpy.typing as npt
 
 from handsim.datatypes.trajectory import ObjectTrack, Phase, Trajectory
-from handsim.errors import FormatError, TrajectoryError
+from handsim.errors import TrajectoryError
 
 SWITCH_ON = "on"
 """Name of a phase during which the glove switch is ON."""
 
 SWITCH_OFF = "off"
 """Name of a phase during which the glove switch is OFF."""
-
-ANNOTATION_SUFFIX = "_annot-.txt"
-"""What a phase annotation file name adds to its motion file's name (without ``.txt``)."""
-
-_LABEL_RE = re.compile(r"\.?[A-Za-z][A-Za-z0-9_]*(?:-[A-Za-z0-9_]+)*")
-_FRAME_RE = re.compile(r"\d+")
 
 
 # --------------------------------------------------------------------------------------------------
@@ -112,7 +94,7 @@ def split_by_switch(trajectory: Trajectory, *, state: bool | None = None) -> tup
 
 
 # --------------------------------------------------------------------------------------------------
-# Annotation files
+# Annotated intervals
 
 
 @dataclass(frozen=True)
@@ -151,144 +133,23 @@ class PhaseAnnotation:
         return Phase(self.name, self.start, self.stop)
 
 
-def read_phase_annotations(path: str | Path) -> tuple[PhaseAnnotation, ...]:
-    """Read a GraspDB14 phase annotation file (``*_annot-.txt``).
-
-    Args:
-        path: The annotation file.
-
-    Returns:
-        The intervals in file order (frame order, without overlaps).
-
-    Raises:
-        InputFileError: The file is missing or unreadable.
-        FormatError: A line does not hold ``<first frame> <last frame> <label>``, a frame number is not an
-            integer >= 1, the last frame precedes the first, a label is malformed, an interval does not
-            start after the previous one ends, or the file holds no interval. The message names the file,
-            the 1-based line and the field.
-    """
-    from handsim.io._text import read_text  # lazy: handsim.io imports handsim.glove
-
-    p = Path(path)
-    text = read_text(p)
-    result: list[PhaseAnnotation] = []
-    for lineno, raw in enumerate(text.splitlines(), start=1):
-        line = raw.strip()
-        if not line or line.startswith("#"):
-            continue
-        tokens = line.split()
-        if len(tokens) != 3:
-            raise FormatError(
-                p,
-                f"expected 3 blank-separated entries (first frame, last frame, label), got {len(tokens)}",
-                line=lineno,
-            )
-        first = _frame(p, lineno, tokens[0], "first frame")
-        last = _frame(p, lineno, tokens[1], "last frame")
-        if last < first:
-            raise FormatError(
-                p, f"last frame {last} is before first frame {first}", line=lineno, field="last frame"
-            )
-        if not _LABEL_RE.fullmatch(tokens[2]):
-            raise FormatError(
-                p,
-                f"expected a phase label such as '.rest' or 'reach-overopen-closing', got {tokens[2]!r}",
-                line=lineno,
-                field="label",
-            )
-        if result and first <= result[-1].stop:
-            prev = result[-1]
-            raise FormatError(
-                p,
-                f"interval {first}-{last} does not start after the previous interval "
-                f"{prev.start + 1}-{prev.stop} (line {prev.line}) ends; intervals must be in frame order "
-                "without overlap",
-                line=lineno,
-                field="first frame",
-            )
-        result.append(PhaseAnnotation(tokens[2], first - 1, last, lineno))
-    if not result:
-        raise FormatError(
-            p, "no phase intervals: expected lines '<first frame> <last frame> <label>' (1-based, inclusive)"
-        )
-    return tuple(result)
-
-
-def _frame(path: Path, line: int, token: str, field: str) -> int:
-    """A 1-based frame number, or a :class:`FormatError` naming line and field."""
-    if not _FRAME_RE.fullmatch(token) or int(token) < 1:
-        raise FormatError(
-            path, f"expected a frame number (an integer >= 1), got {token!r}", line=line, field=field
-        )
-    return int(token)
-
-
-ANNOTATED_PREFIX = "r_"
-"""The one motion-file prefix an annotation name leaves out: GraspDB14's sample pair is
-``r_01_11_ex03-rad-004-grasp-su04.txt`` ↔ ``01_11_ex03-rad-004-grasp-su04_annot-.txt``."""
-
-
-def _motion_stem(path: Path) -> str:
-    return path.name[:-4] if path.name.lower().endswith(".txt") else path.name
-
-
-def annotation_names(motion_path: str | Path) -> tuple[str, ...]:
-    """The names a motion file's phase annotation may have, in the order they are looked for.
-
-    The motion's exact stem (its name without ``.txt``) followed by ``_annot-.txt``, then, for a name
-    starting with ``r_``, the same without that prefix (the GraspDB14 sample pair). No other prefix is
-    dropped and no other name is tried: an annotation belongs to one recording only.
-
-    Args:
-        motion_path: A motion file (it need not exist).
-
-    Returns:
-        One or two file names.
-    """
-    stem = _motion_stem(Path(motion_path))
-    names = [f"{stem}{ANNOTATION_SUFFIX}"]
-    if stem.startswith(ANNOTATED_PREFIX) and len(stem) > len(ANNOTATED_PREFIX):
-        names.append(f"{stem[len(ANNOTATED_PREFIX) :]}{ANNOTATION_SUFFIX}")
-    return tuple(names)
-
-
-def find_annotation_file(motion_path: str | Path) -> Path | None:
-    """The phase annotation file of a GraspDB14 motion file, if it lies beside it.
-
-    Only the names of :func:`annotation_names` count: ``r_01_11_ex03-rad-004-grasp-su04.txt`` →
-    ``r_01_11_ex03-rad-004-grasp-su04_annot-.txt`` or ``01_11_ex03-rad-004-grasp-su04_annot-.txt``;
-    ``h_01_11_…`` or ``VIShand_01_11_…`` find neither. Whether the file found agrees with the recording's
-    frame count is :func:`match_annotation`'s job.
-
-    Args:
-        motion_path: A motion file (``rad`` or ``raw``; it need not exist).
-
-    Returns:
-        The first candidate that exists in the motion file's folder, or None. An annotation file given as
-        the motion is itself.
-    """
-    p = Path(motion_path)
-    if _motion_stem(p).endswith("_annot-"):
-        return p if p.exists() else None
-    for name in annotation_names(p):
-        candidate = p.parent / name
-        if candidate.is_file():
-            return candidate
-    return None
-
-
 @dataclass(frozen=True)
 class AnnotationMatch:
     """Which phase annotation a recording uses, and why (or why none).
+
+    Made by :func:`handsim.io.graspdb_annotations.match_annotation` (or ``check_annotation``).
 
     Attributes:
         path: The annotation file used, or None.
         note: For people: the file and the frames it covers, or why no annotation is used. A file that lies
             beside the recording but is not used gives a note starting with ``warning:``.
+        intervals: The intervals of :attr:`path` as read when it was matched (empty when none is used). Not
+            compared: the file names them.
     """
 
     path: Path | None
     note: str
+    intervals: tuple[PhaseAnnotation, ...] = field(default=(), compare=False, repr=False)
 
     @property
     def warning(self) -> bool:
@@ -296,84 +157,21 @@ class AnnotationMatch:
         return self.note.startswith("warning:")
 
 
-def annotation_frames(path: str | Path) -> int:
-    """How many frames an annotation file covers: its last interval's last frame (1-based, inclusive).
-
-    Raises:
-        InputFileError: The file is missing or unreadable.
-        FormatError: The file is malformed (see :func:`read_phase_annotations`).
-    """
-    return read_phase_annotations(path)[-1].stop
-
-
-def check_annotation(annotation: str | Path, motion: str | Path, frames: int) -> AnnotationMatch:
-    """Use an annotation file for a recording only when it covers exactly the recording's frames.
-
-    Args:
-        annotation: The annotation file.
-        motion: The recording, for the note.
-        frames: The recording's frame count.
-
-    Returns:
-        The annotation with a note, or None with a ``warning:`` note naming both files and both counts.
-
-    Raises:
-        InputFileError: The annotation is missing or unreadable.
-        FormatError: The annotation is malformed.
-    """
-    a, m = Path(annotation), Path(motion)
-    covered = annotation_frames(a)
-    if covered != frames:
-        return AnnotationMatch(
-            None,
-            f"warning: phase annotation {a} is not used: its intervals end at frame {covered}, but the "
-            f"recording {m} has {frames} frames (an annotation covers exactly the frames of the recording it "
-            "belongs to; is it another recording's?); the grasp phase is found from the finger flexion",
-        )
-    return AnnotationMatch(a, f"phase annotation {a.name}: {covered} frames, as many as {m.name} has")
-
-
-def match_annotation(motion_path: str | Path, frames: int) -> AnnotationMatch:
-    """The phase annotation a recording uses: the one beside it by name, if it agrees with its frames.
-
-    Args:
-        motion_path: The recording.
-        frames: Its frame count.
-
-    Returns:
-        The annotation (:func:`find_annotation_file`) and a note; None with the reason when no file of
-        :func:`annotation_names` lies beside it, or with a ``warning:`` when the one there covers another
-        number of frames (:func:`check_annotation`).
-
-    Raises:
-        InputFileError: The annotation is unreadable.
-        FormatError: The annotation is malformed.
-    """
-    p = Path(motion_path)
-    found = find_annotation_file(p)
-    if found is None:
-        names = " or ".join(annotation_names(p))
-        return AnnotationMatch(
-            None,
-            f"no phase annotation ({names}) beside {p.name}: the grasp phase is found from the finger "
-            "flexion",
-        )
-    return check_annotation(found, p, frames)
-
-
 # --------------------------------------------------------------------------------------------------
 # Phases on trajectories
 
 
-def attach_phases(
-    trajectory: Trajectory, annotations: str | Path | Sequence[Phase | PhaseAnnotation]
+def with_phases(
+    trajectory: Trajectory, items: Sequence[Phase | PhaseAnnotation], source: str = "given intervals"
 ) -> Trajectory:
-    """Set a trajectory's phases from an annotation file or given intervals.
+    """Set a trajectory's phases from given intervals.
+
+    From an annotation file: :func:`handsim.io.graspdb_annotations.attach_phases`.
 
     Args:
         trajectory: The recording the phases belong to.
-        annotations: A phase annotation file (read with :func:`read_phase_annotations`), or phases /
-            annotations already read (frame numbers 0-based, stop exclusive).
+        items: Phases or annotated intervals (frame numbers 0-based, stop exclusive).
+        source: Where the intervals come from (an annotation file's path), for the note and messages.
 
     Returns:
         A copy of the trajectory with :attr:`~Trajectory.phases` replaced (annotations become phases named
@@ -381,18 +179,10 @@ def attach_phases(
         phase covers.
 
     Raises:
-        InputFileError: The annotation file is missing or unreadable.
-        FormatError: The annotation file is malformed.
         TrajectoryError: An interval ends after the trajectory's last frame (the message names the
-            annotation file and line).
+            source and the annotation's line).
     """
     n = trajectory.nframes
-    if isinstance(annotations, (str, Path)):
-        source = str(annotations)
-        items: Sequence[Phase | PhaseAnnotation] = read_phase_annotations(annotations)
-    else:
-        source = "given intervals"
-        items = annotations
     phases: list[Phase] = []
     labels: list[str] = []
     for item in items:
@@ -478,20 +268,12 @@ def cut(trajectory: Trajectory, phase: Phase | str) -> Trajectory:
 
 
 __all__ = [
-    "ANNOTATED_PREFIX",
-    "ANNOTATION_SUFFIX",
     "SWITCH_OFF",
     "SWITCH_ON",
     "AnnotationMatch",
     "PhaseAnnotation",
-    "annotation_frames",
-    "annotation_names",
-    "attach_phases",
-    "check_annotation",
     "cut",
-    "find_annotation_file",
-    "match_annotation",
-    "read_phase_annotations",
     "split_by_switch",
     "switch_segments",
+    "with_phases",
 ]

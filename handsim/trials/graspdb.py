@@ -4,7 +4,7 @@ A recording is a ``.txt`` file (GraspDB14's FK-oracle files have no extension). 
 default hand unless a skeleton is given; the object is the one given, else the one whose id the file name
 carries (``r_01_11_ex03-…`` → id 1, the tennis ball); phases come from the
 recording's ``_annot-`` file beside it when it covers exactly the recording's frames
-(:func:`handsim.glove.phases.match_annotation`), else from the finger flexion (scenario ``glove``).
+(:func:`handsim.io.graspdb_annotations.match_annotation`), else from the finger flexion (scenario ``glove``).
 Single-sample spikes are marked invalid and filled before the recording is judged
 (:func:`handsim.glove.checks.check_recording`).
 """
@@ -69,8 +69,8 @@ def _matches(path: Path) -> bool:
 
 def _find(path: Path, options: TrialOptions) -> Trial:
     from handsim.builders.graspdb_objects import graspdb_object
-    from handsim.glove.phases import find_annotation_file, match_annotation
     from handsim.io.graspdb import graspdb_row_count, parse_graspdb_filename
+    from handsim.io.graspdb_annotations import find_annotation_file, match_annotation
 
     if options.skeleton is not None and options.hand_length is not None:
         raise TrialError(
@@ -114,8 +114,8 @@ def _load(trial: Trial, metrics: MetricSpec | None, progress: bool) -> LoadedTri
     from handsim.builders import build_hand
     from handsim.glove import apply_thumb_rest, load_calibration, thumb_rest_note
     from handsim.glove.checks import check_recording
-    from handsim.glove.phases import check_annotation
     from handsim.io import read_skeleton, read_trajectory
+    from handsim.io.graspdb_annotations import check_annotation
 
     if trial.skeleton_path is None:
         skeleton, hand, hand_text = parametric_hand(trial)
@@ -143,7 +143,8 @@ def _load(trial: Trial, metrics: MetricSpec | None, progress: bool) -> LoadedTri
 
 def _no_annotation(trial: Trial, frames: int) -> AnnotationMatch:
     """Why a trial that names no annotation uses none (what :func:`_find` found, or that it names none)."""
-    from handsim.glove.phases import AnnotationMatch, match_annotation
+    from handsim.glove.phases import AnnotationMatch
+    from handsim.io.graspdb_annotations import match_annotation
 
     match = match_annotation(trial.trajectory_path, frames)
     if match.path is None:
@@ -236,8 +237,8 @@ def _sort_files(sorting: Sorting) -> None:
 
 def _annotated(annotation: str, files: list[str], base: Path) -> str | None:
     """The recording among ``files`` (beside ``annotation``) whose phase annotation it is, or None."""
-    from handsim.glove.phases import find_annotation_file
     from handsim.io.graspdb import parse_graspdb_filename
+    from handsim.io.graspdb_annotations import find_annotation_file
 
     folder = PurePosixPath(annotation).parent
     for f in files:
