@@ -124,7 +124,7 @@ def test_inspect_prints_timing_phases_and_limit_violations_and_writes_a_plot(cap
 
 
 def test_calibrate_fits_a_calibration_sequence_and_writes_json(capsys, tmp_path):
-    from handsim.glove import load_calibration
+    from handsim.io.glove_calibration import load_calibration
     from tests.test_glove_calibration import _synthetic_sequence, _write_raw
 
     raw, switch, gains, _ = _synthetic_sequence()

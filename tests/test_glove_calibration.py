@@ -24,10 +24,9 @@ from handsim.glove import (
     GloveCalibration,
     apply_calibration,
     estimate_calibration,
-    load_calibration,
-    save_calibration,
 )
-from handsim.glove.calibration import FORMAT, VERSION, calibration_from_dict
+from handsim.glove.calibration import FORMAT, VERSION
+from handsim.io.glove_calibration import calibration_from_dict, load_calibration, save_calibration
 from handsim.io.graspdb import read_graspdb_raw
 
 IDX = {name: i for i, name in enumerate(SENSOR_NAMES)}

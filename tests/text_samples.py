@@ -16,7 +16,8 @@ from pathlib import Path
 import trimesh
 
 from handsim.assets import TZIONAS_DIR
-from handsim.glove import GloveCalibration, load_calibration
+from handsim.glove import GloveCalibration
+from handsim.io.glove_calibration import load_calibration
 from handsim.io.graspdb import read_graspdb_glove, read_graspdb_raw
 from handsim.io.graspdb_annotations import read_phase_annotations
 from handsim.io.mesh import read_mesh_arrays

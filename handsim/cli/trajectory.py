@@ -15,10 +15,10 @@ def load_trajectory(path: str, skeleton_path: str | None, calibration_path: str 
     (:func:`handsim.glove.checks.check_recording`); the checks' result is None for other recordings.
     """
     # lazy: the readers and glove checks, only for this command
-    from handsim.glove import load_calibration
     from handsim.glove.checks import check_recording
     from handsim.io import read_skeleton, read_trajectory
     from handsim.io._text import require_file
+    from handsim.io.glove_calibration import load_calibration
     from handsim.io.graspdb_annotations import match_annotation
 
     require_file(path)  # before its skeleton: a folder named x.MOTION is not "x.SKEL: file not found"
@@ -74,7 +74,8 @@ def _inspect(args: argparse.Namespace) -> int:
 
 def _calibrate(args: argparse.Namespace) -> int:
     # lazy: the glove calibration and the raw-count reader, only for this command
-    from handsim.glove import estimate_calibration, save_calibration
+    from handsim.glove import estimate_calibration
+    from handsim.io.glove_calibration import save_calibration
     from handsim.io.graspdb import read_graspdb_raw
 
     recording = read_graspdb_raw(args.recording)

@@ -10,8 +10,10 @@ Sensor layout (:mod:`handsim.glove.sensors`):
 
 Calibration, raw counts → radians (:mod:`handsim.glove.calibration`):
 
-* :class:`GloveCalibration`, :func:`apply_calibration`, :func:`load_calibration`, :func:`save_calibration`.
-* :func:`estimate_calibration` — from a recorded calibration sequence (:data:`CALIBRATION_PROTOCOL`).
+* :class:`GloveCalibration`, :func:`apply_calibration`; its JSON files are written and read by
+  :mod:`handsim.io.glove_calibration` (``save_calibration``, ``load_calibration``).
+* :func:`estimate_calibration` — from a recorded calibration sequence (:data:`CALIBRATION_PROTOCOL`,
+  :mod:`handsim.glove.calibration_estimation`).
 
 DIP coupling (:mod:`handsim.glove.coupling`): :func:`couple_dip` (``DIP = 2/3 PIP`` by default),
 :func:`cyberglove_dip` (the relation the GraspDB14 glove software used).
@@ -36,18 +38,14 @@ annotation and spike checks on a recording.
 from __future__ import annotations
 
 from handsim.glove.calibration import (
-    CALIBRATION_PROTOCOL,
     DEFAULT_COUPLING,
     DEFAULT_GAINS,
     AbductionCoupling,
     CalibrationError,
     GloveCalibration,
-    ReferencePose,
     apply_calibration,
-    estimate_calibration,
-    load_calibration,
-    save_calibration,
 )
+from handsim.glove.calibration_estimation import CALIBRATION_PROTOCOL, ReferencePose, estimate_calibration
 from handsim.glove.coupling import CYBERGLOVE, DIP_PIP_RATIO, couple_dip, cyberglove_dip
 from handsim.glove.gaps import GAP_METHODS, fill_gaps, find_gaps
 from handsim.glove.phases import (
@@ -100,9 +98,7 @@ __all__ = [
     "fill_gaps",
     "find_gaps",
     "find_spikes",
-    "load_calibration",
     "remove_spikes",
-    "save_calibration",
     "split_by_switch",
     "switch_segments",
     "thumb_rest_note",

@@ -112,9 +112,10 @@ def _find(path: Path, options: TrialOptions) -> Trial:
 
 def _load(trial: Trial, metrics: MetricSpec | None, progress: bool) -> LoadedTrial:
     from handsim.builders import build_hand
-    from handsim.glove import apply_thumb_rest, load_calibration, thumb_rest_note
+    from handsim.glove import apply_thumb_rest, thumb_rest_note
     from handsim.glove.checks import check_recording
     from handsim.io import read_skeleton, read_trajectory
+    from handsim.io.glove_calibration import load_calibration
     from handsim.io.graspdb_annotations import check_annotation
 
     if trial.skeleton_path is None:
