@@ -22,7 +22,7 @@ from handsim.assets import TZIONAS_DIR
 from handsim.cli import main
 from handsim.datatypes.fingers import FINGER_GROUPS, TZIONAS_FINGERS, finger_groups, finger_of
 from handsim.io import read_skeleton
-from handsim.io.graspdb import parse_graspdb_filename
+from handsim.io.graspdb_filenames import parse_graspdb_filename
 from handsim.io.mano import MANO_DIR_ENV
 from handsim.runner import execute
 from handsim.runner.execute import RunnerError, run_dataset

@@ -69,8 +69,9 @@ def _matches(path: Path) -> bool:
 
 def _find(path: Path, options: TrialOptions) -> Trial:
     from handsim.builders.graspdb_objects import graspdb_object
-    from handsim.io.graspdb import graspdb_row_count, parse_graspdb_filename
+    from handsim.io.graspdb import graspdb_row_count
     from handsim.io.graspdb_annotations import find_annotation_file, match_annotation
+    from handsim.io.graspdb_filenames import parse_graspdb_filename
 
     if options.skeleton is not None and options.hand_length is not None:
         raise TrialError(
@@ -172,7 +173,7 @@ def _inputs(trial: Trial, base: Path) -> tuple[TrialInput, ...]:
 
 def _sort_files(sorting: Sorting) -> None:
     from handsim.builders.graspdb_objects import GRASPDB_OBJECTS
-    from handsim.io.graspdb import filename_datatype, parse_graspdb_filename
+    from handsim.io.graspdb_filenames import filename_datatype, parse_graspdb_filename
     from handsim.trials.graspdb_names import graspdb_meta
 
     names = {o.graspdb_id: o.name for o in GRASPDB_OBJECTS}
@@ -238,8 +239,8 @@ def _sort_files(sorting: Sorting) -> None:
 
 def _annotated(annotation: str, files: list[str], base: Path) -> str | None:
     """The recording among ``files`` (beside ``annotation``) whose phase annotation it is, or None."""
-    from handsim.io.graspdb import parse_graspdb_filename
     from handsim.io.graspdb_annotations import find_annotation_file
+    from handsim.io.graspdb_filenames import parse_graspdb_filename
 
     folder = PurePosixPath(annotation).parent
     for f in files:
