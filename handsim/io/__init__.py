@@ -7,6 +7,11 @@ Entry points:
   calibration), Tzionas/Ballan hand ``.MOTION`` files (with the sequence's object tracks) and handsim's
   synthetic scripted grasps (``.grasp.json``, :mod:`handsim.io.scripted`).
 
+GraspDB14 files beside a recording: phase annotations (:mod:`handsim.io.graspdb_annotations`) and glove
+calibrations (:mod:`handsim.io.glove_calibration`: ``load_calibration``, ``save_calibration``). The
+parametric default hand's skeleton, plain data from published proportions, is
+:func:`handsim.io.parametric_skeleton.default_skeleton`.
+
 Other sources, with their own readers: ARCTIC (:mod:`handsim.io.arctic_motion`: ``read_arctic_sequence``
 — both hands and the object —, ``read_arctic_mano``, ``read_arctic_object``; templates in
 :mod:`handsim.io.arctic`), MANO models and poses
