@@ -12,6 +12,7 @@ import math
 import platform
 from pathlib import Path
 
+import mujoco
 import numpy as np
 
 from handsim.datatypes.fingers import finger_groups
@@ -21,6 +22,7 @@ from handsim.sim.compiled import SimScene
 from handsim.sim.plausibility import limit_violations
 from handsim.sim.replay import ReplayResult
 from handsim.trials import TrialEntry
+from handsim.version import __version__
 
 MAX_CURVE_POINTS = 600
 """Most points per curve in a record."""
@@ -32,12 +34,8 @@ _CHUNK = 1 << 20
 
 def versions() -> dict:
     """Versions that decide a record's numbers: handsim, MuJoCo, NumPy, Python and the platform."""
-    import mujoco
-
-    import handsim
-
     return {
-        "handsim": handsim.__version__,
+        "handsim": __version__,
         "mujoco": mujoco.__version__,
         "numpy": np.__version__,
         "python": platform.python_version(),
