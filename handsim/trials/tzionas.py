@@ -175,6 +175,7 @@ def _hands_of(trial: Trial) -> dict[str, tuple[Path, Path]]:
 
 def _load(trial: Trial, metrics: MetricSpec | None, progress: bool) -> LoadedTrial:
     from handsim.builders import build_hand
+    from handsim.builders.surfaces import FITTED_SKIN
     from handsim.io import read_skeleton, read_trajectory
     from handsim.io.tzionas_motion import read_tzionas_hands
     from handsim.sim.scenarios import recorded_scene
@@ -182,7 +183,10 @@ def _load(trial: Trial, metrics: MetricSpec | None, progress: bool) -> LoadedTri
     two = _is_two_hand(trial)
     trajectory = read_tzionas_hands(trial.trajectory_path) if two else read_trajectory(trial.trajectory_path)
     skeletons = {side: read_skeleton(skel) for side, (_, skel) in _hands_of(trial).items()}
-    hands = {side: build_hand(skeleton, collision=trial.collision) for side, skeleton in skeletons.items()}
+    # The Tzionas hands were fitted to observed skin: their pads' rest surface lies outside the mesh.
+    hands = {
+        side: build_hand(sk, collision=trial.collision, skin=FITTED_SKIN) for side, sk in skeletons.items()
+    }
     specs, objects, notes = build_objects(trial, progress)
     tracks = {o.track: s for o, s in zip(objects, specs, strict=True)}
     scene = recorded_scene(hands if two else hands[""], trajectory, tracks)
@@ -201,6 +205,8 @@ def _load(trial: Trial, metrics: MetricSpec | None, progress: bool) -> LoadedTri
         notes=(
             *trial.notes,
             *(f"{side + ' hand: ' if side else ''}{n}" for side, sk in skeletons.items() for n in sk.notes),
+            f"skin: the finger pads' rest surface lies {FITTED_SKIN.margin * 1000:g} mm outside the fitted "
+            "hand mesh (the fit is the compressed skin; docs/physics.md, fitted skin)",
             *notes,
         ),
     )
