@@ -151,7 +151,10 @@ def test_the_two_hand_replay_tracks_both_hands_with_zero_warnings(result, alone)
     )
     tips = frames.tip_error[before]
     np.testing.assert_allclose(
-        tips[:, frames.tip_hand == 1], tips[:, frames.tip_hand == 0], rtol=0, atol=1e-4  # 0.1 mm; 25 µm
+        tips[:, frames.tip_hand == 1],
+        tips[:, frames.tip_hand == 0],
+        rtol=0,
+        atol=1e-4,  # 0.1 mm; 25 µm
     )
     assert abs(s["left/mean_tracking_error_deg"] - alone.summary["mean_tracking_error_deg"]) < 0.15
     assert s["left/max_tracking_error_deg"] < alone.summary["max_tracking_error_deg"] < 5.0
