@@ -22,7 +22,7 @@ from handsim.io.mesh import read_mesh_arrays
 from handsim.io.off import read_off
 from handsim.io.scripted import read_scripted_grasp
 from handsim.io.tzionas import read_limits, read_motion, read_skel, read_skin, read_voi
-from handsim.io.tzionas_motion import read_index_bounds, read_models_info
+from handsim.io.tzionas_configs import read_index_bounds, read_models_info
 from handsim.io.xmlskel import read_xmlskel
 from tests.test_io_tzionas import LIMITS, MOTION, OFF, SKEL, SKIN
 

@@ -118,7 +118,9 @@ def read_trajectory(
 
 def _read_tzionas(path: Path) -> Trajectory:
     """A hand ``.MOTION`` with the sequence's object tracks when its ``Configs/NN`` lists them."""
-    from handsim.io.tzionas_motion import config_dir_of, read_tzionas_motion, read_tzionas_sequence
+    from handsim.io.tzionas_configs import config_dir_of
+    from handsim.io.tzionas_motion import read_tzionas_motion
+    from handsim.io.tzionas_sequence import read_tzionas_sequence
 
     if not path.stem.startswith("Model_Hand"):
         raise InputFileError(
