@@ -9,8 +9,8 @@ Entry points:
 
 Other sources, with their own readers: ARCTIC (:mod:`handsim.io.arctic_motion`: ``read_arctic_sequence``
 — both hands and the object —, ``read_arctic_mano``, ``read_arctic_object``; templates in
-:mod:`handsim.io.arctic`), MANO models and poses
-(:mod:`handsim.io.mano`: ``read_mano_model``, ``mano_pose_to_trajectory``), meshes (:mod:`handsim.io.mesh`).
+:mod:`handsim.io.arctic`), MANO models and poses (:mod:`handsim.io.mano`: ``read_mano_model``;
+:mod:`handsim.io.mano_pose`: ``mano_pose_to_trajectory``), meshes (:mod:`handsim.io.mesh`).
 """
 
 from __future__ import annotations
