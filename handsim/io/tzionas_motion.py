@@ -56,8 +56,10 @@ from handsim.datatypes.trajectory import ObjectTrack, Trajectory
 from handsim.datatypes.trajectory_ops import with_limit_note
 from handsim.errors import FormatError, InputFileError, TrajectoryError
 from handsim.io._text import numbered_lines, read_bytes, read_text, sha256_of
-from handsim.io.tzionas import SkelBone, read_motion, read_skel, read_tzionas_skeleton
+from handsim.io.tzionas import read_tzionas_skeleton
 from handsim.io.tzionas_configs import IndexBounds, config_dir_of, read_index_bounds
+from handsim.io.tzionas_motion_file import read_motion
+from handsim.io.tzionas_skel import SkelBone, read_skel
 
 DEFAULT_FPS = 30.0
 """Frame rate assumed when none is given, Hz: the dataset's Kinect-class RGB-D sensor streams at 30 Hz."""

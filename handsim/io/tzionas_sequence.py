@@ -14,9 +14,9 @@ from pathlib import Path
 from handsim.datatypes.trajectory import ObjectTrack, Trajectory
 from handsim.datatypes.trajectory_ops import join_hands
 from handsim.errors import InputFileError, TrajectoryError
-from handsim.io.tzionas import read_skel
 from handsim.io.tzionas_configs import config_dir_of, read_models_info
 from handsim.io.tzionas_motion import fit_tzionas_object_motion, read_tzionas_motion
+from handsim.io.tzionas_skel import read_skel
 
 
 def object_track_name(model: str) -> str:
