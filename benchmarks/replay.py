@@ -75,8 +75,8 @@ from handsim.builders.mano_hand import build_mano_hand, mano_hand_skeleton
 from handsim.builders.objects import build_object
 from handsim.datatypes.trajectory import ObjectTrack, Trajectory
 from handsim.io import read_skeleton, read_trajectory
-from handsim.io.tzionas_motion import read_tzionas_sequence
 from handsim.io.tzionas_objects import read_tzionas_object
+from handsim.io.tzionas_sequence import read_tzionas_sequence
 from handsim.sim.arctic_scene import arctic_scene
 from handsim.sim.compiled import compile_scene
 from handsim.sim.control import control_schedule

@@ -5,8 +5,7 @@ Data flows one way: ``handsim.io`` readers → plain data (:class:`~handsim.data
 ``handsim.sim``.
 """
 
-__version__ = "0.1.0"
-
 # Registers handsim/Replay-v0 and handsim/Grasp-v0: imports gymnasium and NumPy, not MuJoCo, and sets no
 # environment variable (rendering picks its OpenGL backend when it renders: handsim.viz.headless).
 import handsim.envs  # noqa: F401
+from handsim.version import __version__ as __version__

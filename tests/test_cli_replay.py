@@ -58,7 +58,7 @@ def test_replay_of_the_bundled_tzionas_sequence_prints_the_summary_and_writes_js
     curves = record["curves"]
     n = summary["frames"]
     assert len(curves["times_s"]) == n and _numbers_or_none(curves["times_s"])
-    for key in ("penetration_mm", "tracking_error_norm_deg", "max_tip_error_mm"):
+    for key in ("penetration_mm", "tracking_error_deg", "max_tip_error_mm"):
         assert len(curves[key]) == n and _numbers_or_none(curves[key])
     assert list(curves["drift_mm"]) == ["obj"] and _numbers_or_none(curves["drift_mm"]["obj"])
     assert set(curves["contacts_per_link"]) == set(record["scene"]["links"])

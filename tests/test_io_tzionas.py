@@ -15,15 +15,11 @@ from hypothesis import strategies as st
 from scipy.spatial.transform import Rotation
 
 from handsim.errors import FormatError, InputFileError
-from handsim.io.tzionas import (
-    read_limits,
-    read_motion,
-    read_off,
-    read_skel,
-    read_skin,
-    read_tzionas_skeleton,
-    read_voi,
-)
+from handsim.io.off import read_off
+from handsim.io.tzionas import read_tzionas_skeleton
+from handsim.io.tzionas_motion_file import read_motion
+from handsim.io.tzionas_skel import read_limits, read_skel
+from handsim.io.tzionas_surface import read_skin, read_voi
 
 HAND_BONES = 20
 HAND_DOFS = 31  # rx + ry + rz flags of the 19 non-root bones of Model_Hand_R.LIMITS, counted by hand

@@ -17,8 +17,8 @@ from handsim.datatypes.trajectory import Phase, Trajectory
 from handsim.errors import SimulationError, TrajectoryError
 from handsim.io import read_skeleton, read_trajectory
 from handsim.io.graspdb_annotations import attach_phases, find_annotation_file
-from handsim.io.tzionas_motion import read_tzionas_sequence
 from handsim.io.tzionas_objects import read_tzionas_object
+from handsim.io.tzionas_sequence import read_tzionas_sequence
 from handsim.sim.compiled import compile_scene
 from handsim.sim.control import control_schedule
 from handsim.sim.drive import ScenarioSwitches, ScheduleDriver

@@ -32,7 +32,7 @@ from handsim.sim.summary import HAND_KEYS
 from handsim.trials import TrialError, discover, find_trial, load_trial
 from tests.tzionas_fixtures import LEFT_SHIFT_MM, truncated_motion, two_hand_sample
 
-RIGHT_CONTACT_FRAME = 105
+RIGHT_CONTACT_FRAME = 104  # measured; 105 before the pads rested 1.5 mm outside the fitted mesh
 """The first replay frame (100 Hz) in which the right hand of sequence 20 touches the cube."""
 
 
@@ -134,9 +134,11 @@ def test_the_two_hand_replay_tracks_both_hands_with_zero_warnings(result, alone)
     for key in HAND_KEYS:
         assert s[f"right/{key}"] == pytest.approx(alone.summary[key], rel=1e-9, abs=1e-9), key
     assert s["max_drift_mm"] == pytest.approx(alone.summary["max_drift_mm"], rel=1e-9)
-    # the left hand touches nothing, and tracks like the right one: identical until the right hand's first
-    # cube contact, after which its mean joint error stays within 0.05° (measured 0.029°: the cube's
-    # contacts load the right fingers, the left ones follow their targets freely)
+    # the left hand touches no object, and tracks like the right one until the right hand's first cube
+    # contact: to 0.02° (measured 0.008°; each hand's fingers touch each other from the first frame — the
+    # fitted skin's rest offset — and both hands' contacts are solved as one system), after which its mean
+    # joint error stays within 0.15° (measured 0.106°: the cube's contacts load the right fingers, the left
+    # ones follow their targets freely)
     assert s["left/contact_frames"] == 0 and s["left/max_penetration_mm"] == 0.0
     frames = result.frames
     right_links = frames.link_hand == 0
@@ -145,13 +147,16 @@ def test_the_two_hand_replay_tracks_both_hands_with_zero_warnings(result, alone)
     before = slice(0, RIGHT_CONTACT_FRAME)
     error = np.abs(frames.tracking_error[before])
     np.testing.assert_allclose(
-        error[:, frames.dof_hand == 1], error[:, frames.dof_hand == 0], rtol=0, atol=np.radians(1e-3)
+        error[:, frames.dof_hand == 1], error[:, frames.dof_hand == 0], rtol=0, atol=np.radians(0.02)
     )
     tips = frames.tip_error[before]
     np.testing.assert_allclose(
-        tips[:, frames.tip_hand == 1], tips[:, frames.tip_hand == 0], rtol=0, atol=1e-5
+        tips[:, frames.tip_hand == 1],
+        tips[:, frames.tip_hand == 0],
+        rtol=0,
+        atol=1e-4,  # 0.1 mm; 25 µm
     )
-    assert abs(s["left/mean_tracking_error_deg"] - alone.summary["mean_tracking_error_deg"]) < 0.05
+    assert abs(s["left/mean_tracking_error_deg"] - alone.summary["mean_tracking_error_deg"]) < 0.15
     assert s["left/max_tracking_error_deg"] < alone.summary["max_tracking_error_deg"] < 5.0
     assert s["left/mean_tip_error_mm"] < 10.0
 
@@ -163,7 +168,7 @@ def test_the_cli_replay_prints_a_line_per_hand(models, capsys):
     assert "warnings    none" in lines
     (right,) = [line for line in lines if line.startswith("right ")]
     (left,) = [line for line in lines if line.startswith("left ")]
-    assert right.startswith("right       contact 204 frames (up to 3 links, 1.15 N); penetration max 1.49 mm")
+    assert right.startswith("right       contact 372 frames (up to 3 links, 2.19 N); penetration max 0.31 mm")
     assert left.startswith("left        contact 0 frames (up to 0 links, 0.00 N); penetration max 0.00 mm")
 
 
@@ -188,15 +193,15 @@ def test_a_dataset_run_lists_the_sequence_as_one_trial_with_per_hand_records(mod
     assert record["status"] == "ok" and record["kind"] == "tzionas"
     for side in ("right", "left"):
         assert all(f"{side}/{key}" in record["summary"] for key in HAND_KEYS)
-    assert record["summary"]["right/contact_frames"] == 204 and record["summary"]["left/contact_frames"] == 0
+    assert record["summary"]["right/contact_frames"] == 372 and record["summary"]["left/contact_frames"] == 0
     assert main(["report", "--render-only", str(out)]) == 0
     capsys.readouterr()
     markdown = (out / "report.md").read_text()
     assert "## Two-hand trials" in markdown
-    assert "| [Models/20](report.html#trial-models-20) | 204 | 1.49 | 0.32 | 0 | 0.00 | 0.29 |" in markdown
+    assert "| [Models/20](report.html#trial-models-20) | 372 | 0.31 | 0.39 | 0 | 0.00 | 0.29 |" in markdown
     report = json.loads((out / "summary.json").read_text())
     (row,) = report["trials"]
-    assert row["right/contact_frames"] == 204 and row["left/contact_frames"] == 0
+    assert row["right/contact_frames"] == 372 and row["left/contact_frames"] == 0
 
 
 def test_hands_whose_motions_have_different_frame_counts_are_refused_naming_both(tmp_path, capsys):

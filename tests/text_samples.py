@@ -23,8 +23,10 @@ from handsim.io.graspdb_annotations import read_phase_annotations
 from handsim.io.mesh import read_mesh_arrays
 from handsim.io.off import read_off
 from handsim.io.scripted import read_scripted_grasp
-from handsim.io.tzionas import read_limits, read_motion, read_skel, read_skin, read_voi
-from handsim.io.tzionas_motion import read_index_bounds, read_models_info
+from handsim.io.tzionas_configs import read_index_bounds, read_models_info
+from handsim.io.tzionas_motion_file import read_motion
+from handsim.io.tzionas_skel import read_limits, read_skel
+from handsim.io.tzionas_surface import read_skin, read_voi
 from handsim.io.xmlskel import read_xmlskel
 from tests.test_io_tzionas import LIMITS, MOTION, OFF, SKEL, SKIN
 

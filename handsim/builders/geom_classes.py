@@ -49,4 +49,6 @@ def add_geom_classes(
         collision.geom.solref = list(surface.solref)
     if surface.solimp is not None:
         collision.geom.solimp = list(surface.solimp)
+    if surface.margin:
+        collision.geom.margin = surface.margin
     return visual, collision

@@ -26,7 +26,7 @@ from scipy.spatial import ConvexHull, QhullError
 
 from handsim.builders.geom_classes import add_geom_classes
 from handsim.builders.hand_geometry import Capsule, default_hand_mass, finger_chains, hand_geometry
-from handsim.builders.surfaces import SKIN
+from handsim.builders.surfaces import SKIN, Surface
 from handsim.datatypes.physical_ranges import HAND_MASS
 from handsim.datatypes.rotations import matrix_to_quat
 from handsim.datatypes.skeleton import Skeleton, mj_name
@@ -67,10 +67,10 @@ JOINT_CLASSES: dict[str, JointClass] = {
 }
 
 
-def _add_defaults(spec: mujoco.MjSpec, root_has_dofs: bool) -> dict[str, mujoco.MjsDefault]:
+def _add_defaults(spec: mujoco.MjSpec, root_has_dofs: bool, skin: Surface) -> dict[str, mujoco.MjsDefault]:
     main = spec.default
     visual, collision = add_geom_classes(
-        spec, surface=SKIN, visual_rgba=SKIN_RGBA, collision_rgba=COLLISION_RGBA
+        spec, surface=skin, visual_rgba=SKIN_RGBA, collision_rgba=COLLISION_RGBA
     )
     classes = {"visual": visual, "collision": collision}
     kinds = [k for k in JOINT_CLASSES if k != "wrist" or root_has_dofs]
@@ -129,6 +129,7 @@ def build_hand(
     name: str | None = None,
     timestep: float = 0.002,
     force: bool = False,
+    skin: Surface = SKIN,
 ) -> mujoco.MjSpec:
     """Build a position-controlled MuJoCo hand from a skeleton.
 
@@ -142,6 +143,9 @@ def build_hand(
         name: Model name; the skeleton's name by default.
         timestep: Simulation timestep in seconds.
         force: Accept a ``mass`` outside :data:`handsim.datatypes.physical_ranges.HAND_MASS` (0.1 to 1 kg).
+        skin: Contact parameters of the collision geoms: :data:`~handsim.builders.surfaces.SKIN` (the
+            geometry is the undeformed finger), or :data:`~handsim.builders.surfaces.FITTED_SKIN` for a
+            surface fitted to observed, compressed skin (the Tzionas hands).
 
     Returns:
         An uncompiled spec. The root body sits at the skeleton's root rest position and frame; DoFs of
@@ -164,7 +168,7 @@ def build_hand(
     spec.option.impratio = 10.0
     root_name = skeleton.joints[0].name
     root_has_dofs = bool(skeleton.dofs_of(root_name))
-    classes = _add_defaults(spec, root_has_dofs)
+    classes = _add_defaults(spec, root_has_dofs, skin)
 
     geometry = hand_geometry(skeleton, breadth)
     hulls = _skinned_hulls(skeleton) if collision == "mesh" else {}

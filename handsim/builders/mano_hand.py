@@ -5,7 +5,7 @@ The skeleton (:func:`mano_skeleton`):
 * the 16 MANO joints with identity frames (MANO's joint frames are aligned with the model frame at rest);
   each finger joint is three hinges about the model axes z, y, x, outermost first
   (``<joint>_z``, ``<joint>_y``, ``<joint>_x``), so ``Rz · Ry · Rx = exp(ω)`` of MANO's axis-angle ω
-  (:func:`handsim.io.mano.mano_pose_to_trajectory` does the exact conversion); limits are the full Euler
+  (:func:`handsim.io.mano_pose.mano_pose_to_trajectory` does the exact conversion); limits are the full Euler
   ranges (:data:`HINGE_LIMITS`), not anatomy; the wrist has no DoF (its pose is the root pose);
 * palm anchors ``index0``, ``middle0``, ``ring0``, ``pinky0`` (no DoF) that only shape the palm, so that
   :func:`build_hand`'s rule "a finger chain starts with a metacarpal inside the palm" gives every MANO

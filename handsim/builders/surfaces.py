@@ -31,6 +31,9 @@ class Surface:
         priority: MuJoCo geom priority: the higher one's parameters are used for a contact.
         solref: (time constant s, damping ratio), or None for MuJoCo's default.
         solimp: (dmin, dmax, width m, midpoint, power), or None for MuJoCo's default.
+        margin: How far outside the collision geometry the surface's rest (undeformed) surface lies, m:
+            MuJoCo's geom ``margin``, from which the contact's impedance counts penetration (0: the
+            geometry is the rest surface).
     """
 
     sliding: float
@@ -38,6 +41,7 @@ class Surface:
     priority: int = 0
     solref: tuple[float, float] | None = None
     solimp: tuple[float, float, float, float, float] | None = None
+    margin: float = 0.0
 
     @property
     def friction(self) -> list[float]:
@@ -54,6 +58,26 @@ PAD_SOLREF = (0.0172, 1.0)
 
 SKIN = Surface(sliding=1.0, torsional=0.0025, priority=1, solref=PAD_SOLREF, solimp=PAD_SOLIMP)
 """The hand's collision geoms: skin against household materials, soft finger pads."""
+FITTED_SKIN_OFFSET = 0.0015
+"""Hands whose surface was fitted to observed skin (the Tzionas/Ballan hands): the pad's rest surface lies
+this far outside the fitted mesh, m. Such a fit puts the mesh where the *compressed* skin touched the object
+(the fitting refuses interpenetration), so a pad whose rest surface were the mesh itself would carry almost no
+force at the recorded pose; with this offset it carries the pad's calibrated 1 N per contact (1.5 mm,
+:data:`PAD_SOLREF`). Measured on Tzionas sequence 20 (``docs/physics.md``): offset 0 / 1 / 1.5 / 2 mm keeps
+the cube within 1 cm of its track in 40 / 74 / 76 / 76 % of frames (mean drift 26.5 / 10.5 / 10.5 /
+10.1 mm)."""
+
+FITTED_SKIN = Surface(
+    sliding=SKIN.sliding,
+    torsional=SKIN.torsional,
+    priority=SKIN.priority,
+    solref=PAD_SOLREF,
+    solimp=PAD_SOLIMP,
+    margin=FITTED_SKIN_OFFSET,
+)
+"""Skin of a hand whose surface was fitted to observations: :data:`SKIN` with the rest offset
+:data:`FITTED_SKIN_OFFSET`. Hands sized from proportions or driven by a sensor glove (the default hand's
+capsules, GraspDB14 skeletons, MANO) keep :data:`SKIN`: their geometry is the undeformed finger."""
 OBJECT = Surface(sliding=0.5, torsional=0.001)
 """Objects against each other (hard materials; skin and the environment bring their own)."""
 ENVIRONMENT = Surface(sliding=0.4, torsional=0.001, priority=1)

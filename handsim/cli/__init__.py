@@ -16,10 +16,10 @@ import sys
 import threading
 from collections.abc import Sequence
 
-from handsim import __version__
 from handsim.cli import build, catalog, demo, export, replay, report, trajectory
 from handsim.cli._common import EXIT_INTERRUPTED, Parser, range_problem
 from handsim.errors import HandsimError
+from handsim.version import __version__
 
 DESCRIPTION = """\
 handsim turns captured human hand motion into MuJoCo physics.

@@ -4,7 +4,8 @@
 :mod:`~handsim.datatypes.trajectory` (times × DoF targets, root and object poses, phases),
 :mod:`~handsim.datatypes.trajectory_ops` (resampling, limits, slicing), :mod:`~handsim.datatypes.mesh`,
 :mod:`~handsim.datatypes.object_model`, :mod:`~handsim.datatypes.poses`, :mod:`~handsim.datatypes.rotations`
-(the one rotation module, quaternions ``w, x, y, z``), :mod:`~handsim.datatypes.fingers` (finger of a link)
+(the one rotation module, quaternions ``w, x, y, z``), :mod:`~handsim.datatypes.kinematics` (a rotation
+split into a chain of hinge angles), :mod:`~handsim.datatypes.fingers` (finger of a link)
 and :mod:`~handsim.datatypes.physical_ranges` (plausible masses and densities).
 
 Frozen dataclasses holding NumPy arrays, SI units; nothing here imports MuJoCo or any other handsim layer

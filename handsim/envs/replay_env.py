@@ -110,8 +110,8 @@ def default_replay_inputs() -> tuple[SimScene, Trajectory]:
     from handsim.assets import TZIONAS_DIR
     from handsim.builders import build_hand, build_object
     from handsim.io import read_skeleton
-    from handsim.io.tzionas_motion import read_tzionas_sequence
     from handsim.io.tzionas_objects import read_tzionas_object
+    from handsim.io.tzionas_sequence import read_tzionas_sequence
     from handsim.sim.scenarios import recorded_scene
 
     folder = TZIONAS_DIR.joinpath(*DEFAULT_SEQUENCE)

@@ -14,8 +14,8 @@ parametric default hand's skeleton, plain data from published proportions, is
 
 Other sources, with their own readers: ARCTIC (:mod:`handsim.io.arctic_motion`: ``read_arctic_sequence``
 — both hands and the object —, ``read_arctic_mano``, ``read_arctic_object``; templates in
-:mod:`handsim.io.arctic`), MANO models and poses
-(:mod:`handsim.io.mano`: ``read_mano_model``, ``mano_pose_to_trajectory``), meshes (:mod:`handsim.io.mesh`).
+:mod:`handsim.io.arctic`), MANO models and poses (:mod:`handsim.io.mano`: ``read_mano_model``;
+:mod:`handsim.io.mano_pose`: ``mano_pose_to_trajectory``), meshes (:mod:`handsim.io.mesh`).
 """
 
 from __future__ import annotations
@@ -123,7 +123,9 @@ def read_trajectory(
 
 def _read_tzionas(path: Path) -> Trajectory:
     """A hand ``.MOTION`` with the sequence's object tracks when its ``Configs/NN`` lists them."""
-    from handsim.io.tzionas_motion import config_dir_of, read_tzionas_motion, read_tzionas_sequence
+    from handsim.io.tzionas_configs import config_dir_of
+    from handsim.io.tzionas_motion import read_tzionas_motion
+    from handsim.io.tzionas_sequence import read_tzionas_sequence
 
     if not path.stem.startswith("Model_Hand"):
         raise InputFileError(

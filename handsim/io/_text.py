@@ -112,3 +112,14 @@ def parse_floats(
 def numbered_lines(text: str) -> list[tuple[int, str]]:
     """Non-blank lines of ``text`` with their 1-based line numbers, stripped."""
     return [(i + 1, s.strip()) for i, s in enumerate(text.splitlines()) if s.strip()]
+
+
+def blank_line_blocks(text: str) -> list[list[tuple[int, str]]]:
+    """Non-blank stripped lines with their line numbers, grouped by blank lines."""
+    blocks: list[list[tuple[int, str]]] = [[]]
+    for i, raw in enumerate(text.splitlines()):
+        if raw.strip():
+            blocks[-1].append((i + 1, raw.strip()))
+        elif blocks[-1]:
+            blocks.append([])
+    return [b for b in blocks if b]

@@ -37,13 +37,8 @@ from handsim.datatypes.trajectory import ObjectTrack, Trajectory
 from handsim.datatypes.trajectory_ops import join_hands
 from handsim.errors import TrajectoryError
 from handsim.io.arctic_motion import ARCTIC_FPS, HANDS, ArcticSequence
-from handsim.io.mano import (
-    MANO_JOINT_NAMES,
-    MANOModel,
-    MANOSequence,
-    mano_joints,
-    mano_pose_to_trajectory,
-)
+from handsim.io.mano import MANO_JOINT_NAMES, MANOModel, mano_joints
+from handsim.io.mano_pose import MANOSequence, mano_pose_to_trajectory
 
 BETAS_TOLERANCE_M = 1e-9
 """The wrist of the hand a sequence drives must sit at the sequence's J0 (its betas) within this, metres."""

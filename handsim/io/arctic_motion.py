@@ -40,7 +40,7 @@ import numpy as np
 from handsim.datatypes.rotations import axis_angle_to_quat
 from handsim.datatypes.trajectory import ObjectTrack
 from handsim.errors import FormatError, HandsimError, InputFileError
-from handsim.io.mano import MANOSequence
+from handsim.io.mano_pose import MANOSequence
 from handsim.io.safe_pickle import load_npy
 
 ARCTIC_FPS = 30.0

@@ -1,4 +1,6 @@
-"""Tzionas/Ballan ``.MOTION`` files as a hand `Trajectory` and object pose tracks.
+"""One Tzionas/Ballan ``.MOTION`` file as a hand `Trajectory` (DoF angles + root pose) or an object track.
+
+Whole sequences (a hand with every object, or two hands) are assembled by :mod:`handsim.io.tzionas_sequence`.
 
 Rows and times. ``.MOTION`` row 0 is the rigging (rest) pose. Aligned frame k (k = 0 … TotalAlligned − 1)
 uses row k + MotionnOffset and shows video frame k + VideoooOffset, both offsets from the sequence's
@@ -17,9 +19,9 @@ its rest frame (row 0, as in :func:`~handsim.io.tzionas.read_tzionas_skeleton`):
 * DoF angles: the rotation of bone b relative to its parent p, in b's rest frame,
   ``L_b,k = F_bᵀ F_p R_p,kᵀ R_b,k`` (= ``F_bᵀ A_p,k⁻¹ A_b,k F_b`` with ``A = M_k M_0⁻¹``), is exactly what
   :meth:`~handsim.datatypes.skeleton.Skeleton.forward_kinematics` composes (``R_b = R_p F_pᵀ F_b L_b``). It
-  is split
-  into the bone's DoF chain ``Rot(a_1, q_1) ⋯ Rot(a_n, q_n)`` (the ``.LIMITS`` axes, outermost first) by
-  :func:`fit_dof_angles`, which minimises the angle between ``L`` and its reconstruction.
+  is split into the bone's DoF chain ``Rot(a_1, q_1) ⋯ Rot(a_n, q_n)`` (the ``.LIMITS`` axes, outermost
+  first) by :func:`~handsim.datatypes.kinematics.fit_dof_angles`, which minimises the angle between ``L``
+  and its reconstruction.
 * Residuals (:class:`MotionFit`): per bone and frame, that angle; per skeleton joint and frame, the distance
   between the joint placed by forward kinematics of the fitted angles + root pose and the recording
   (bone origins ``T_b,k``; a joint not in the file, e.g. a fingertip, rigidly attached to its parent's
@@ -42,268 +44,27 @@ line; smaller deviations (the files print 6 digits) are removed by SVD (nearest 
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
-import numpy.typing as npt
 
-from handsim.datatypes.rotations import (
-    matrix_to_quat,
-    quat_about,
-    quat_conjugate,
-    quat_multiply,
-    quat_to_axis_angle,
-    rotation_about_axis,
-)
+from handsim.datatypes.kinematics import fit_dof_angles
+from handsim.datatypes.rotations import matrix_to_quat
 from handsim.datatypes.skeleton import Skeleton
 from handsim.datatypes.trajectory import ObjectTrack, Trajectory
-from handsim.datatypes.trajectory_ops import join_hands, with_limit_note
+from handsim.datatypes.trajectory_ops import with_limit_note
 from handsim.errors import FormatError, InputFileError, TrajectoryError
-from handsim.io._text import numbered_lines, parse_int, read_bytes, read_text, sha256_of
-from handsim.io.tzionas import SkelBone, read_motion, read_skel, read_tzionas_skeleton
+from handsim.io._text import numbered_lines, read_bytes, read_text, sha256_of
+from handsim.io.tzionas import read_tzionas_skeleton
+from handsim.io.tzionas_configs import IndexBounds, config_dir_of, read_index_bounds
+from handsim.io.tzionas_motion_file import read_motion
+from handsim.io.tzionas_skel import SkelBone, read_skel
 
 DEFAULT_FPS = 30.0
 """Frame rate assumed when none is given, Hz: the dataset's Kinect-class RGB-D sensor streams at 30 Hz."""
 ROTATION_ERROR_TOL = 1e-3
 """Largest ``max |RᵀR − I|`` of a ``.MOTION`` rotation that is repaired; beyond it the row is an error."""
-INDEX_BOUNDS_KEYS = ("TotalAlligned", "MotionnOffset", "VideoooOffset")
-"""The keys of ``INDEX_BOUNDS.txt``, in the dataset's spelling."""
-_GRID = 180  # samples of the outermost angle of a 3-DoF bone (2° apart)
-_GOLDEN_STEPS = 24  # brackets the outermost angle to ~1e-6 rad
-_NEWTON_STEPS = 3  # Gauss-Newton polish: exact chains are then recovered to ~1e-15 rad
-_TIE = 1e-9  # two 3-DoF solutions whose fit (cos of half the residual) differs less than this are equal
-
-
-# --------------------------------------------------------------------------------------------------
-# Sequence configuration files
-
-
-@dataclass(frozen=True)
-class IndexBounds:
-    """The content of a sequence's ``INDEX_BOUNDS.txt``.
-
-    Attributes:
-        total_aligned: Number of aligned frames.
-        motion_offset: ``.MOTION`` row of aligned frame 0 (row 0 is the rigging pose).
-        video_offset: Video frame of aligned frame 0.
-        source: The file, or "" when the values are defaults.
-        lines: 1-based lines of the three values (0 for defaults).
-    """
-
-    total_aligned: int
-    motion_offset: int
-    video_offset: int
-    source: str = ""
-    lines: tuple[int, int, int] = (0, 0, 0)
-
-
-def read_index_bounds(path: str | Path) -> IndexBounds:
-    """Read a sequence's ``INDEX_BOUNDS.txt``: ``TotalAlligned N``, ``MotionnOffset m``, ``VideoooOffset v``.
-
-    Args:
-        path: The file.
-
-    Returns:
-        The three values (TotalAlligned ≥ 1, offsets ≥ 0).
-
-    Raises:
-        InputFileError: The file is missing or unreadable.
-        FormatError: A line is not one of the three keys and an integer, a key is repeated or missing.
-    """
-    p = Path(path)
-    values: dict[str, tuple[int, int]] = {}
-    lines = numbered_lines(read_text(p))
-    for ln, text in lines:
-        tokens = text.split()
-        if len(tokens) != 2 or tokens[0] not in INDEX_BOUNDS_KEYS:
-            msg = f"expected '<key> <integer>' with key one of {list(INDEX_BOUNDS_KEYS)}, got {text!r}"
-            raise FormatError(p, msg, line=ln, field="key")
-        key = tokens[0]
-        if key in values:
-            msg = f"second {key!r} (first at line {values[key][1]})"
-            raise FormatError(p, msg, line=ln, field=key)
-        values[key] = (parse_int(tokens[1], p, ln, key, 1 if key == "TotalAlligned" else 0), ln)
-    missing = [k for k in INDEX_BOUNDS_KEYS if k not in values]
-    if missing:
-        msg = f"no {missing[0]!r} line; expected the keys {list(INDEX_BOUNDS_KEYS)}, one per line"
-        raise FormatError(p, msg, line=lines[-1][0] if lines else 1, field=missing[0])
-    (total, l1), (motion, l2), (video, l3) = (values[k] for k in INDEX_BOUNDS_KEYS)
-    return IndexBounds(total, motion, video, str(p), (l1, l2, l3))
-
-
-def read_models_info(path: str | Path) -> tuple[tuple[str, int], ...]:
-    """Read a sequence's ``MODELS_INFO.txt``: the model count, then one model name per line.
-
-    Args:
-        path: The file.
-
-    Returns:
-        The model names (e.g. ``Model_Hand_R``) with their 1-based lines.
-
-    Raises:
-        InputFileError: The file is missing or unreadable.
-        FormatError: The count is not an integer ≥ 1 or does not match the names that follow.
-    """
-    p = Path(path)
-    lines = numbered_lines(read_text(p))
-    if not lines:
-        raise FormatError(p, "empty file; expected the number of models", line=1, field="model count")
-    count = parse_int(lines[0][1], p, lines[0][0], "model count", 1)
-    names = lines[1:]
-    if len(names) != count:
-        msg = f"{len(names)} model names follow, expected {count} (the count on line {lines[0][0]})"
-        raise FormatError(p, msg, line=(names[-1] if names else lines[0])[0], field="model names")
-    return tuple((name, ln) for ln, name in names)
-
-
-def config_dir_of(models_dir: str | Path) -> Path:
-    """The ``Configs/NN`` folder that belongs to ``Models/NN`` (the dataset's layout)."""
-    m = Path(models_dir)
-    return m.parent.parent / "Configs" / m.name
-
-
-# --------------------------------------------------------------------------------------------------
-# Rotation decomposition
-
-
-def _wrap(angles: np.ndarray) -> np.ndarray:
-    return np.pi - np.mod(np.pi - angles, 2.0 * np.pi)  # (-π, π]
-
-
-def _pair_matrix(q: np.ndarray, a1: np.ndarray, a2: np.ndarray) -> np.ndarray:
-    """M with ⟨q, r(a1, x) r(a2, y)⟩ = [cos x/2, sin x/2] M [cos y/2, sin y/2]ᵀ, shape (…, 2, 2)."""
-    w, v = q[..., 0], q[..., 1:]
-    m11 = -w * float(a1 @ a2) + v @ np.cross(a1, a2)
-    return np.stack([np.stack([w, v @ a2], -1), np.stack([v @ a1, m11], -1)], -2)
-
-
-def _largest_singular(m: np.ndarray) -> np.ndarray:
-    """Largest singular value of 2 × 2 matrices (closed form)."""
-    s = np.sum(m * m, axis=(-2, -1))
-    det = m[..., 0, 0] * m[..., 1, 1] - m[..., 0, 1] * m[..., 1, 0]
-    return np.sqrt(0.5 * (s + np.sqrt(np.maximum(s * s - 4.0 * det * det, 0.0))))
-
-
-def _fit_one(q: np.ndarray, a: np.ndarray) -> np.ndarray:
-    """The angle about ``a`` closest to ``q``: its twist about ``a``."""
-    return _wrap(2.0 * np.arctan2(q[..., 1:] @ a, q[..., 0]))
-
-
-def _fit_two(q: np.ndarray, a1: np.ndarray, a2: np.ndarray) -> np.ndarray:
-    """Angles (…, 2) maximising |⟨q, r(a1, x) r(a2, y)⟩|: the largest singular pair of the pair matrix."""
-    u, _, vt = np.linalg.svd(_pair_matrix(q, a1, a2))
-    x = 2.0 * np.arctan2(u[..., 1, 0], u[..., 0, 0])
-    y = 2.0 * np.arctan2(vt[..., 0, 1], vt[..., 0, 0])
-    return _wrap(np.stack([x, y], axis=-1))
-
-
-def _profile(q: np.ndarray, axes: np.ndarray, x: np.ndarray) -> np.ndarray:
-    """Best fit (|⟨q, fit⟩|) of a 3-DoF chain with its outermost angle fixed at ``x``."""
-    rest = quat_multiply(quat_conjugate(quat_about(axes[0], x)), q)
-    return _largest_singular(_pair_matrix(rest, axes[1], axes[2]))
-
-
-def _golden_max(q: np.ndarray, axes: np.ndarray, lo: np.ndarray, hi: np.ndarray) -> np.ndarray:
-    """Golden-section search for the maximum of :func:`_profile` in [lo, hi], all frames at once."""
-    ratio = 0.5 * (math.sqrt(5.0) - 1.0)
-    x1, x2 = hi - ratio * (hi - lo), lo + ratio * (hi - lo)
-    f1, f2 = _profile(q, axes, x1), _profile(q, axes, x2)
-    for _ in range(_GOLDEN_STEPS):
-        left = f1 >= f2  # the maximum lies in [lo, x2]
-        lo, hi = np.where(left, lo, x1), np.where(left, x2, hi)
-        new = np.where(left, hi - ratio * (hi - lo), lo + ratio * (hi - lo))
-        f_new = _profile(q, axes, new)
-        x1, x2 = np.where(left, new, x2), np.where(left, x1, new)
-        f1, f2 = np.where(left, f_new, f2), np.where(left, f1, f_new)
-    return 0.5 * (lo + hi)
-
-
-def _fit_three(q: np.ndarray, axes: np.ndarray) -> np.ndarray:
-    """Angles (T, 3): search the outermost angle, the other two in closed form; smallest exact solution."""
-    step = 2.0 * np.pi / _GRID
-    grid = -np.pi + step * np.arange(_GRID)
-    values = _profile(q[:, None, :], axes, grid[None, :])  # (T, G)
-    peaks = (values >= np.roll(values, 1, axis=1)) & (values >= np.roll(values, -1, axis=1))
-    ranked = np.argsort(np.where(peaks, -values, np.inf), axis=1)[:, :2]
-    candidates, fits = [], []
-    for c in range(2):  # the two best peaks: a 3-DoF chain generally has two exact solutions
-        x = _golden_max(q, axes, grid[ranked[:, c]] - step, grid[ranked[:, c]] + step)
-        inner = _fit_two(quat_multiply(quat_conjugate(quat_about(axes[0], x)), q), axes[1], axes[2])
-        candidates.append(np.concatenate([_wrap(x)[:, None], inner], axis=1))
-        fits.append(_profile(q, axes, x))
-    smaller = np.sum(candidates[1] ** 2, axis=1) < np.sum(candidates[0] ** 2, axis=1)
-    second = (fits[1] >= np.maximum(fits[0], fits[1]) - _TIE) & (smaller | (fits[1] > fits[0] + _TIE))
-    angles = np.where(second[:, None], candidates[1], candidates[0])
-    for _ in range(_NEWTON_STEPS):
-        angles = _newton_step(q, axes, angles)
-    return angles
-
-
-def _chain_quats(axes: np.ndarray, angles: np.ndarray) -> np.ndarray:
-    out = np.tile([1.0, 0.0, 0.0, 0.0], (len(angles), 1))
-    for i, axis in enumerate(axes):
-        out = quat_multiply(out, quat_about(axis, angles[:, i]))
-    return out
-
-
-def _residual(q: np.ndarray, axes: np.ndarray, angles: np.ndarray) -> np.ndarray:
-    """Rotation vector (T, 3) taking the chain to ``q``, in the chain's end frame."""
-    return quat_to_axis_angle(quat_multiply(quat_conjugate(_chain_quats(axes, angles)), q))
-
-
-def _newton_step(q: np.ndarray, axes: np.ndarray, angles: np.ndarray) -> np.ndarray:
-    """One Gauss-Newton step on the residual rotation, kept only where it lowers the residual."""
-    error = _residual(q, axes, angles)
-    jacobian = np.empty((len(angles), 3, len(axes)))
-    for i, axis in enumerate(axes):  # d(chain)/d(q_i) in the end frame: a_i turned back by the inner DoFs
-        inner = np.tile(np.eye(3), (len(angles), 1, 1))
-        for j in range(i + 1, len(axes)):
-            inner = inner @ rotation_about_axis(axes[j], angles[:, j])
-        jacobian[:, :, i] = np.einsum("kji,j->ki", inner, axis)
-    step = np.einsum("kij,kj->ki", np.linalg.pinv(jacobian), error)
-    moved = _wrap(angles + step)
-    better = np.linalg.norm(_residual(q, axes, moved), axis=1) < np.linalg.norm(error, axis=1)
-    return np.where(better[:, None], moved, angles)
-
-
-def fit_dof_angles(rotations: npt.ArrayLike, axes: npt.ArrayLike) -> tuple[np.ndarray, np.ndarray]:
-    """Split rotations into a chain of rotations about fixed axes, ``R ≈ Rot(a_1, q_1) ⋯ Rot(a_n, q_n)``.
-
-    The angles minimise the angle between ``R`` and the chain. One axis: the twist of ``R`` about it
-    (closed form). Two axes: the largest singular pair of a 2 × 2 matrix (closed form). Three axes: a
-    search over ``q_1`` (2° grid, then golden section) with the other two in closed form, polished by
-    Gauss-Newton steps; where two exact solutions exist, the one with the smaller ``Σ q²`` is returned.
-
-    Args:
-        rotations: Rotation matrices, shape (T, 3, 3).
-        axes: Unit axes, outermost first, shape (n, 3) with n ≤ 3.
-
-    Returns:
-        Angles in radians in (−π, π], shape (T, n), and the residual angle between each rotation and its
-        reconstruction, radians, shape (T,).
-
-    Raises:
-        ValueError: More than 3 axes, an axis that is not a unit vector, or wrongly shaped input.
-    """
-    r = np.asarray(rotations, dtype=float)
-    a = np.asarray(axes, dtype=float).reshape(-1, 3)
-    if r.ndim != 3 or r.shape[1:] != (3, 3):
-        raise ValueError(f"rotations must have shape (T, 3, 3), got {r.shape}")
-    if len(a) > 3:
-        raise ValueError(f"at most 3 axes can be fitted, got {len(a)}")
-    if len(a) and np.abs(np.linalg.norm(a, axis=1) - 1.0).max() > 1e-6:
-        raise ValueError(f"axes must be unit vectors, got norms {np.linalg.norm(a, axis=1)}")
-    q = matrix_to_quat(r)
-    if len(a) == 0:
-        angles = np.zeros((len(r), 0))
-    elif len(a) == 1:
-        angles = _fit_one(q, a[0])[:, None]
-    elif len(a) == 2:
-        angles = _fit_two(q, a[0], a[1])
-    else:
-        angles = _fit_three(q, a)
-    return angles, np.linalg.norm(_residual(q, a, angles), axis=1)
 
 
 # --------------------------------------------------------------------------------------------------
@@ -715,175 +476,3 @@ def read_tzionas_object_motion(
         TrajectoryError: More than two bones, or a second bone without exactly one DoF.
     """
     return fit_tzionas_object_motion(skel_path, index_bounds=index_bounds)[0]
-
-
-def object_track_name(model: str) -> str:
-    """Key of an object model in :attr:`Trajectory.objects` (``Model_Object_Cube`` → ``cube``).
-
-    It equals the name :func:`~handsim.io.tzionas_objects.read_tzionas_object` gives the object model.
-    """
-    return model.removeprefix("Model_Object_").lower()
-
-
-HAND_SIDES = {"Model_Hand_R": "right", "Model_Hand_L": "left"}
-"""A two-hand sequence's hand models and the names of their hands in the scene (right first)."""
-
-
-@dataclass(frozen=True)
-class _Sequence:
-    directory: Path
-    info_path: Path
-    models: tuple[tuple[str, int], ...]
-    hands: list[tuple[str, int]]
-    index_bounds: Path | None
-
-
-def _sequence(models_dir: str | Path) -> _Sequence:
-    directory = Path(models_dir)
-    config = config_dir_of(directory)
-    info_path = config / "MODELS_INFO.txt"
-    models = read_models_info(info_path)
-    hands = [(name, ln) for name, ln in models if name.startswith("Model_Hand")]
-    bounds = config / "INDEX_BOUNDS.txt"
-    return _Sequence(directory, info_path, models, hands, bounds if bounds.is_file() else None)
-
-
-def _object_tracks(seq: _Sequence) -> tuple[dict[str, ObjectTrack], list[str]]:
-    """Every listed object's track by :func:`object_track_name`, and notes (objects', unknown models')."""
-    notes: list[str] = []
-    objects: dict[str, ObjectTrack] = {}
-    for model, ln in seq.models:
-        if not model.startswith("Model_Object"):
-            if not model.startswith("Model_Hand"):
-                notes.append(
-                    f"{seq.info_path.name}:{ln}: model {model!r} is neither a hand nor an object: ignored"
-                )
-            continue
-        skel = _listed(seq.directory, model, seq.info_path, ln)
-        track, fit = fit_tzionas_object_motion(skel, index_bounds=seq.index_bounds)
-        key = object_track_name(model)
-        objects[key] = track
-        notes.extend(f"object {key!r}: {n}" for n in fit.notes)
-    return objects, notes
-
-
-def read_tzionas_sequence(
-    models_dir: str | Path, *, hand: str | None = None, fps: float | None = None
-) -> Trajectory:
-    """Read a whole Tzionas/Ballan sequence: one hand's trajectory with every object's pose track.
-
-    The models are those of ``Configs/NN/MODELS_INFO.txt`` (beside ``Models/NN``), the aligned frames those
-    of ``Configs/NN/INDEX_BOUNDS.txt``. Other hands are ignored (noted); :func:`read_tzionas_hands` reads
-    both hands of a two-hand sequence.
-
-    Args:
-        models_dir: The sequence's ``Models/NN`` folder.
-        hand: The hand model to read (e.g. ``Model_Hand_L``); by default the first ``Model_Hand_*`` listed.
-        fps: Frame rate in Hz; None assumes :data:`DEFAULT_FPS`.
-
-    Returns:
-        The hand's trajectory (as :func:`read_tzionas_motion`) with ``objects`` keyed by
-        :func:`object_track_name`; object notes are prefixed with the object's name.
-
-    Raises:
-        InputFileError: ``MODELS_INFO.txt`` or a listed model's file is missing or unreadable.
-        FormatError: A file does not follow its format (file, line and field are named).
-        TrajectoryError: No hand listed, or ``hand`` is not one of the listed hands.
-        ValueError: ``fps`` is not a finite number > 0.
-    """
-    seq = _sequence(models_dir)
-    hands, info_path = seq.hands, seq.info_path
-    if not hands or (hand is not None and hand not in [h for h, _ in hands]):
-        raise TrajectoryError(
-            f"{info_path}: {'no hand model' if not hands else f'no hand {hand!r}'} (Model_Hand_*) listed; "
-            f"it lists {[name for name, _ in seq.models]}"
-        )
-    name, line = next((h, ln) for h, ln in hands if hand in (None, h))
-    trajectory = read_tzionas_motion(
-        _listed(seq.directory, name, seq.info_path, line), fps=fps, index_bounds=seq.index_bounds
-    )
-    notes = list(trajectory.notes)
-    others = [h for h, _ in hands if h != name]
-    if others:
-        notes.append(f"{seq.info_path.name} also lists {others}: ignored (a trajectory drives one hand)")
-    objects, object_notes = _object_tracks(seq)
-    return replace(trajectory, objects=objects, notes=(*notes, *object_notes))
-
-
-def two_hand_models(info_path: Path, models: tuple[tuple[str, int], ...]) -> dict[str, str]:
-    """The hands of a sequence listing two: scene name (``right``, ``left``) → model, right first.
-
-    Args:
-        info_path: The sequence's ``MODELS_INFO.txt`` (for messages).
-        models: Its models (:func:`read_models_info`).
-
-    Returns:
-        ``{"right": "Model_Hand_R", "left": "Model_Hand_L"}``.
-
-    Raises:
-        TrajectoryError: The hands listed are not exactly :data:`HAND_SIDES` (the message names the lines).
-    """
-    hands = [(name, ln) for name, ln in models if name.startswith("Model_Hand")]
-    if sorted(name for name, _ in hands) != sorted(HAND_SIDES):
-        listed = ", ".join(f"{name!r} (line {ln})" for name, ln in hands)
-        raise TrajectoryError(
-            f"{info_path}: lists the hands {listed}; a two-hand sequence lists exactly "
-            f"{' and '.join(HAND_SIDES)}, one each"
-        )
-    return {side: model for model, side in HAND_SIDES.items()}
-
-
-def read_tzionas_hands(models_dir: str | Path, *, fps: float | None = None) -> Trajectory:
-    """Read a Tzionas/Ballan sequence with two hands: both hands' trajectories and every object's track.
-
-    Each hand is read as :func:`read_tzionas_motion` reads it (aligned frames from the sequence's
-    ``INDEX_BOUNDS.txt``) and the two are joined (:func:`handsim.datatypes.trajectory_ops.join_hands`): DoF
-    columns
-    ``right/<dof>`` and ``left/<dof>``, root poses under ``hand_roots["right"]`` and ``["left"]``.
-
-    Args:
-        models_dir: The sequence's ``Models/NN`` folder; its ``Configs/NN/MODELS_INFO.txt`` lists
-            ``Model_Hand_R`` and ``Model_Hand_L`` (:func:`two_hand_models`).
-        fps: Frame rate in Hz; None assumes :data:`DEFAULT_FPS`.
-
-    Returns:
-        The two-hand trajectory (``source`` the ``Models/NN`` folder, no ``sha256``: the run records hash
-        each input file) with ``objects`` keyed by :func:`object_track_name`; each hand's notes are prefixed
-        with its name, object notes with the object's.
-
-    Raises:
-        InputFileError: ``MODELS_INFO.txt`` or a listed model's file is missing or unreadable.
-        FormatError: A file does not follow its format (file, line and field are named).
-        TrajectoryError: The hands listed are not ``Model_Hand_R`` and ``Model_Hand_L``, or their motions
-            have different frame counts (both files and counts are named).
-        ValueError: ``fps`` is not a finite number > 0.
-    """
-    seq = _sequence(models_dir)
-    models = two_hand_models(seq.info_path, seq.models)
-    lines = dict(seq.hands)
-    skels = {
-        side: _listed(seq.directory, model, seq.info_path, lines[model]) for side, model in models.items()
-    }
-    frames = {side: read_skel(skel)[0] for side, skel in skels.items()}
-    if len(set(frames.values())) > 1:
-        counts = " and ".join(
-            f"{skels[side].with_suffix('.MOTION')} has {n} frames ({skels[side].name}'s count)"
-            for side, n in frames.items()
-        )
-        raise TrajectoryError(
-            f"the two hands of sequence {seq.directory.name} must share their frames: {counts}"
-        )
-    parts = {
-        side: read_tzionas_motion(skel, fps=fps, index_bounds=seq.index_bounds)
-        for side, skel in skels.items()
-    }
-    objects, object_notes = _object_tracks(seq)
-    joined = join_hands(parts, objects=objects, source=str(seq.directory), sha256="")
-    return replace(joined, notes=(*joined.notes, *object_notes))
-
-
-def _listed(directory: Path, model: str, info_path: Path, line: int) -> Path:
-    skel = directory / f"{model}.SKEL"
-    if not skel.is_file():
-        raise InputFileError(f"{skel}: file not found; {info_path}:{line} lists model {model!r}")
-    return skel

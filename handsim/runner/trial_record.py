@@ -12,32 +12,30 @@ import math
 import platform
 from pathlib import Path
 
+import mujoco
 import numpy as np
 
 from handsim.datatypes.fingers import finger_groups
 from handsim.datatypes.trajectory import Trajectory
 from handsim.glove.checks import CHECK_FIELDS, RecordingChecks
 from handsim.sim.compiled import SimScene
+from handsim.sim.curves import CURVES, DEG, row_max, tracking_error
 from handsim.sim.plausibility import limit_violations
 from handsim.sim.replay import ReplayResult
 from handsim.trials import TrialEntry
+from handsim.version import __version__
 
 MAX_CURVE_POINTS = 600
 """Most points per curve in a record."""
 CURVE_DIGITS = 6
 """Significant digits of curve values."""
-MM, DEG = 1000.0, 180.0 / math.pi
 _CHUNK = 1 << 20
 
 
 def versions() -> dict:
     """Versions that decide a record's numbers: handsim, MuJoCo, NumPy, Python and the platform."""
-    import mujoco
-
-    import handsim
-
     return {
-        "handsim": handsim.__version__,
+        "handsim": __version__,
         "mujoco": mujoco.__version__,
         "numpy": np.__version__,
         "python": platform.python_version(),
@@ -100,20 +98,19 @@ def curves(result: ReplayResult) -> dict:
     touching = touching_links(result)[idx]
     groups = finger_groups(result.scene["links"]) if objects else {}
     contacts = {g: touching[:, links].sum(axis=1).astype(int).tolist() for g, links in groups.items()}
-    drift = None
-    if result.scene["scenario"] == "recorded" and f.object_position_error.shape[1]:
-        err = f.object_position_error[idx]
-        finite = np.isfinite(err)
-        drift = rounded(np.where(finite.any(axis=1), np.where(finite, err, -np.inf).max(axis=1), np.nan), MM)
-    tracking = f.tracking_error[idx]
-    rms = np.sqrt(np.mean(tracking**2, axis=1)) if tracking.shape[1] else np.full(idx.shape, np.nan)
+    recorded = result.scene["scenario"] == "recorded" and f.object_position_error.shape[1]
+    values = {  # SI, the curves of handsim.sim.curves; None where the curve does not exist
+        "penetration": f.penetration[idx] if objects else None,
+        "drift": row_max(f.object_position_error[idx]) if recorded else None,
+        "tracking_error": tracking_error(f.tracking_error[idx]),
+        "self_penetration": None if objects else f.self_penetration[idx],
+    }
+    out = {CURVES[k].key: None if v is None else rounded(v, CURVES[k].scale) for k, v in values.items()}
     return {
         "time_s": rounded(f.times[idx]),
-        "penetration_mm": rounded(f.penetration[idx], MM) if objects else None,
+        "penetration_mm": out.pop("penetration_mm"),
         "contacts_per_finger": contacts,
-        "drift_mm": drift,
-        "tracking_error_deg": rounded(rms, DEG),
-        "self_penetration_mm": None if objects else rounded(f.self_penetration[idx], MM),
+        **out,
         "stride": int(idx[1] - idx[0]) if idx.size > 1 else 1,
     }
 

@@ -71,7 +71,8 @@ def pad_force_curve(hand: mujoco.MjSpec, link: str, depths: npt.ArrayLike) -> np
     Args:
         hand: A hand spec (:func:`handsim.builders.build_hand`), in its rest pose; not modified.
         link: The link (body name), e.g. ``"if_dip"`` for the index finger's distal phalanx.
-        depths: Penetration depths, m (> 0).
+        depths: Penetration depths into the collision geometry, m (> 0; ≥ 0 for a skin with a rest offset,
+            :data:`handsim.builders.surfaces.FITTED_SKIN`, whose force counts from its rest surface).
 
     Returns:
         The forces, N, one per depth.
@@ -96,7 +97,8 @@ def pad_force_curve(hand: mujoco.MjSpec, link: str, depths: npt.ArrayLike) -> np
             row = _normal_row(pressed, state, geom)
             shift += depth + state.efc_pos[row]
         k, _, impedance, _ = state.efc_KBIP[row]
-        forces.flat[i] = k * impedance * -state.efc_pos[row] / state.efc_R[row]
+        violation = state.efc_pos[row] - state.efc_margin[row]  # from the skin's rest surface (margin)
+        forces.flat[i] = k * impedance * -violation / state.efc_R[row]
     return forces
 
 

@@ -7,6 +7,7 @@ from dataclasses import asdict, dataclass
 
 import numpy as np
 
+from handsim.sim.curves import slip as slip_curve
 from handsim.sim.metrics import FrameMetrics, MetricSpec
 
 NO_OBJECT = "not judged: no object (a hand-only sequence: nothing to touch, hold or drift)"
@@ -97,8 +98,7 @@ def hold_outcome(
     r = int(np.searchsorted(t, release_time - 1e-9))
     stop_index = int(np.searchsorted(t, window[1] + 1e-9))
     last = min(stop_index, t.shape[0]) - 1
-    rel = frames.object_in_hand[:, object_index]
-    slip = np.linalg.norm(rel - rel[r], axis=1)
+    slip = slip_curve(frames.object_in_hand[:, object_index], r)
     contact = frames.hand_contact[:, object_index]
     lost, reason = None, None
     gap_start = None

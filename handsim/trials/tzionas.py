@@ -7,7 +7,7 @@ The hand is the motion's own ``.SKEL`` (+ ``.LIMITS``, ``.OFF``, ``.SKIN`` besid
 A sequence whose ``MODELS_INFO.txt`` lists two hands (``Model_Hand_R`` and ``Model_Hand_L``) is one trial
 whose recording is its ``Models/NN`` folder: both hands in one scene (``hand/right/``, ``hand/left/``), each
 root following its own recorded pose and its DoFs driven by its own motion
-(:func:`~handsim.io.tzionas_motion.read_tzionas_hands`), the objects as for one hand. Either hand's
+(:func:`~handsim.io.tzionas_sequence.read_tzionas_hands`), the objects as for one hand. Either hand's
 ``.MOTION`` given as the recording finds the whole sequence (a note says so).
 """
 
@@ -47,7 +47,7 @@ def _matches(path: Path) -> bool:
 
 
 def _find(path: Path, options: TrialOptions) -> Trial:
-    from handsim.io.tzionas_motion import config_dir_of, read_models_info
+    from handsim.io.tzionas_configs import config_dir_of, read_models_info
 
     models_dir = path if path.is_dir() else path.parent
     info = config_dir_of(models_dir) / "MODELS_INFO.txt"
@@ -110,7 +110,7 @@ def _check_skeleton(recording: Path, own: list[Path], options: TrialOptions) -> 
 
 
 def _objects(models_dir: Path, info: Path, models: tuple[tuple[str, int], ...]) -> tuple[TrialObject, ...]:
-    from handsim.io.tzionas_motion import object_track_name
+    from handsim.io.tzionas_sequence import object_track_name
 
     return tuple(
         TrialObject(str(models_dir / f"{name}.SKEL"), object_track_name(name), f"{info.name}:{line}")
@@ -123,7 +123,7 @@ def _two_hand_trial(
     path: Path, models_dir: Path, info: Path, models: tuple[tuple[str, int], ...], options: TrialOptions
 ) -> Trial:
     """The trial of a sequence listing two hands: its ``Models/NN`` folder is the recording."""
-    from handsim.io.tzionas_motion import two_hand_models
+    from handsim.io.tzionas_sequence import two_hand_models
 
     skeletons = _hand_skeletons(models_dir, two_hand_models(info, models))
     lines = dict(models)
@@ -162,7 +162,8 @@ def _hands_of(trial: Trial) -> dict[str, tuple[Path, Path]]:
     if not _is_two_hand(trial):
         motion = Path(trial.trajectory_path)
         return {"": (motion, Path(trial.skeleton_path or motion.with_suffix(".SKEL")))}
-    from handsim.io.tzionas_motion import config_dir_of, read_models_info, two_hand_models
+    from handsim.io.tzionas_configs import config_dir_of, read_models_info
+    from handsim.io.tzionas_sequence import two_hand_models
 
     folder = Path(trial.trajectory_path)
     info = config_dir_of(folder) / "MODELS_INFO.txt"
@@ -175,14 +176,18 @@ def _hands_of(trial: Trial) -> dict[str, tuple[Path, Path]]:
 
 def _load(trial: Trial, metrics: MetricSpec | None, progress: bool) -> LoadedTrial:
     from handsim.builders import build_hand
+    from handsim.builders.surfaces import FITTED_SKIN
     from handsim.io import read_skeleton, read_trajectory
-    from handsim.io.tzionas_motion import read_tzionas_hands
+    from handsim.io.tzionas_sequence import read_tzionas_hands
     from handsim.sim.scenarios import recorded_scene
 
     two = _is_two_hand(trial)
     trajectory = read_tzionas_hands(trial.trajectory_path) if two else read_trajectory(trial.trajectory_path)
     skeletons = {side: read_skeleton(skel) for side, (_, skel) in _hands_of(trial).items()}
-    hands = {side: build_hand(skeleton, collision=trial.collision) for side, skeleton in skeletons.items()}
+    # The Tzionas hands were fitted to observed skin: their pads' rest surface lies outside the mesh.
+    hands = {
+        side: build_hand(sk, collision=trial.collision, skin=FITTED_SKIN) for side, sk in skeletons.items()
+    }
     specs, objects, notes = build_objects(trial, progress)
     tracks = {o.track: s for o, s in zip(objects, specs, strict=True)}
     scene = recorded_scene(hands if two else hands[""], trajectory, tracks)
@@ -201,6 +206,8 @@ def _load(trial: Trial, metrics: MetricSpec | None, progress: bool) -> LoadedTri
         notes=(
             *trial.notes,
             *(f"{side + ' hand: ' if side else ''}{n}" for side, sk in skeletons.items() for n in sk.notes),
+            f"skin: the finger pads' rest surface lies {FITTED_SKIN.margin * 1000:g} mm outside the fitted "
+            "hand mesh (the fit is the compressed skin; docs/physics.md, fitted skin)",
             *notes,
         ),
     )
@@ -218,7 +225,7 @@ def _siblings(path: Path, exts: tuple[str, ...]) -> list[Path]:
 
 
 def _inputs(trial: Trial, base: Path) -> tuple[TrialInput, ...]:
-    from handsim.io.tzionas_motion import config_dir_of
+    from handsim.io.tzionas_configs import config_dir_of
 
     hands = _hands_of(trial)
     motion, _ = next(iter(hands.values()))

@@ -13,10 +13,10 @@ from pathlib import Path
 
 import numpy as np
 
+from handsim.sim.curves import CURVES, DEG, MM, row_max, tracking_error
+from handsim.sim.curves import slip as slip_curve
 from handsim.sim.replay import ReplayResult
 from handsim.viz.plotting import _pyplot, save_figure
-
-MM, DEG = 1000.0, 180.0 / math.pi
 
 
 @dataclass(frozen=True)
@@ -28,7 +28,8 @@ class ReplayCurves:
         penetration: Deepest hand–object penetration, m (N,); NaN without objects (not judged).
         links: Hand links with collision geometry (none without objects: no hand–object contact to count).
         link_contacts: Contacts per hand link with any object part (N, links).
-        tracking_error_norm: Euclidean norm over the hand's DoFs of achieved minus target angle, rad (N,).
+        tracking_error: RMS over the hand's DoFs of achieved minus target angle, rad (N,)
+            (:func:`handsim.sim.curves.tracking_error`).
         tips: Fingertip sites.
         tip_error: Distance of each fingertip from where the targets put it, m (N, tips).
         objects: Object labels (their scene prefixes without ``/``: ``obj``, ``obj0`` …).
@@ -48,7 +49,7 @@ class ReplayCurves:
     penetration: np.ndarray
     links: tuple[str, ...]
     link_contacts: np.ndarray
-    tracking_error_norm: np.ndarray
+    tracking_error: np.ndarray
     tips: tuple[str, ...]
     tip_error: np.ndarray
     objects: tuple[str, ...]
@@ -73,9 +74,9 @@ class ReplayCurves:
             "contacts_per_link": {
                 n: self.link_contacts[:, i].astype(int).tolist() for i, n in enumerate(self.links)
             },
-            "tracking_error_norm_deg": col(self.tracking_error_norm, DEG),
+            "tracking_error_deg": col(self.tracking_error, DEG),
             "tip_error_mm": {n: col(self.tip_error[:, i], MM) for i, n in enumerate(self.tips)},
-            "max_tip_error_mm": col(_nanmax(self.tip_error), MM),
+            "max_tip_error_mm": col(row_max(self.tip_error), MM),
             "drift_mm": None,
             "rotation_drift_deg": None,
             "slip_mm": None if self.slip is None else col(self.slip, MM),
@@ -91,15 +92,6 @@ class ReplayCurves:
                 n: col(self.rotation_drift[:, i], DEG) for i, n in enumerate(self.objects)
             }
         return out
-
-
-def _nanmax(x: np.ndarray) -> np.ndarray:
-    """Row maximum ignoring NaN; NaN for an all-NaN or empty row."""
-    x = np.asarray(x, dtype=float)
-    if x.shape[1] == 0:
-        return np.full(x.shape[0], np.nan)
-    finite = np.isfinite(x)
-    return np.where(finite.any(axis=1), np.where(finite, x, -np.inf).max(axis=1), np.nan)
 
 
 def _object_labels(parts: list[str], part_object: np.ndarray, count: int) -> tuple[str, ...]:
@@ -126,11 +118,7 @@ def replay_curves(result: ReplayResult) -> ReplayCurves:
     slip = None
     hold = result.hold
     if hold is not None and nobj:
-        rel = f.object_in_hand[:, 0]
-        r = int(np.searchsorted(f.times, hold.released_at - 1e-9))
-        slip = np.full(n, np.nan)
-        if r < n:
-            slip[r:] = np.linalg.norm(rel[r:] - rel[r], axis=1)
+        slip = slip_curve(f.object_in_hand[:, 0], int(np.searchsorted(f.times, hold.released_at - 1e-9)))
     diverged_at = None
     if result.diverged is not None and n:
         diverged_at = float(f.times[-1])
@@ -140,7 +128,7 @@ def replay_curves(result: ReplayResult) -> ReplayCurves:
         penetration=f.penetration if nobj else np.full(n, np.nan),
         links=tuple(result.scene.get("links", ())) if nobj else (),
         link_contacts=f.contact_count.sum(axis=2) if touching else np.zeros((n, 0), int),
-        tracking_error_norm=np.linalg.norm(f.tracking_error, axis=1),
+        tracking_error=tracking_error(f.tracking_error),
         tips=tuple(result.scene.get("tips", ())),
         tip_error=f.tip_error,
         objects=_object_labels(list(result.scene.get("parts", ())), f.part_object, nobj),
@@ -207,10 +195,10 @@ def plot_replay(result: ReplayResult, path: str | Path, *, title: str | None = N
     most = int(c.link_contacts.max()) if c.link_contacts.size else 0
     ax_con.set_ylabel(f"contacts per link\n(dark 1 … bright {max(most, 1)})", fontsize=8)
 
-    ax_err.plot(t, c.tracking_error_norm * DEG, lw=1.0, color="#1f4e8c", label="tracking error norm (°)")
+    ax_err.plot(t, c.tracking_error * DEG, lw=1.0, color="#1f4e8c", label=CURVES["tracking_error"].label)
     ax_err.set_ylabel("tracking\nerror (°)", fontsize=8)
     tips = ax_err.twinx()
-    tips.plot(t, _nanmax(c.tip_error) * MM, lw=1.0, color="#e67e22", label="worst fingertip (mm)")
+    tips.plot(t, row_max(c.tip_error) * MM, lw=1.0, color="#e67e22", label=CURVES["tip_error"].label)
     tips.set_ylabel("tip error\n(mm)", fontsize=8, color="#e67e22")
 
     metrics = result.config.get("metrics", {})
