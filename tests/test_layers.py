@@ -1,0 +1,54 @@
+"""The architecture is enforced: the import-linter contracts in pyproject.toml hold, and a violation fails.
+
+The contracts (a layers contract: cli → report/export → envs/runner → viz → trials → sim → builders → io →
+glove → datatypes → base; the report reads records only) are checked on the source tree. The second test
+copies the package, adds one upward import to a data-type module and shows that ``lint-imports`` refuses
+it, naming the offending import.
+"""
+
+from __future__ import annotations
+
+import os
+import shutil
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+ROOT = Path(__file__).resolve().parents[1]
+
+pytest.importorskip("importlinter", reason='import-linter checks the layers: pip install ".[test]"')
+
+
+def _lint_imports(root: Path) -> subprocess.CompletedProcess:
+    env = {**os.environ, "PYTHONPATH": str(root)}
+    code = "import sys; from importlinter.cli import lint_imports_command; sys.exit(lint_imports_command())"
+    return subprocess.run(
+        [sys.executable, "-c", code, "--no-cache", str(root / "pyproject.toml")],
+        cwd=root,
+        env=env,
+        capture_output=True,
+        text=True,
+        timeout=300,
+    )
+
+
+def test_import_contracts_are_kept():
+    run = _lint_imports(ROOT)
+    assert run.returncode == 0, run.stdout + run.stderr
+    assert "Contracts: 2 kept, 0 broken." in run.stdout
+
+
+def test_lint_imports_fails_when_a_data_type_imports_the_cli(tmp_path):
+    def python_only(folder: str, names: list[str]) -> list[str]:  # lint-imports reads Python files only
+        return [n for n in names if n == "__pycache__" or not (n.endswith(".py") or Path(folder, n).is_dir())]
+
+    shutil.copytree(ROOT / "handsim", tmp_path / "handsim", ignore=python_only)
+    shutil.copy(ROOT / "pyproject.toml", tmp_path / "pyproject.toml")
+    skeleton = tmp_path / "handsim" / "datatypes" / "skeleton.py"
+    skeleton.write_text(skeleton.read_text() + "\n\ndef _upward():\n    import handsim.cli  # noqa: F401\n")
+    run = _lint_imports(tmp_path)
+    assert run.returncode == 1
+    assert "handsim.datatypes is not allowed to import handsim.cli:" in run.stdout
+    assert "handsim.datatypes.skeleton -> handsim.cli" in run.stdout
