@@ -12,12 +12,12 @@ from handsim.trials.base import (
     LoadedTrial,
     Trial,
     TrialError,
-    TrialKind,
     TrialObject,
     TrialOptions,
     UnsupportedTrialError,
 )
-from handsim.trials.discovery import CompanionFile, Discovery, TrialEntry, TrialInput, UnknownFile, select
+from handsim.trials.discovery import Discovery, select
+from handsim.trials.kind import TrialKind
 from handsim.trials.registry import (
     KINDS,
     TRIAL_KINDS,
@@ -27,6 +27,7 @@ from handsim.trials.registry import (
     load_trial,
     trial_kind,
 )
+from handsim.trials.sorting import CompanionFile, TrialEntry, TrialInput, UnknownFile
 
 __all__ = [
     "HAND_COLLISIONS",

@@ -18,12 +18,12 @@ from handsim.trials.base import (
     LoadedTrial,
     Trial,
     TrialError,
-    TrialKind,
     TrialObject,
     TrialOptions,
     build_objects,
 )
-from handsim.trials.discovery import Sorting, TrialEntry, group_fields, relative, trial_input
+from handsim.trials.kind import TrialKind
+from handsim.trials.sorting import Sorting, TrialEntry, group_fields, relative, trial_input
 
 if TYPE_CHECKING:
     from handsim.sim.metrics import MetricSpec

@@ -20,13 +20,13 @@ from handsim.trials.base import (
     LoadedTrial,
     Trial,
     TrialError,
-    TrialKind,
     TrialObject,
     TrialOptions,
     UnsupportedTrialError,
 )
-from handsim.trials.discovery import Sorting, TrialEntry, TrialInput, trial_input
 from handsim.trials.glove import glove_loaded, parametric_hand
+from handsim.trials.kind import TrialKind
+from handsim.trials.sorting import Sorting, TrialEntry, TrialInput, trial_input
 
 if TYPE_CHECKING:
     from handsim.glove.phases import AnnotationMatch

@@ -1,6 +1,6 @@
 """The one list of trial kinds, and what finds, loads and discovers trials through it.
 
-Adding a kind is one module exposing a :class:`~handsim.trials.base.TrialKind` and one entry in
+Adding a kind is one module exposing a :class:`~handsim.trials.kind.TrialKind` and one entry in
 :data:`KINDS`; no other kind changes.
 """
 
@@ -18,11 +18,11 @@ from handsim.trials.base import (
     LoadedTrial,
     Trial,
     TrialError,
-    TrialKind,
     TrialOptions,
     UnsupportedTrialError,
 )
 from handsim.trials.discovery import Discovery, discover_with
+from handsim.trials.kind import TrialKind
 
 if TYPE_CHECKING:
     from handsim.sim.metrics import MetricSpec

@@ -11,9 +11,10 @@ from pathlib import Path
 from typing import TYPE_CHECKING
 
 from handsim.errors import HandsimError
-from handsim.trials.base import LoadedTrial, Trial, TrialKind, TrialObject, TrialOptions
-from handsim.trials.discovery import Sorting, TrialEntry, group_fields, trial_input
+from handsim.trials.base import LoadedTrial, Trial, TrialObject, TrialOptions
 from handsim.trials.glove import glove_loaded, parametric_hand
+from handsim.trials.kind import TrialKind
+from handsim.trials.sorting import Sorting, TrialEntry, group_fields, trial_input
 
 if TYPE_CHECKING:
     from handsim.sim.metrics import MetricSpec

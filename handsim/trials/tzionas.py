@@ -22,12 +22,12 @@ from handsim.trials.base import (
     LoadedTrial,
     Trial,
     TrialError,
-    TrialKind,
     TrialObject,
     TrialOptions,
     build_objects,
 )
-from handsim.trials.discovery import Sorting, TrialEntry, TrialInput, group_fields, trial_input
+from handsim.trials.kind import TrialKind
+from handsim.trials.sorting import Sorting, TrialEntry, TrialInput, group_fields, trial_input
 
 if TYPE_CHECKING:
     from handsim.sim.metrics import MetricSpec
