@@ -11,8 +11,8 @@ from gymnasium.utils.env_checker import check_env
 
 import handsim  # noqa: F401  registers the environments
 from handsim.assets import TZIONAS_DIR
-from handsim.envs.recordings import RecordingError, cached_recordings, load_recording
-from handsim.envs.replay_env import ReplayEnv, default_replay_inputs
+from handsim.envs.recordings import RecordingError, cached_recordings, default_replay_inputs, load_recording
+from handsim.envs.replay_env import ReplayEnv
 from handsim.errors import InputFileError
 from handsim.trials import TrialError
 from tests.tzionas_fixtures import two_hand_sample

@@ -14,7 +14,9 @@ from scipy.spatial.transform import Rotation
 
 import handsim  # noqa: F401  registers the environments
 from handsim.envs.grasp_env import GraspEnv
-from handsim.envs.replay_env import REWARD_TERMS, STEP_NUMBERS, ReplayEnv, rotation_error
+from handsim.envs.replay_env import ReplayEnv
+from handsim.envs.replay_observation import rotation_error
+from handsim.envs.replay_reward import REWARD_TERMS, STEP_NUMBERS
 from tests.helpers import glove_switch_inputs
 from tests.test_vector_env import _pair, _run_both
 

@@ -21,7 +21,9 @@ import handsim  # noqa: F401  registers the environments
 from handsim.builders.graspdb_objects import UnknownObjectError
 from handsim.envs import ENVS, register_envs
 from handsim.envs.grasp_env import GraspEnv
-from handsim.envs.replay_env import REWARD_TERMS, ReplayEnv, default_replay_inputs
+from handsim.envs.recordings import default_replay_inputs
+from handsim.envs.replay_env import ReplayEnv
+from handsim.envs.replay_reward import REWARD_TERMS
 from handsim.sim.drive import scenario_switches
 from handsim.sim.replay import ReplayConfig, replay
 from tests.helpers import glove_switch_inputs

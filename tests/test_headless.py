@@ -131,7 +131,7 @@ def test_renders_headless_after_mujoco_was_imported_first():
 
 @pytest.mark.skipif(not sys.platform.startswith("linux"), reason="the headless default is Linux's")
 def test_the_ray_workers_gl_setting_leaves_this_process_environment_alone(monkeypatch):
-    from handsim.runner.execute import _gl_env
+    from handsim.runner.ray_backend import _gl_env
 
     for name in ("MUJOCO_GL", "DISPLAY", "WAYLAND_DISPLAY"):
         monkeypatch.delenv(name, raising=False)

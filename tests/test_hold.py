@@ -112,7 +112,7 @@ def test_the_minimum_window_is_a_metric_spec_parameter():
 
 
 def test_run_line_leaves_not_judged_holds_out_of_the_hold_rate():
-    from handsim.runner.execute import records_line
+    from handsim.runner.run_summary import records_line
 
     def record(trial_id: str, held: bool | None) -> dict:
         return {"id": trial_id, "status": "ok", "summary": {"held": held, "valid": True}}

@@ -25,6 +25,7 @@ from handsim.cli._common import (
     usage_error,
 )
 from handsim.runner.records import read_records
+from handsim.runner.run_summary import failure_counts, records_line
 
 if TYPE_CHECKING:
     from handsim.sim.replay import ReplayConfig
@@ -45,9 +46,6 @@ def _render(out: Path) -> int:
 
 def _render_only(out: Path) -> int:
     """Render the report of a run's records and print its line; exit 1 if every recorded trial failed."""
-    # lazy: the runner (MuJoCo), only for a run's records
-    from handsim.runner.execute import failure_counts, records_line
-
     code = _render(out)
     records = read_records(out)
     print(records_line(records))

@@ -29,6 +29,7 @@ import numpy.typing as npt
 from gymnasium import spaces
 
 from handsim.envs._base import DEFAULT_CAMERA, DEFAULT_SIZE, HandEnv
+from handsim.envs._checks import nonnegative, positive
 from handsim.envs._observation import ContactSummary, ObservationLayout, add_state
 from handsim.sim.compiled import SceneSetup, SimScene, compile_scene
 from handsim.sim.control import DEFAULT_CONTROL_RATE, substeps_for
@@ -162,14 +163,6 @@ def grasp_scene(object_name: str = "tennis_ball", hand_clearance: float = 0.02) 
     )
 
 
-def _check(name: str, value: float, *, positive: bool = False) -> float:
-    value = float(value)
-    ok = math.isfinite(value) and (value > 0 if positive else value >= 0)
-    if not ok:
-        raise ValueError(f"{name} must be a finite number {'>' if positive else '≥'} 0, got {value}")
-    return value
-
-
 class GraspEnv(HandEnv):
     """Lift a catalogue object off the table and hold it (``handsim/Grasp-v0``).
 
@@ -264,7 +257,7 @@ class GraspEnv(HandEnv):
         extent = np.asarray(root_range, dtype=float)
         if extent.shape != (3,) or not np.all(np.isfinite(extent)) or np.any(extent < 0):
             raise ValueError(f"root_range must be 3 finite numbers ≥ 0 (x, y, z), got {extent.tolist()}")
-        clearance = _check("hand_clearance", hand_clearance)
+        clearance = nonnegative("hand_clearance", hand_clearance)
         built = grasp_scene(object_name, clearance)
         substeps = substeps_for(control_rate, built.scene.timestep)
         self._setup_sim(
@@ -274,15 +267,15 @@ class GraspEnv(HandEnv):
         layout = self._scene.layout
         nu = len(layout.dof_names)
         self._nu = nu
-        self._steps = max(1, round(_check("duration", duration, positive=True) / self.dt))
-        self._lift_height = _check("lift_height", lift_height, positive=True)
-        self._hold_steps = max(1, math.ceil(_check("hold_time", hold_time) / self.dt - 1e-9))
-        self._noise = _check("object_xy_noise", object_xy_noise)
-        self._w_reach = _check("reach_weight", reach_weight)
-        self._w_contact = _check("contact_weight", contact_weight) / CONTACT_LINKS
-        self._w_lift = _check("lift_weight", lift_weight) / self._lift_height
-        self._w_hold = _check("hold_weight", hold_weight)
-        self._w_pen = _check("penetration_weight", penetration_weight) * 1000.0  # per m
+        self._steps = max(1, round(positive("duration", duration) / self.dt))
+        self._lift_height = positive("lift_height", lift_height)
+        self._hold_steps = max(1, math.ceil(nonnegative("hold_time", hold_time) / self.dt - 1e-9))
+        self._noise = nonnegative("object_xy_noise", object_xy_noise)
+        self._w_reach = nonnegative("reach_weight", reach_weight)
+        self._w_contact = nonnegative("contact_weight", contact_weight) / CONTACT_LINKS
+        self._w_lift = nonnegative("lift_weight", lift_weight) / self._lift_height
+        self._w_hold = nonnegative("hold_weight", hold_weight)
+        self._w_pen = nonnegative("penetration_weight", penetration_weight) * 1000.0  # per m
         self.zero_action = zero_action
         self._terminate_on_success = bool(terminate_on_success)
         self._scripted = root_control == "scripted"
@@ -302,7 +295,7 @@ class GraspEnv(HandEnv):
         self._root_lo = self._root_start - extent
         self._root_lo[2] = built.root_floor  # down to the palm on the table top
         self._root_hi = self._root_start + extent
-        self._root_step = _check("root_speed", root_speed) * self.dt
+        self._root_step = nonnegative("root_speed", root_speed) * self.dt
         self._target = self._root_start.copy()
         self._script = self._scripted_targets(clearance) if self._scripted else None
         self._grasp_offset = np.asarray(built.grasp_offset, dtype=float)

@@ -7,11 +7,13 @@ the trial options are :func:`~handsim.trials.find_trial`'s keywords (``skeleton`
 ``thumb_rest``, ``force``, ``mano_dir``, ``templates``). Each (recording, options) pair is read and its
 scene built (placement search included) once per process: :func:`load_recording` caches the result, so
 the N workers of a vector environment in one process, and every episode that samples a recording again,
-share one build.
+share one build. Without recording paths an environment runs the scene and trajectory it is given, or
+the bundled Tzionas sequence 20 (:func:`default_replay_inputs`); :func:`recordings_from_keywords` decides.
 """
 
 from __future__ import annotations
 
+import functools
 import inspect
 import os
 from collections.abc import Sequence
@@ -21,6 +23,10 @@ from typing import Any
 from handsim.datatypes.trajectory import Trajectory
 from handsim.errors import HandsimError
 from handsim.sim.compiled import SimScene
+
+DEFAULT_SEQUENCE = ("Models", "20")
+"""The bundled Tzionas sequence under :data:`handsim.assets.TZIONAS_DIR`."""
+RecordingsArg = str | os.PathLike | Sequence[str | os.PathLike]
 
 
 class RecordingError(HandsimError, ValueError):
@@ -115,3 +121,60 @@ def load_recording(path: str | os.PathLike, **options: Any) -> tuple[SimScene, T
 def cached_recordings() -> int:
     """How many (recording, options) builds this process holds."""
     return len(_CACHE)
+
+
+@functools.lru_cache(maxsize=1)
+def default_replay_inputs() -> tuple[SimScene, Trajectory]:
+    """The default scene and trajectory, built once per process (about 2 s).
+
+    Returns:
+        The bundled Tzionas sequence 20 loaded as its trial loads it (:func:`handsim.trials.load_trial`:
+        the hand of ``Model_Hand_R.SKEL`` with the fitted skin, the cube following its track) and its
+        trajectory.
+    """
+    from handsim.assets import TZIONAS_DIR
+    from handsim.trials import load_trial
+
+    loaded = load_trial(TZIONAS_DIR.joinpath(*DEFAULT_SEQUENCE) / "Model_Hand_R.MOTION")
+    return loaded.scene, loaded.trajectory
+
+
+def recordings_from_keywords(
+    scene: SimScene | None, trajectory: Trajectory | RecordingsArg | None, trial_options: dict[str, Any]
+) -> tuple[tuple[SimScene, Trajectory], ...]:
+    """The (scene, trajectory) pairs an environment samples from, from its ``scene``/``trajectory`` keywords.
+
+    Args:
+        scene: The environment's ``scene`` keyword.
+        trajectory: Its ``trajectory`` keyword: a :class:`Trajectory`, recording path(s) or None.
+        trial_options: The keywords left after the environment's own.
+
+    Returns:
+        One pair per recording, in the order given; the bundled default when neither is given.
+
+    Raises:
+        RecordingError: Unknown keywords, an empty list, trial options without recording paths, or a
+            scene with recording paths.
+        ValueError: Only one of ``scene`` and a :class:`Trajectory` is given.
+    """
+    check_trial_options(trial_options, "ReplayEnv")
+    if trajectory is not None and not isinstance(trajectory, Trajectory):
+        if scene is not None:
+            raise RecordingError(
+                "give a scene with a Trajectory, or recording paths without a scene (each recording builds "
+                "its own)"
+            )
+        return tuple(load_recording(p, **trial_options) for p in recording_paths(trajectory))
+    if trial_options:
+        raise RecordingError(
+            f"trial options {sorted(trial_options)} need recording paths: trajectory=PATH or a list of paths"
+        )
+    if scene is None and trajectory is None:
+        return (default_replay_inputs(),)
+    if scene is None or trajectory is None:
+        raise ValueError(
+            "pass both scene and trajectory, or neither for the bundled Tzionas sequence 20; "
+            f"got scene={'None' if scene is None else 'a scene'}, "
+            f"trajectory={'None' if trajectory is None else 'a trajectory'}"
+        )
+    return ((scene, trajectory),)

@@ -7,11 +7,13 @@ controls, mocap targets, active equalities) is a row, and one ``Batch.step`` cal
 ``frame_skip`` MuJoCo steps on a pool of native threads with the GIL released — bit-identical to stepping
 each world's own ``MjData`` with ``mj_step`` (MuJoCo's promise, pinned by this package's tests against N
 single environments). A world's per-frame control law is the single environment's: the residual on the
-recorded targets (:meth:`ReplayEnv._controls`, elementwise over all worlds at once), the recorded root pose
-on the mocap target, the glove scenario's contact switch (per-world ``geom_contype``/``geom_conaffinity``)
-and support release (per-world ``eq_active``) at the frames :func:`~handsim.sim.drive.scenario_switches`
-gives. Observations, rewards and episode ends come from the same :class:`ReplayEnv` methods, world by
-world, so the vector environment returns exactly what N :class:`ReplayEnv` would.
+recorded targets (:meth:`ReplayTask.controls <handsim.envs.replay_task.ReplayTask.controls>`, elementwise
+over all worlds at once), the recorded root pose on the mocap target, the glove scenario's contact switch
+(per-world ``geom_contype``/``geom_conaffinity``) and support release (per-world ``eq_active``) at the
+frames :func:`~handsim.sim.drive.scenario_switches` gives. Observations and rewards come from the same
+:class:`~handsim.envs.replay_task.ReplayTask` the single environment computes with (:attr:`ReplayEnv.task`),
+world by world, and episodes end by the same rule, so the vector environment returns exactly what N
+:class:`ReplayEnv` would.
 
 Autoreset follows gymnasium ≥ 1.0's default, ``AutoresetMode.NEXT_STEP``: a world that terminated or was
 truncated is reset by the next ``step`` call (its action ignored, reward 0, not terminated, not
@@ -21,6 +23,7 @@ truncated, its info the reset's ``frame`` and ``time``). ``reset(seed=s)`` seeds
 
 from __future__ import annotations
 
+import math
 import os
 from typing import Any
 
@@ -34,7 +37,8 @@ from gymnasium.vector.utils import batch_space
 from mujoco import batch as mjbatch
 
 from handsim.envs.recordings import RecordingError
-from handsim.envs.replay_env import STEP_NUMBERS, ReplayEnv
+from handsim.envs.replay_env import ReplayEnv
+from handsim.envs.replay_reward import DRIFT, STEP_NUMBERS
 from handsim.sim.stepper import warning_events
 
 _INTEGRATION = int(mujoco.mjtState.mjSTATE_INTEGRATION)
@@ -90,7 +94,7 @@ class ReplayVectorEnv(gym.vector.VectorEnv):
                 f"got {max_episode_steps}"
             )
         self.num_envs = int(num_envs)
-        # one ReplayEnv holds the configuration, the per-world functions and the reset states
+        # one ReplayEnv holds the configuration and the reset states; its task the per-world functions
         self._env = ReplayEnv(**kwargs)
         env = self._env
         if env.recordings > 1:
@@ -116,7 +120,9 @@ class ReplayVectorEnv(gym.vector.VectorEnv):
         self._sensordata = batch.bind("sensordata")
         self._time = batch.bind("time")
         self._row = np.empty(batch.nstate)
-        driver = env._driver
+        task = self._task = env.task
+        self._observation = task.observation
+        driver = self._driver = task.driver
         switches = driver.switches
         self._release = switches.release_frame
         self._contact = switches.contact_frame
@@ -136,8 +142,8 @@ class ReplayVectorEnv(gym.vector.VectorEnv):
         self._warning = batch.warning
         self._seen = np.zeros(self._warning.shape[:2], dtype=self._warning.dtype)
         self._substeps, self._timestep = env.frame_skip, float(model.opt.timestep)
-        self._last = env._last
-        self._times = env._times
+        self._last = task.last
+        self._times = task.times
         self._frames = np.zeros(self.num_envs, dtype=np.int64)
         self._everyone = np.arange(self.num_envs)
         self._started = False
@@ -147,7 +153,7 @@ class ReplayVectorEnv(gym.vector.VectorEnv):
         self._obs = np.zeros((self.num_envs, *env.observation_space.shape))
         self._actions = np.zeros((self.num_envs, len(env.dof_names)))
         self._world_rng: list[np.random.Generator | None] = [None] * self.num_envs
-        self._qpos_adr, self._qvel_adr = env._qpos_adr, env._qvel_adr
+        self._qpos_adr, self._qvel_adr = self._observation.qpos_adr, self._observation.qvel_adr
 
     # ---- facts --------------------------------------------------------------------------------------------
     @property
@@ -257,7 +263,7 @@ class ReplayVectorEnv(gym.vector.VectorEnv):
             self._advance(ids, sel)
             penetration = self._observe(ids, sel)
             warnings = self._warnings(ids)
-            reward_of, actions, obs, frames = self._env._reward, self._actions, self._obs, self._frames
+            reward_of, actions, obs, frames = self._task.reward, self._actions, self._obs, self._frames
             table = []  # per stepped world: the reward, its terms and the info numbers
             for i in ids.tolist():
                 action = actions[i]
@@ -276,8 +282,9 @@ class ReplayVectorEnv(gym.vector.VectorEnv):
             diverged = np.zeros(n, bool)
             for i, events in warnings.items():
                 diverged[i] = any(e.diverged for e in events)
+            limit = self._env.max_object_drift
             terminated[sel] = diverged[sel] | (
-                columns[1 + STEP_NUMBERS.index("object_drift")][sel] > self._env._max_drift
+                columns[1 + DRIFT][sel] > (math.inf if limit is None else limit)
             )
             for key, column in zip(STEP_NUMBERS, columns[1:], strict=True):
                 infos[key], infos[f"_{key}"] = column, mask
@@ -324,9 +331,9 @@ class ReplayVectorEnv(gym.vector.VectorEnv):
             The start frame and the reset's values of :data:`STEP_NUMBERS`.
         """
         env = self._env
-        env._np_random = self._world_rng[i]
+        env.np_random = self._world_rng[i]
         obs, info = env.reset(options=options)
-        self._world_rng[i] = env._np_random
+        self._world_rng[i] = env.np_random
         mujoco.mj_getState(env.model, env.data, self._row, _INTEGRATION)
         self._state[i] = self._row
         if self._contact > 0:
@@ -349,7 +356,7 @@ class ReplayVectorEnv(gym.vector.VectorEnv):
             self._eq_active[release[:, None], self._supports] = 0
         if self._contact in at:
             contact = ids[k == self._contact]
-            driver = self._env._driver  # the scene's own collision filters of the objects
+            driver = self._driver  # the scene's own collision filters of the objects
             self._contype[contact[:, None], self._geoms] = driver._contype
             self._conaffinity[contact[:, None], self._geoms] = driver._conaffinity
         n = k + 1
@@ -361,30 +368,30 @@ class ReplayVectorEnv(gym.vector.VectorEnv):
                 self._mocap_pos[ids[:, None], self._mocap] = self._root_pos[n]
                 self._mocap_quat[ids[:, None], self._mocap] = self._root_quat[n]
         if isinstance(sel, slice):
-            self._env._controls(self._actions, n, self._ctrl)
+            self._task.controls(self._actions, n, self._ctrl)
             self._batch.step(None, nstep=self._substeps)
         else:
             controls = np.empty((ids.size, self._ctrl.shape[1]))
-            self._env._controls(self._actions[ids], n, controls)
+            self._task.controls(self._actions[ids], n, controls)
             self._ctrl[ids] = controls
             self._batch.step(ids, nstep=self._substeps)
         self._frames[sel] = n
 
     def _observe(self, ids: np.ndarray, sel: slice | np.ndarray) -> np.ndarray:
         """Fill the observation rows of worlds ``ids`` from their state; returns each world's penetration."""
-        env, obs = self._env, self._obs
+        observation, obs = self._observation, self._obs
         rows = sel if isinstance(sel, slice) else ids[:, None]
-        obs[sel, env._pos_slice] = self._qpos[rows, self._qpos_adr]
-        obs[sel, env._vel_slice] = self._qvel[rows, self._qvel_adr]
+        obs[sel, observation.pos_slice] = self._qpos[rows, self._qpos_adr]
+        obs[sel, observation.vel_slice] = self._qvel[rows, self._qvel_adr]
         penetration = np.zeros(self.num_envs)
-        contacts, force_slice, sensordata = env._contacts, env._force_slice, self._sensordata
+        contacts, force_slice, sensordata = observation.contacts, observation.force_slice, self._sensordata
         frames = self._frames
         for i in ids.tolist():
             row = obs[i]
             contacts.link_forces(sensordata[i], row[force_slice])
-            penetration[i] = row[env._pen_index] = contacts.penetration(sensordata[i])
-            env._features(row, int(frames[i]), sensordata[i])  # the single environment's own
-        obs[sel, env._progress_index] = frames[sel] / self._last
+            penetration[i] = row[observation.pen_index] = contacts.penetration(sensordata[i])
+            observation.features(row, int(frames[i]), sensordata[i])  # the single environment's own
+        obs[sel, observation.progress_index] = frames[sel] / self._last
         return penetration
 
     def _warnings(self, ids: np.ndarray) -> dict[int, tuple]:

@@ -16,7 +16,7 @@ from pathlib import Path
 
 import numpy as np
 
-from handsim.envs.replay_env import STEP_NUMBERS
+from handsim.envs.replay_reward import STEP_NUMBERS
 from handsim.errors import HandsimError
 from handsim.export.errors import ExportError, RecordMismatchError
 from handsim.runner.trial_record import sha256_file

@@ -20,6 +20,7 @@ import os
 import signal
 import sys
 import time
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -43,6 +44,13 @@ class TrialOutcome:
 
     record: dict
     files: dict[str, bytes] = field(default_factory=dict)
+
+
+TrialFunction = Callable[[TrialEntry, ReplayConfig, int], TrialOutcome]
+"""What a backend runs for each trial, ``(entry, config, frames) → outcome``: :func:`trial_outcome`.
+
+A module-level function: a pool worker or a Ray task unpickles it by name.
+"""
 
 
 def run_parameters(config: ReplayConfig, frames: int) -> dict:
@@ -208,6 +216,21 @@ def trial_outcome(entry: TrialEntry, config: ReplayConfig, frames: int = 4) -> T
     timing["total_s"] = time.perf_counter() - start
     record["timing"] = {k: round(v, 3) for k, v in timing.items()}
     return TrialOutcome(record, files)
+
+
+def crashed_outcome(entry: TrialEntry, config: ReplayConfig, frames: int, why: str) -> TrialOutcome:
+    """The record of a trial whose worker process died (no Python exception to report).
+
+    Args:
+        entry: The trial.
+        config: Replay parameters.
+        frames: Frames the run renders per trial.
+        why: How the worker died, for the error's message.
+    """
+    record = base_record(entry, config, frames)
+    record["error"] = {"type": "WorkerCrashed", "message": f"{entry.id}: {why}", "traceback": ""}
+    record["timing"] = {"load_s": 0.0, "replay_s": 0.0, "render_s": 0.0, "total_s": 0.0}
+    return TrialOutcome(record)
 
 
 def write_outcome_files(out: str | Path, outcome: TrialOutcome) -> None:

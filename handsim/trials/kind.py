@@ -5,10 +5,13 @@ from __future__ import annotations
 from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path, PurePosixPath
+from typing import TYPE_CHECKING
 
-from handsim.sim.metrics import MetricSpec
 from handsim.trials.base import LoadedTrial, Trial, TrialOptions
 from handsim.trials.sorting import Sorting
+
+if TYPE_CHECKING:  # an annotation only: the trial registry loads without MuJoCo (start-up time)
+    from handsim.sim.metrics import MetricSpec
 
 
 @dataclass(frozen=True)
