@@ -15,7 +15,7 @@ import mujoco
 import numpy as np
 from scipy.spatial import cKDTree
 
-from handsim.datatypes.rotations import quat_multiply
+from handsim.datatypes.rotations import quat_multiply, quat_to_matrix
 from handsim.sim.collide import HandObjectCollider
 
 
@@ -36,9 +36,7 @@ def distinct_orientations(quats: np.ndarray, points: np.ndarray) -> np.ndarray:
     bound = np.nextafter(tolerance, np.inf)  # the tree finds every point within the tolerance
     kept: list[tuple[np.ndarray, cKDTree, np.ndarray, np.ndarray]] = []
     for quat in quats:
-        rot = np.empty(9)
-        mujoco.mju_quat2Mat(rot, quat)
-        turned = points @ rot.reshape(3, 3).T
+        turned = points @ quat_to_matrix(quat).T
         low, high = turned.min(axis=0), turned.max(axis=0)
         if any(
             # points all within the tolerance of the kept set lie within its box widened by the tolerance

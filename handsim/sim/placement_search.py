@@ -14,6 +14,7 @@ import mujoco
 import numpy as np
 
 from handsim.datatypes.fingers import finger_of
+from handsim.datatypes.rotations import quat_to_matrix
 from handsim.datatypes.trajectory import Trajectory
 from handsim.sim.collide import CLEAR, DEEP, HandObjectCollider
 from handsim.sim.compiled import SimScene
@@ -147,9 +148,7 @@ class PlacementSearch:
         lo, hi, centres, radii = self._reach()
         coarse, steps = [], {}
         for quat in self.quats:
-            rot = np.empty(9)
-            mujoco.mju_quat2Mat(rot, quat)
-            extent = self.points @ rot.reshape(3, 3).T
+            extent = self.points @ quat_to_matrix(quat).T
             # the object's box holds a point the closing converges on, and it lies within the hand's reach
             low = np.maximum(lo, self.grasp_points.min(axis=0) - spec.coarse_step) - extent.max(axis=0)
             high = np.minimum(hi, self.grasp_points.max(axis=0) + spec.coarse_step) - extent.min(axis=0)
