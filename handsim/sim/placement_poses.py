@@ -15,7 +15,7 @@ import mujoco
 import numpy as np
 from scipy.spatial import cKDTree
 
-from handsim.datatypes.rotations import quat_multiply, quat_to_matrix
+from handsim.datatypes.rotations import quat_about, quat_multiply, quat_to_matrix
 from handsim.sim.collide import HandObjectCollider
 
 
@@ -23,7 +23,7 @@ def axis_aligned_orientations() -> np.ndarray:
     """The 24 orientations that put one of the object's six face directions up, each at four spins."""
     h = np.sqrt(0.5)
     faces = [[1, 0, 0, 0], [h, h, 0, 0], [0, 1, 0, 0], [h, -h, 0, 0], [h, 0, h, 0], [h, 0, -h, 0]]
-    spins = [[np.cos(a / 2), 0, 0, np.sin(a / 2)] for a in (0, np.pi / 2, np.pi, 3 * np.pi / 2)]
+    spins = quat_about([0.0, 0.0, 1.0], np.array([0, np.pi / 2, np.pi, 3 * np.pi / 2]))
     return np.array([quat_multiply(s, f) for f, s in itertools.product(faces, spins)])
 
 
@@ -126,11 +126,8 @@ def perturbed_poses(
         return variants
     for axis, name in enumerate("xyz"):
         for sign, mark in ((1.0, "+"), (-1.0, "-")):
-            half = math.radians(sign * turn_deg) / 2
-            turn = np.zeros(4)
-            turn[0], turn[1 + axis] = math.cos(half), math.sin(half)
             turned = pose.copy()
-            turned[3:] = quat_multiply(turn, pose[3:])
+            turned[3:] = quat_multiply(quat_about(np.eye(3)[axis], math.radians(sign * turn_deg)), pose[3:])
             if len(distinct_orientations(np.array([pose[3:], turned[3:]]), points)) == 2:
                 variants.append((f"{mark}{name} {turn_deg:g}°", turned))
     return variants
