@@ -47,7 +47,7 @@ from pathlib import Path
 
 import numpy as np
 
-from handsim.builders.decompose import default_cache_dir
+from handsim.builders.hull_cache import default_cache_dir
 from handsim.datatypes.trajectory import Trajectory
 from handsim.sim.compiled import SimScene
 from handsim.sim.grasp_frame import GraspFrame, closing_frames
@@ -108,7 +108,7 @@ def place_object(
         turn_deg: Angle it turns the winner about each axis, degrees (0: no turns).
         use_cache: Read and write the placement cache (:mod:`handsim.sim.placement_cache`): a hit gives
             the stored placement bit for bit. When False, neither.
-        cache_dir: Root of the cache; :func:`handsim.builders.decompose.default_cache_dir` when None.
+        cache_dir: Root of the cache; :func:`handsim.builders.hull_cache.default_cache_dir` when None.
 
     Returns:
         The placement (see the module docstring); never raises for want of a feasible pose: an infeasible

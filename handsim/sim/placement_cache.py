@@ -11,7 +11,7 @@ gives new keys: a stale entry is never read). A hit gives the stored
 NumPy arrays).
 
 Entries live in ``cache_dir/placement/<key[:2]>/<key>.pkl`` (``cache_dir`` as for the convex hulls:
-:func:`handsim.builders.decompose.default_cache_dir`), written atomically (temporary file, then rename).
+:func:`handsim.builders.hull_cache.default_cache_dir`), written atomically (temporary file, then rename).
 An entry whose checksum, format or key does not match is ignored and replaced, with a note; it is never
 trusted. A value changed at run time rather than in a source file (a module constant patched by a
 script) is not in the key: such a caller passes ``use_cache=False`` to
