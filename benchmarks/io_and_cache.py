@@ -23,7 +23,8 @@ from pathlib import Path
 import trimesh
 from timing import median_seconds  # benchmarks/timing.py (scripts run from benchmarks/)
 
-from handsim.builders.decompose import DecompositionError, DecompositionParams, decompose
+from handsim.builders.decompose import decompose
+from handsim.builders.decomposition_types import DecompositionError, DecompositionParams
 from handsim.datatypes.mesh import validate_mesh
 from handsim.io.graspdb import read_graspdb_glove, read_graspdb_raw
 

@@ -16,7 +16,9 @@ import shutil
 import time
 
 from handsim.builders import catalog
-from handsim.builders.decompose import BUNDLED_CACHE_DIR, DecompositionParams, decompose
+from handsim.builders.decompose import decompose
+from handsim.builders.decomposition_types import DecompositionParams
+from handsim.builders.hull_cache import BUNDLED_CACHE_DIR
 
 
 def main() -> None:

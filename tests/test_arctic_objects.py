@@ -20,7 +20,7 @@ from handsim.builders.arctic_objects import (
     arctic_object,
 )
 from handsim.builders.catalog import resolve
-from handsim.builders.decompose import DecompositionParams
+from handsim.builders.decomposition_types import DecompositionParams
 from handsim.builders.graspdb_objects import UnknownObjectError
 from handsim.builders.objects import build_object
 from handsim.cli import main

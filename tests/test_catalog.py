@@ -8,8 +8,9 @@ import mujoco
 import pytest
 
 from handsim.builders import catalog
-from handsim.builders.decompose import BUNDLED_CACHE_DIR, DecompositionParams, cache_key
+from handsim.builders.decomposition_types import DecompositionParams
 from handsim.builders.graspdb_objects import UnknownObjectError
+from handsim.builders.hull_cache import BUNDLED_CACHE_DIR, cache_key
 from handsim.builders.objects import build_object, object_spec, prepare_object
 from handsim.builders.scene import build_scene
 from handsim.errors import InputFileError

@@ -16,16 +16,16 @@ import numpy as np
 import pytest
 import trimesh
 
+from handsim.builders import coacd_process, hull_cache
 from handsim.builders import decompose as dec
-from handsim.builders.decompose import (
+from handsim.builders.decompose import decompose
+from handsim.builders.decomposition_types import (
     ConvexHull,
     Decomposition,
     DecompositionError,
     DecompositionParams,
-    cache_key,
-    decompose,
-    default_cache_dir,
 )
+from handsim.builders.hull_cache import cache_key, default_cache_dir
 from handsim.datatypes.mesh import Mesh, validate_mesh
 from handsim.errors import MeshError
 
@@ -50,7 +50,7 @@ def decomposed(annulus: Mesh, tmp_path_factory: pytest.TempPathFactory) -> tuple
 # IN.npz OUT.npz). They load the real worker by path for its output format and its core-dump setting.
 _FAULTY_WORKER_HEAD = f"""
 import importlib.util, os, sys
-spec = importlib.util.spec_from_file_location("_coacd_worker", {str(dec._WORKER)!r})
+spec = importlib.util.spec_from_file_location("_coacd_worker", {str(coacd_process._WORKER)!r})
 real = importlib.util.module_from_spec(spec)
 spec.loader.exec_module(real)
 out_path = sys.argv[2]
@@ -70,7 +70,7 @@ def faulty_worker(tmp_path_factory: pytest.TempPathFactory, monkeypatch: pytest.
     def use(fault: str) -> None:
         script = tmp_path_factory.mktemp("worker") / "faulty_worker.py"
         script.write_text(_FAULTY_WORKER_HEAD + FAULTY_WORKERS[fault])
-        monkeypatch.setattr(dec, "_WORKER", script)
+        monkeypatch.setattr(coacd_process, "_WORKER", script)
 
     return use
 
@@ -259,7 +259,7 @@ def _rewrite(entry: Path, target: Path, change: str) -> None:
             arrays["faces"] = arrays["faces"].copy()
             arrays["faces"][0, 0] = 10_000
         del arrays["checksum"]
-        arrays["checksum"] = np.array(dec._checksum(arrays))
+        arrays["checksum"] = np.array(hull_cache._checksum(arrays))
     with open(target, "wb") as f:
         np.savez(f, **arrays)
 
@@ -280,8 +280,8 @@ def test_read_entry_rejects_damaged_cache_entry(
     first, cache = decomposed
     damaged = tmp_path / "entry.npz"
     _rewrite(entry_path(cache, first.key), damaged, change)
-    with pytest.raises(dec._CorruptEntryError, match=rf"^{reason}$"):
-        dec._read_entry(damaged)
+    with pytest.raises(hull_cache.CorruptEntryError, match=rf"^{reason}$"):
+        hull_cache.read_entry(damaged)
 
 
 def test_write_entry_is_atomic_and_round_trips(
@@ -289,9 +289,9 @@ def test_write_entry_is_atomic_and_round_trips(
 ) -> None:
     first, _ = decomposed
     path = tmp_path / "ab" / "entry.npz"
-    dec._write_entry(path, first.hulls, 1.25, ("a note",))
+    hull_cache.write_entry(path, first.hulls, 1.25, ("a note",))
     assert files_under(tmp_path) == [path]  # no temporary file left behind
-    hulls, seconds, notes = dec._read_entry(path)
+    hulls, seconds, notes = hull_cache.read_entry(path)
     assert (seconds, notes) == (1.25, ("a note",))
     assert_same_hulls(first, dataclasses.replace(first, hulls=hulls))
 

@@ -11,7 +11,7 @@ import pytest
 import trimesh
 from scipy.spatial.transform import Rotation
 
-from handsim.builders.decompose import DecompositionParams
+from handsim.builders.decomposition_types import DecompositionParams
 from handsim.builders.objects import build_object, object_bounds, prepare_object
 from handsim.datatypes.object_model import Hinge, ObjectModel, ObjectPart, Primitive, mesh_object
 from handsim.errors import FormatError, InputFileError, ModelError

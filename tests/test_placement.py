@@ -12,7 +12,7 @@ import shutil
 import pytest
 
 from handsim.sim.metrics import MetricSpec
-from handsim.sim.placement import PlacementSpec
+from handsim.sim.placement_types import PlacementSpec
 from handsim.trials import load_trial
 
 TRIAL = "r_01_11_ex03-rad-004-grasp-su04.txt"

@@ -18,8 +18,10 @@ import handsim.sim.scenarios as scenarios
 from handsim.assets import ASSETS_DIR
 from handsim.sim.collide import HandObjectCollider
 from handsim.sim.hand_pose import targets_qpos
-from handsim.sim.placement import SCREEN_MARGIN, PlacementSpec, _searched, place_object
+from handsim.sim.placement import _searched, place_object
 from handsim.sim.placement_cache import entry_path, placement_key, read_entry
+from handsim.sim.placement_search import SCREEN_MARGIN
+from handsim.sim.placement_types import PlacementSpec
 from handsim.trials import load_trial
 
 TENNIS = ASSETS_DIR / "demo" / "tennis_ball.grasp.json"

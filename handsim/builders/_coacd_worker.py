@@ -1,4 +1,4 @@
-"""Child process that runs CoACD on one mesh; started by :mod:`handsim.builders.decompose`, not by users.
+"""Child process that runs CoACD on one mesh; started by :mod:`handsim.builders.coacd_process`, not by users.
 
 Usage: ``python _coacd_worker.py IN.npz OUT.npz``. ``IN.npz`` holds ``vertices`` (V, 3) float64 metres,
 ``faces`` (F, 3) int64 and ``params``, a JSON object of keyword arguments for :func:`coacd.run_coacd`.

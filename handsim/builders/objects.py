@@ -29,7 +29,8 @@ import mujoco
 import numpy as np
 import trimesh
 
-from handsim.builders.decompose import Decomposition, DecompositionParams, decompose
+from handsim.builders.decompose import decompose
+from handsim.builders.decomposition_types import Decomposition, DecompositionParams
 from handsim.builders.geom_classes import add_geom_classes
 from handsim.builders.surfaces import CONTACT_CONDIM, OBJECT, Surface
 from handsim.datatypes.mesh import Mesh

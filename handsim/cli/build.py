@@ -56,11 +56,11 @@ def _build_hand(args: argparse.Namespace) -> int:
 
 
 def _decomposition_param(name: str, convert: type) -> Callable[[str], float | int]:
-    """An argparse type for a field of :class:`~handsim.builders.decompose.DecompositionParams`."""
+    """An argparse type for a field of :class:`~handsim.builders.decomposition_types.DecompositionParams`."""
 
     def parse(text: str) -> float | int:
         # lazy: the builders (trimesh, SciPy) are slow to import, and --help must not wait
-        from handsim.builders.decompose import DecompositionParams
+        from handsim.builders.decomposition_types import DecompositionParams
 
         try:
             value = convert(text)
@@ -78,7 +78,7 @@ def _decomposition_param(name: str, convert: type) -> Callable[[str], float | in
 
 def _decomposition_params(args: argparse.Namespace):
     # lazy: trimesh and SciPy (the decomposer), only to build objects
-    from handsim.builders.decompose import DecompositionParams
+    from handsim.builders.decomposition_types import DecompositionParams
 
     return DecompositionParams(
         threshold=args.threshold, max_convex_hull=args.max_hulls, timeout_s=args.timeout

@@ -2,7 +2,9 @@
 
 :mod:`~handsim.datatypes.skeleton` (joints, degrees of freedom, forward kinematics),
 :mod:`~handsim.datatypes.trajectory` (times × DoF targets, root and object poses, phases),
-:mod:`~handsim.datatypes.trajectory_ops` (resampling, limits, slicing), :mod:`~handsim.datatypes.mesh`,
+:mod:`~handsim.datatypes.trajectory_ops` (limits, resampling, two hands: the public names of
+:mod:`~handsim.datatypes.trajectory_limits`, :mod:`~handsim.datatypes.trajectory_resampling` and
+:mod:`~handsim.datatypes.two_hand_trajectory`), :mod:`~handsim.datatypes.mesh`,
 :mod:`~handsim.datatypes.object_model`, :mod:`~handsim.datatypes.poses`, :mod:`~handsim.datatypes.rotations`
 (the one rotation module, quaternions ``w, x, y, z``), :mod:`~handsim.datatypes.kinematics` (a rotation
 split into a chain of hinge angles), :mod:`~handsim.datatypes.fingers` (finger of a link)

@@ -24,6 +24,7 @@ import numpy as np
 from scipy.optimize import linprog
 from scipy.spatial import ConvexHull, QhullError
 
+from handsim.datatypes.rotations import quat_to_matrix
 from handsim.sim.compiled import SimScene
 
 _HAND_BIT, _OBJECT_BIT = 2, 2
@@ -168,9 +169,7 @@ class HandObjectCollider:
         """
         model, data = self.model, self.data
         mujoco.mj_kinematics(model, data)
-        rot = np.empty(9)
-        mujoco.mju_quat2Mat(rot, np.asarray(quat, dtype=float))
-        rot = rot.reshape(3, 3)
+        rot = quat_to_matrix(quat)
         hand = self._hand_geoms
         h_pos, h_rb = data.geom_xpos[hand].copy(), model.geom_rbound[hand] + model.geom_margin[hand]
         # bounding spheres of the object's geoms (relative to its free joint's frame)

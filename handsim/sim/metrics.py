@@ -21,7 +21,7 @@ from handsim.datatypes.rotations import quat_angle
 from handsim.sim.compiled import SimScene
 from handsim.sim.control import ControlSchedule
 from handsim.sim.layout import _SLOT, CONTACT_SLOTS
-from handsim.sim.placement import PlacementSpec
+from handsim.sim.placement_types import PlacementSpec
 from handsim.sim.self_contact import self_penetration_track
 from handsim.sim.stability import StabilitySpec
 
@@ -54,7 +54,7 @@ class MetricSpec:
             the axis direction its grip resists best (a hand on its side, fingers down), never into the palm
             (an object lying on an open hand is no grasp); ``"palm down"`` — always palm down.
         placement: The glove placement search's parameters
-            (:class:`~handsim.sim.placement.PlacementSpec`).
+            (:class:`~handsim.sim.placement_types.PlacementSpec`).
         stability: The grasp stability tests' parameters (:class:`~handsim.sim.stability.StabilitySpec`).
     """
 

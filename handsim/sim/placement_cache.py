@@ -2,15 +2,16 @@
 
 A placement depends only on the search scene (hand, object and their poses: the compiled model, saved as
 MuJoCo's binary model), the trajectory's times and targets, the grasp frames, the search's parameters
-(:class:`~handsim.sim.placement.PlacementSpec`, release delay, control rate, the robustness moves) and the
-code that searches and simulates. The key (:func:`placement_key`) is the SHA-256 of all of them, with the
-MuJoCo and NumPy versions and a fingerprint of handsim's own source files (any edit of handsim gives new
-keys: a stale entry is never read). A hit gives the stored :class:`~handsim.sim.placement.Placement`
-bit for bit (pickled, read back with :mod:`handsim.io.safe_pickle`'s restricted unpickler, which resolves
-only the placement's own classes and NumPy arrays).
+(:class:`~handsim.sim.placement_types.PlacementSpec`, release delay, control rate, the robustness moves)
+and the code that searches and simulates. The key (:func:`placement_key`) is the SHA-256 of all of them,
+with the MuJoCo and NumPy versions and a fingerprint of handsim's own source files (any edit of handsim
+gives new keys: a stale entry is never read). A hit gives the stored
+:class:`~handsim.sim.placement_types.Placement` bit for bit (pickled, read back with
+:mod:`handsim.io.safe_pickle`'s restricted unpickler, which resolves only the placement's own classes and
+NumPy arrays).
 
 Entries live in ``cache_dir/placement/<key[:2]>/<key>.pkl`` (``cache_dir`` as for the convex hulls:
-:func:`handsim.builders.decompose.default_cache_dir`), written atomically (temporary file, then rename).
+:func:`handsim.builders.hull_cache.default_cache_dir`), written atomically (temporary file, then rename).
 An entry whose checksum, format or key does not match is ignored and replaced, with a note; it is never
 trusted. A value changed at run time rather than in a source file (a module constant patched by a
 script) is not in the key: such a caller passes ``use_cache=False`` to

@@ -35,7 +35,8 @@ from handsim.sim.control import DEFAULT_CONTROL_RATE
 from handsim.sim.grasp_frame import GraspFrame, grasp_frame
 from handsim.sim.hand_pose import hand_frame
 from handsim.sim.metrics import MetricSpec
-from handsim.sim.placement import Candidate, place_object
+from handsim.sim.placement import place_object
+from handsim.sim.placement_types import Candidate
 
 CAMERA_DOWN = (0.0, 1.0, 0.0)
 """Image down (+y) of a pinhole camera frame, e.g. the Tzionas rigging world (extrinsics identity)."""

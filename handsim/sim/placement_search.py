@@ -1,0 +1,227 @@
+"""The glove placement's grid search: candidate poses at each closing frame, their fit and contact frames.
+
+Steps 1 and 2 of :mod:`handsim.sim.placement` (candidates on coarse and refined grids, ranked by what the
+recorded closing does to them; each candidate's fit frame and contact frame). The grip tests and the choice
+of the winner are :func:`handsim.sim.placement.place_object`'s.
+"""
+
+from __future__ import annotations
+
+import itertools
+from dataclasses import replace
+
+import mujoco
+import numpy as np
+
+from handsim.datatypes.fingers import finger_of
+from handsim.datatypes.rotations import quat_to_matrix
+from handsim.datatypes.trajectory import Trajectory
+from handsim.sim.collide import CLEAR, DEEP, HandObjectCollider
+from handsim.sim.compiled import SimScene
+from handsim.sim.grasp_frame import GraspFrame, flexion_fraction
+from handsim.sim.hand_pose import targets_qpos
+from handsim.sim.placement_poses import (
+    axis_aligned_orientations,
+    box_grid,
+    distinct_orientations,
+    grid_around,
+    object_points,
+)
+from handsim.sim.placement_types import Candidate, PlacementSpec
+
+SCREEN_MARGIN = 0.0005
+"""A pose whose inscribed balls overlap the hand's by more than the penetration tolerance plus this is
+settled as infeasible without a collision query, m: MuJoCo's convex penetration depths (GJK/EPA, tolerance
+1e-6) came out at most 0.012 mm below the bound on the 140 000 queries of the shared recordings' searches,
+so the margin is 40× that; the winner does not depend on it (docs/replay.md)."""
+_FINGERS = frozenset({"index", "middle", "ring", "little"})
+
+
+class PlacementSearch:
+    """The grid search at one hand posture (see the module docstring)."""
+
+    def __init__(
+        self, scene: SimScene, trajectory: Trajectory, grasp: GraspFrame, spec: PlacementSpec, screen: bool
+    ) -> None:
+        self.scene, self.trajectory, self.grasp, self.spec = scene, trajectory, grasp, spec
+        self.screen = screen  # settle poses by bounds where they decide the query (CLEAR, DEEP)
+        self.screened = 0  # poses settled without a collision query
+        self.pruned_deep = False  # some pose was settled as infeasible: the least penetration is not known
+        self.collider = HandObjectCollider(scene, spec.touch)
+        self.points = object_points(self.collider)
+        self.quats = distinct_orientations(axis_aligned_orientations(), self.points)
+        model, geoms = self.collider.model, np.flatnonzero(self.collider.is_obj)
+        self.round = (  # one sphere about the object's origin: no turn changes it
+            len(geoms) == 1
+            and int(model.geom_type[geoms[0]]) == int(mujoco.mjtGeom.mjGEOM_SPHERE)
+            and np.allclose(model.geom_pos[geoms[0]], 0.0)
+        )
+        self.radius = float(np.linalg.norm(self.points, axis=1).max())
+        layout = scene.layout
+        collider = self.collider
+        collider.set_hand(targets_qpos(scene, trajectory, grasp.closed))
+        mujoco.mj_kinematics(collider.model, collider.data)
+        tips = collider.data.site_xpos[layout.tip_sites].copy()
+        self.centre = tips.mean(axis=0)
+        thumbs = [i for i, name in enumerate(layout.tip_names) if finger_of(name) == "thumb"]
+        others = [i for i in range(len(tips)) if i not in thumbs]
+        self.grasp_points = np.vstack(
+            [self.centre, *((tips[t] + tips[o]) / 2 for t in thumbs for o in others)]
+        )
+        self.groups = [finger_of(name) for name in layout.link_names]
+        self.feasible_poses = 0
+        self.least: tuple[float, np.ndarray] | None = None  # least penetration seen, pose
+        self.nearest: tuple[float, np.ndarray] | None = None  # feasible pose nearest the centre
+
+    def _reach(self) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        collider, layout = self.collider, self.scene.layout
+        mujoco.mj_kinematics(collider.model, collider.data)
+        data = collider.data
+        reach = np.vstack([data.xpos[layout.link_bodies], data.site_xpos[layout.tip_sites]])
+        centres, radii = collider.hand_spheres()
+        return reach.min(axis=0), reach.max(axis=0), centres, radii
+
+    def _consider(self, pose: np.ndarray, depth: float) -> None:
+        if self.least is None or depth < self.least[0]:
+            self.least = (depth, pose)
+        if depth <= self.spec.penetration:
+            self.feasible_poses += 1
+            distance = float(np.linalg.norm(pose[:3] - self.centre))
+            if self.nearest is None or distance < self.nearest[0]:
+                self.nearest = (distance, pose)
+
+    def _verdicts(self, poses: list[np.ndarray]) -> np.ndarray:
+        """:meth:`HandObjectCollider.screen` of each pose (runs of one orientation screened together)."""
+        verdicts = np.zeros(len(poses), dtype=np.int8)
+        if not self.screen or not poses:
+            return verdicts
+        array = np.asarray(poses)
+        starts = [0, *(np.flatnonzero((array[1:, 3:] != array[:-1, 3:]).any(axis=1)) + 1), len(poses)]
+        deep = self.spec.penetration + SCREEN_MARGIN
+        for a, b in itertools.pairwise(starts):
+            verdicts[a:b] = self.collider.screen(array[a:b, :3], array[a, 3:], deep)
+        return verdicts
+
+    def _fits(self, frame: int, poses: list[np.ndarray]) -> list[tuple[np.ndarray, int]]:
+        """The poses that fit (within the tolerance) and touch the hand at ``frame``, with their links."""
+        self.collider.set_hand(targets_qpos(self.scene, self.trajectory, frame))
+        fitting = []
+        for pose, verdict in zip(poses, self._verdicts(poses), strict=True):
+            if verdict == CLEAR:  # no link within the touch distance: fits, touches nothing
+                self.screened += 1
+                self._consider(pose, 0.0)
+                continue
+            if verdict == DEEP:
+                self.screened += 1
+                self.pruned_deep = True
+                continue
+            depth, links = self.collider.depth_links(pose[:3], pose[3:])
+            self._consider(pose, depth)
+            if depth <= self.spec.penetration and links:
+                fitting.append((pose, links))
+        return fitting
+
+    def _ranked(self, fitting: list[tuple[np.ndarray, int]]) -> list[tuple[tuple, np.ndarray]]:
+        """Fitting poses ranked by what the recorded closing does to them (best first).
+
+        At the closed frame a finger whose links lie deeper than the tolerance inside the object is one the
+        recording closes past it: it will press on it. The key: the pressing fingers oppose each other (the
+        thumb or the palm against a finger), how many finger groups press, how many links touch where it
+        fits, and closeness to the fingertips' centre.
+        """
+        self.collider.set_hand(targets_qpos(self.scene, self.trajectory, self.grasp.closed))
+        ranked = []
+        for pose, links in fitting:
+            touch = self.collider.touch_at(pose[:3], pose[3:])
+            pressing = {self.groups[i] for i in np.flatnonzero(touch.distance < -self.spec.penetration)}
+            pressing |= {"palm" for i in touch.links if self.groups[i] == "palm"}
+            opposed = bool(pressing & {"thumb", "palm"}) and bool(pressing & _FINGERS)
+            key = (opposed, len(pressing), links, -float(np.linalg.norm(pose[:3] - self.centre)))
+            ranked.append((key, pose))
+        ranked.sort(key=lambda item: item[0], reverse=True)
+        return ranked
+
+    def level(self, frame: int) -> list[tuple[tuple, np.ndarray]]:
+        """The seeds of one closing frame, each refined on finer grids around it: (key, pose), best first."""
+        spec, collider = self.spec, self.collider
+        collider.set_hand(targets_qpos(self.scene, self.trajectory, frame))
+        lo, hi, centres, radii = self._reach()
+        coarse, steps = [], {}
+        for quat in self.quats:
+            extent = self.points @ quat_to_matrix(quat).T
+            # the object's box holds a point the closing converges on, and it lies within the hand's reach
+            low = np.maximum(lo, self.grasp_points.min(axis=0) - spec.coarse_step) - extent.max(axis=0)
+            high = np.minimum(hi, self.grasp_points.max(axis=0) + spec.coarse_step) - extent.min(axis=0)
+            step = max(spec.coarse_step, float(np.prod(high - low) / spec.coarse_points) ** (1 / 3))
+            grid = box_grid(low, high, step)
+            gap = np.linalg.norm(grid[:, None, :] - centres[None], axis=-1) - radii - self.radius
+            grid = grid[(gap <= spec.touch).any(axis=1)]  # can touch some link at all
+            steps[tuple(quat)] = step
+            coarse.extend(np.concatenate([pos, quat]) for pos in grid)
+        seeds = self._diverse(self._ranked(self._fits(frame, coarse)), steps)
+        refined = []
+        for key, pose in seeds:
+            span = steps[tuple(pose[3:])]
+            while span > spec.fine_step + 1e-12:  # halve the spacing around the best pose until fine
+                span /= 2
+                around = [np.concatenate([p, pose[3:]]) for p in grid_around(pose[:3], 2 * span, span)]
+                best = self._ranked(self._fits(frame, around))
+                if best and best[0][0] > key:
+                    key, pose = best[0]
+            refined.append((key, pose))
+        return refined
+
+    def _diverse(self, ranked: list, steps: dict) -> list:
+        kept: list = []
+        for key, pose in ranked:
+            step = steps[tuple(pose[3:])]
+            if all(
+                not np.array_equal(pose[3:], other[3:]) or np.linalg.norm(pose[:3] - other[:3]) > 1.5 * step
+                for _, other in kept
+            ):
+                kept.append((key, pose))
+            if len(kept) == self.spec.seeds:
+                break
+        return kept
+
+    def depth_at(self, frame: int, pose: np.ndarray) -> tuple[float, np.ndarray]:
+        """Penetration and touching links of ``pose`` with the hand at the targets of ``frame``."""
+        self.collider.set_hand(targets_qpos(self.scene, self.trajectory, frame))
+        touch = self.collider.touch_at(pose[:3], pose[3:])
+        return touch.depth, touch.links
+
+    def candidate(self, pose: np.ndarray) -> Candidate:
+        """The candidate at ``pose`` with its fit frame, searched down from the closed frame.
+
+        Its contact frame is left at its fit frame until :meth:`with_contact`.
+        """
+        grasp, tolerance = self.grasp, self.spec.penetration
+        frame, depth, links = grasp.open, *self.depth_at(grasp.open, pose)
+        for f in range(grasp.closed, grasp.open - 1, -1):
+            d, touching = self.depth_at(f, pose)
+            if d <= tolerance:
+                frame, depth, links = f, d, touching
+                break
+        return Candidate(
+            pose=pose,
+            links=tuple(self.scene.layout.link_names[i] for i in links),
+            depth=depth,
+            fit_frame=frame,
+            fit_fraction=flexion_fraction(self.trajectory, grasp, frame),
+            contact_frame=frame,
+            depth_before_contact=0.0,
+        )
+
+    def with_contact(self, candidate: Candidate) -> Candidate:
+        """The candidate with its contact frame (hand–object contacts act from there).
+
+        It is the first frame of the run of frames up to its fit frame in which the hand at its targets is
+        within the tolerance of it, searched back to the closing's open frame at most: the object is reached
+        during the closing, and the hand moving before it (at rest, reaching) does not touch it.
+        """
+        opened = min(self.grasp.open, candidate.fit_frame)
+        for f in range(candidate.fit_frame - 1, opened - 1, -1):
+            depth, _ = self.depth_at(f, candidate.pose)
+            if depth > self.spec.penetration:
+                return replace(candidate, contact_frame=f + 1, depth_before_contact=depth)
+        return replace(candidate, contact_frame=opened, depth_before_contact=0.0)
