@@ -17,9 +17,9 @@ def load_trajectory(path: str, skeleton_path: str | None, calibration_path: str 
     # lazy: the readers and glove checks, only for this command
     from handsim.glove.checks import check_recording
     from handsim.io import read_skeleton, read_trajectory
-    from handsim.io._text import require_file
     from handsim.io.glove_calibration import load_calibration
     from handsim.io.graspdb_annotations import match_annotation
+    from handsim.io.text_files import require_file
 
     require_file(path)  # before its skeleton: a folder named x.MOTION is not "x.SKEL: file not found"
     if skeleton_path is None and Path(path).suffix.lower() == ".motion":

@@ -128,13 +128,13 @@ class ReplayVectorEnv(gym.vector.VectorEnv):
         self._contact = switches.contact_frame
         # the frames at whose start something switches (release ≥ 0; contacts switched only when > 0)
         self._switches = {f for f, first in ((self._release, 0), (self._contact, 1)) if f >= first}
-        self._supports = driver._supports
+        self._supports = driver.targets.supports
         self._eq_active = batch.bind("eq_active") if model.neq else None
-        self._mocap = driver._mocap
-        self._root_pos, self._root_quat = driver._root_pos, driver._root_quat
+        self._mocap = driver.targets.mocap
+        self._root_pos, self._root_quat = driver.targets.root_pos, driver.targets.root_quat
         if self._root_pos is not None:
             self._mocap_pos, self._mocap_quat = batch.bind("mocap_pos"), batch.bind("mocap_quat")
-        self._geoms = driver._geoms
+        self._geoms = driver.targets.geoms
         if self._contact > 0:  # the glove scenario switches contacts: per-world collision filters
             self._contype = batch.expand("geom_contype")
             self._conaffinity = batch.expand("geom_conaffinity")
@@ -149,7 +149,7 @@ class ReplayVectorEnv(gym.vector.VectorEnv):
         self._started = False
         self._pending = False  # some world ended on the last step and is reset on the next
         self._autoreset = np.zeros(self.num_envs, dtype=bool)
-        self._all_mocap = driver._all_mocap
+        self._all_mocap = driver.targets.all_mocap
         self._obs = np.zeros((self.num_envs, *env.observation_space.shape))
         self._actions = np.zeros((self.num_envs, len(env.dof_names)))
         self._world_rng: list[np.random.Generator | None] = [None] * self.num_envs
@@ -357,8 +357,8 @@ class ReplayVectorEnv(gym.vector.VectorEnv):
         if self._contact in at:
             contact = ids[k == self._contact]
             driver = self._driver  # the scene's own collision filters of the objects
-            self._contype[contact[:, None], self._geoms] = driver._contype
-            self._conaffinity[contact[:, None], self._geoms] = driver._conaffinity
+            self._contype[contact[:, None], self._geoms] = driver.targets.contype
+            self._conaffinity[contact[:, None], self._geoms] = driver.targets.conaffinity
         n = k + 1
         if self._root_pos is not None:
             if self._all_mocap:

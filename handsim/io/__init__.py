@@ -26,7 +26,7 @@ from typing import TYPE_CHECKING
 from handsim.datatypes.skeleton import Skeleton
 from handsim.datatypes.trajectory import Trajectory
 from handsim.errors import InputFileError
-from handsim.io._text import require_file
+from handsim.io.text_files import require_file
 
 if TYPE_CHECKING:
     from handsim.glove.calibration import GloveCalibration

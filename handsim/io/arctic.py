@@ -25,8 +25,8 @@ import numpy as np
 from handsim.datatypes.mesh import Mesh, validate_mesh
 from handsim.datatypes.object_model import Hinge, ObjectModel, ObjectPart
 from handsim.errors import FormatError, InputFileError, MeshError
-from handsim.io._text import read_text
 from handsim.io.mesh import read_mesh, read_mesh_arrays
+from handsim.io.text_files import read_text
 
 ARCTIC_HINGE_AXIS = (0.0, 0.0, -1.0)
 """Articulation axis in the object frame: the top part turns by R_z(−θ)."""

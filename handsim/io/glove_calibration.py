@@ -21,7 +21,7 @@ from handsim.glove.calibration import (
     GloveCalibration,
 )
 from handsim.glove.sensors import SENSOR_NAMES
-from handsim.io._text import decode_utf8, read_bytes
+from handsim.io.text_files import decode_utf8, read_bytes
 
 
 def save_calibration(calibration: GloveCalibration, path: str | Path) -> Path:

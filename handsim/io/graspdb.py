@@ -27,7 +27,6 @@ from handsim.datatypes.trajectory_ops import with_limit_note
 from handsim.errors import FormatError, TrajectoryError
 from handsim.glove.calibration import GloveCalibration, apply_calibration
 from handsim.glove.sensors import SENSORS, computed_dofs, discarded_sensors, driven_dofs
-from handsim.io._text import decode_text, read_bytes, sha256_of
 from handsim.io.graspdb_filenames import filename_datatype
 from handsim.io.graspdb_rows import (
     FIRST_SENSOR_COLUMN,
@@ -37,6 +36,7 @@ from handsim.io.graspdb_rows import (
     row_stamp,
     split_rows,
 )
+from handsim.io.text_files import decode_text, read_bytes, sha256_of
 
 _DIP_SENSORS = tuple(s for s in SENSORS if s.computed)
 

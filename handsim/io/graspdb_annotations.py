@@ -30,7 +30,7 @@ from pathlib import Path
 from handsim.datatypes.trajectory import Phase, Trajectory
 from handsim.errors import FormatError
 from handsim.glove.phases import AnnotationMatch, PhaseAnnotation, with_phases
-from handsim.io._text import read_text
+from handsim.io.text_files import read_text
 
 ANNOTATION_SUFFIX = "_annot-.txt"
 """What a phase annotation file name adds to its motion file's name (without ``.txt``)."""

@@ -25,7 +25,7 @@ import numpy as np
 
 from handsim.errors import FormatError
 from handsim.glove.sensors import SENSOR_NAMES
-from handsim.io._text import decode_text, parse_float
+from handsim.io.text_files import decode_text, parse_float
 
 NTOKENS = 30
 """Entries per motion row: 6 time-stamp fields, the switch, 23 sensors."""

@@ -11,9 +11,9 @@ import numpy as np
 
 from handsim.datatypes.mesh import Mesh, principal_extents, validate_mesh
 from handsim.errors import InputFileError, MeshError
-from handsim.io._text import UTF8_BOM, decode_text, read_bytes
 from handsim.io.mesh_counts import check_ascii_ply, check_stl
 from handsim.io.off import parse_off
+from handsim.io.text_files import UTF8_BOM, decode_text, read_bytes
 
 MESH_SUFFIXES = (".obj", ".off", ".stl", ".ply")
 UNIT_SCALES = {"m": 1.0, "mm": 1e-3}

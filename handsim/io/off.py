@@ -20,7 +20,7 @@ from pathlib import Path
 import numpy as np
 
 from handsim.errors import FormatError
-from handsim.io._text import numbered_lines, parse_floats, parse_int, read_text
+from handsim.io.text_files import numbered_lines, parse_floats, parse_int, read_text
 
 _KEYWORD = re.compile(r"(ST)?C?N?OFF")
 MAX_FACE_COLOUR = 4

@@ -39,8 +39,8 @@ import numpy as np
 
 from handsim.datatypes.trajectory import Phase, Trajectory
 from handsim.errors import FormatError
-from handsim.io._text import decode_utf8, read_bytes, sha256_of
 from handsim.io.parametric_skeleton import DEFAULT_HAND_LENGTH_M, default_skeleton
+from handsim.io.text_files import decode_utf8, read_bytes, sha256_of
 
 if TYPE_CHECKING:
     from handsim.datatypes.skeleton import Skeleton

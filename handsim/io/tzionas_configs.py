@@ -12,7 +12,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from handsim.errors import FormatError
-from handsim.io._text import numbered_lines, parse_int, read_text
+from handsim.io.text_files import numbered_lines, parse_int, read_text
 
 INDEX_BOUNDS_KEYS = ("TotalAlligned", "MotionnOffset", "VideoooOffset")
 """The keys of ``INDEX_BOUNDS.txt``, in the dataset's spelling."""

@@ -55,7 +55,7 @@ from handsim.datatypes.skeleton import Skeleton
 from handsim.datatypes.trajectory import ObjectTrack, Trajectory
 from handsim.datatypes.trajectory_ops import with_limit_note
 from handsim.errors import FormatError, InputFileError, TrajectoryError
-from handsim.io._text import numbered_lines, read_bytes, read_text, sha256_of
+from handsim.io.text_files import numbered_lines, read_bytes, read_text, sha256_of
 from handsim.io.tzionas import read_tzionas_skeleton
 from handsim.io.tzionas_configs import IndexBounds, config_dir_of, read_index_bounds
 from handsim.io.tzionas_motion_file import read_motion

@@ -13,7 +13,7 @@ from pathlib import Path
 import numpy as np
 
 from handsim.errors import FormatError
-from handsim.io._text import numbered_lines, parse_floats, read_text
+from handsim.io.text_files import numbered_lines, parse_floats, read_text
 from handsim.io.tzionas_skel import MM
 
 MOTION_FIELDS = [f"R[{i}][{j}]" for i in range(3) for j in range(3)] + ["T.x", "T.y", "T.z"]

@@ -20,7 +20,7 @@ from pathlib import Path
 import numpy as np
 
 from handsim.errors import FormatError
-from handsim.io._text import (
+from handsim.io.text_files import (
     blank_line_blocks,
     numbered_lines,
     parse_float,

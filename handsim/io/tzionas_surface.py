@@ -20,7 +20,7 @@ import numpy as np
 
 from handsim.datatypes.skeleton import SkinnedMesh
 from handsim.errors import FormatError
-from handsim.io._text import blank_line_blocks, numbered_lines, parse_floats, parse_int, read_text
+from handsim.io.text_files import blank_line_blocks, numbered_lines, parse_floats, parse_int, read_text
 from handsim.io.tzionas_skel import SkelBone
 
 VOI_FINGERS = ("little", "ring", "middle", "index", "thumb")

@@ -33,7 +33,7 @@ import numpy as np
 from handsim.datatypes.rotations import rotation_about_axis
 from handsim.datatypes.skeleton import Dof, Joint, Skeleton, mj_name
 from handsim.errors import FormatError
-from handsim.io._text import parse_floats, read_bytes
+from handsim.io.text_files import parse_floats, read_bytes
 
 AXIS_TAGS = ("rotx", "roty", "rotz")
 AXIS_KINDS = {"rotx": "flex", "roty": "pron", "rotz": "abd"}

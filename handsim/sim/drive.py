@@ -47,6 +47,33 @@ def scenario_switches(scene: SimScene, schedule: ControlSchedule, release_delay:
     return ScenarioSwitches(contact_frame=contact, release_frame=release)
 
 
+@dataclass(frozen=True)
+class DriveTargets:
+    """What a :class:`ScheduleDriver` writes besides the controls: read by the native vector env too.
+
+    Attributes:
+        supports: Equality ids of the objects' supports (welds released at ``switches.release_frame``).
+        geoms: The objects' collision geoms (switched off until ``switches.contact_frame``).
+        contype: Their ``contype`` when switched on.
+        conaffinity: Their ``conaffinity`` when switched on.
+        mocap: Mocap body ids of the welded hand roots, in hand order.
+        root_qpos: Free-joint qpos address of each welded root.
+        root_pos: Recorded root positions per frame and welded hand, m (frames, hands, 3), or None.
+        root_quat: Recorded root orientations (w, x, y, z) per frame and welded hand, or None.
+        all_mocap: Every mocap body is a welded root, in order (whole-array copies suffice).
+    """
+
+    supports: np.ndarray
+    geoms: np.ndarray
+    contype: np.ndarray
+    conaffinity: np.ndarray
+    mocap: np.ndarray
+    root_qpos: tuple[int, ...]
+    root_pos: np.ndarray | None
+    root_quat: np.ndarray | None
+    all_mocap: bool
+
+
 class ScheduleDriver:
     """Steps a :class:`~handsim.sim.stepper.Stepper` frame by frame through a schedule.
 
@@ -63,19 +90,24 @@ class ScheduleDriver:
         layout = stepper.scene.layout
         self.stepper, self.schedule, self.switches = stepper, schedule, switches
         self.frame = 0
-        self._supports = np.array([o.support_eq for o in layout.objects if o.support_eq >= 0], dtype=np.int64)
-        self._geoms = np.array([g for o in layout.objects for g in o.collision_geoms], dtype=np.int64)
         model = stepper.model
-        self._contype = model.geom_contype[self._geoms].copy()
-        self._conaffinity = model.geom_conaffinity[self._geoms].copy()
+        supports = np.array([o.support_eq for o in layout.objects if o.support_eq >= 0], dtype=np.int64)
+        geoms = np.array([g for o in layout.objects for g in o.collision_geoms], dtype=np.int64)
         roots = schedule.root_poses
         welded = [h for h in layout.hands if h.mocap >= 0]
-        self._mocap = np.array([h.mocap for h in welded], dtype=np.int64)
-        self._root_qpos = [h.root_free_qpos for h in welded]
-        self._root_pos = None if roots is None else np.ascontiguousarray(roots[:, :, :3])
-        self._root_quat = None if roots is None else np.ascontiguousarray(roots[:, :, 3:])
-        # every mocap body is a welded root, in order: whole-array copies instead of fancy indexing
-        self._all_mocap = np.array_equal(self._mocap, np.arange(model.nmocap))
+        mocap = np.array([h.mocap for h in welded], dtype=np.int64)
+        self.targets = DriveTargets(
+            supports=supports,
+            geoms=geoms,
+            contype=model.geom_contype[geoms].copy(),
+            conaffinity=model.geom_conaffinity[geoms].copy(),
+            mocap=mocap,
+            root_qpos=tuple(h.root_free_qpos for h in welded),
+            root_pos=None if roots is None else np.ascontiguousarray(roots[:, :, :3]),
+            root_quat=None if roots is None else np.ascontiguousarray(roots[:, :, 3:]),
+            # every mocap body is a welded root, in order: whole-array copies instead of fancy indexing
+            all_mocap=bool(np.array_equal(mocap, np.arange(model.nmocap))),
+        )
         self._bind()
 
     def _bind(self) -> None:
@@ -106,10 +138,10 @@ class ScheduleDriver:
             schedule.ctrl[frame], layout.ctrl_range[:, 0], layout.ctrl_range[:, 1]
         )
         data.ctrl[:] = schedule.ctrl[frame]
-        if self._root_pos is not None:
-            data.mocap_pos[self._mocap] = self._root_pos[frame]
-            data.mocap_quat[self._mocap] = self._root_quat[frame]
-            for h, adr in enumerate(self._root_qpos):
+        if self.targets.root_pos is not None:
+            data.mocap_pos[self.targets.mocap] = self.targets.root_pos[frame]
+            data.mocap_quat[self.targets.mocap] = self.targets.root_quat[frame]
+            for h, adr in enumerate(self.targets.root_qpos):
                 data.qpos[adr : adr + 7] = schedule.root_poses[frame, h]
         for index, track in schedule.objects.items():
             obj = layout.objects[index]
@@ -117,7 +149,7 @@ class ScheduleDriver:
             if track.articulation is not None and obj.hinge_qpos >= 0:
                 data.qpos[obj.hinge_qpos] = self._in_range(obj.hinge_qpos, track.articulation[frame])
         release = self.switches.release_frame
-        data.eq_active[self._supports] = 0 if 0 <= release < frame else 1
+        data.eq_active[self.targets.supports] = 0 if 0 <= release < frame else 1
         self._set_contacts(frame >= self.switches.contact_frame)
         mujoco.mj_forward(stepper.model, data)
         self.frame = frame
@@ -146,16 +178,16 @@ class ScheduleDriver:
         """
         k = self.frame
         if k == self.switches.release_frame:
-            self._data.eq_active[self._supports] = 0
+            self._data.eq_active[self.targets.supports] = 0
         if k == self.switches.contact_frame and k > 0:
             self._set_contacts(True)
-        if self._root_pos is not None:
-            if self._all_mocap:
-                self._mocap_pos[:] = self._root_pos[k + 1]
-                self._mocap_quat[:] = self._root_quat[k + 1]
+        if self.targets.root_pos is not None:
+            if self.targets.all_mocap:
+                self._mocap_pos[:] = self.targets.root_pos[k + 1]
+                self._mocap_quat[:] = self.targets.root_quat[k + 1]
             else:
-                self._mocap_pos[self._mocap] = self._root_pos[k + 1]
-                self._mocap_quat[self._mocap] = self._root_quat[k + 1]
+                self._mocap_pos[self.targets.mocap] = self.targets.root_pos[k + 1]
+                self._mocap_quat[self.targets.mocap] = self.targets.root_quat[k + 1]
         events = self.stepper.step(ctrl)
         self.frame = k + 1
         return events
@@ -164,5 +196,5 @@ class ScheduleDriver:
         if self.switches.contact_frame <= 0:
             return  # contacts always on: the model is never touched
         model = self.stepper.model
-        model.geom_contype[self._geoms] = self._contype if on else 0
-        model.geom_conaffinity[self._geoms] = self._conaffinity if on else 0
+        model.geom_contype[self.targets.geoms] = self.targets.contype if on else 0
+        model.geom_conaffinity[self.targets.geoms] = self.targets.conaffinity if on else 0
