@@ -13,13 +13,12 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-import handsim.builders.surfaces as surfaces
 from handsim.builders import build_hand
 from handsim.builders.surfaces import FITTED_SKIN, FITTED_SKIN_OFFSET
 from handsim.io import read_skeleton
 from handsim.sim.pad import pad_force_curve
 from handsim.sim.replay import replay
-from handsim.trials import load_trial
+from handsim.trials import load_trial, tzionas
 
 ASSETS = Path(__file__).resolve().parents[1] / "handsim" / "assets"
 SEQ20 = ASSETS / "tzionas_ijcv16" / "Models" / "20" / "Model_Hand_R.MOTION"
@@ -56,7 +55,7 @@ def test_sequence_20s_cube_stays_on_its_track_only_with_the_offset(monkeypatch):
     assert with_offset["within_tolerance"] >= 0.70 and with_offset["mean_drift_mm"] <= 15.0
     assert with_offset["max_penetration_mm"] < 1.0  # the mesh stays outside the cube: the pad compresses
 
-    monkeypatch.setattr(surfaces, "FITTED_SKIN", dataclasses.replace(FITTED_SKIN, margin=0.0))
+    monkeypatch.setattr(tzionas, "FITTED_SKIN", dataclasses.replace(FITTED_SKIN, margin=0.0))
     loaded = load_trial(SEQ20)
     assert _hand_margins(loaded.scene) == {0.0}
     without = replay(loaded.scene, loaded.trajectory).summary

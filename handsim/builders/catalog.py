@@ -18,6 +18,7 @@ from dataclasses import dataclass, replace
 from pathlib import Path
 
 from handsim.assets import TZIONAS_DIR
+from handsim.builders.arctic_objects import arctic_object
 from handsim.builders.graspdb_objects import (
     GRASPDB_OBJECTS,
     UnknownObjectError,
@@ -27,8 +28,9 @@ from handsim.datatypes.object_model import ObjectModel, mesh_object
 from handsim.datatypes.physical_ranges import DENSITY, OBJECT_MASS
 from handsim.errors import InputFileError
 from handsim.io.arctic_motion import ARCTIC_OBJECTS as ARCTIC_NAMES
-from handsim.io.mesh import MESH_SUFFIXES
+from handsim.io.mesh import MESH_SUFFIXES, read_mesh
 from handsim.io.text_files import require_file
+from handsim.io.tzionas_objects import read_tzionas_object
 
 DEFAULT_DENSITY = 1000.0
 """kg/m³ for a mesh file given neither density nor mass (water; plastics are 900–1400)."""
@@ -63,8 +65,6 @@ class CatalogEntry:
 
 
 def _tzionas_model(name: str) -> ObjectModel:
-    from handsim.io.tzionas_objects import read_tzionas_object
-
     model = read_tzionas_object(TZIONAS_DIR / TZIONAS_OBJECTS[name][0])
     return replace(model, name=name)
 
@@ -129,8 +129,6 @@ def arctic(folder: str | Path, *, density: float | None = None, mass: float | No
 
     With the hinge range, colliding parts and the object's own mass (:mod:`handsim.builders.arctic_objects`).
     """
-    from handsim.builders.arctic_objects import arctic_object
-
     return arctic_object(folder, density=density, mass=mass)
 
 
@@ -198,8 +196,6 @@ def resolve(
             f"pass your template folder, e.g. arctic_data/data/meta/object_vtemplates/{what}"
         )
     if suffix == ".skel":
-        from handsim.io.tzionas_objects import read_tzionas_object
-
         return _with_mass(read_tzionas_object(require_file(path)), density, mass)
     if not suffix and path.is_file():
         raise InputFileError(
@@ -208,8 +204,6 @@ def resolve(
             "(see `handsim catalog`)"
         )
     if suffix in MESH_SUFFIXES:
-        from handsim.io.mesh import read_mesh
-
         if units is None:
             raise InputFileError(
                 f"{path}: give the mesh's units ('m' or 'mm'); a wrong guess scales it 1000×"

@@ -28,11 +28,18 @@ import numpy as np
 import numpy.typing as npt
 from gymnasium import spaces
 
+from handsim.builders import build_object, build_scene
+from handsim.builders.catalog import get
+from handsim.builders.hand import build_hand
+from handsim.builders.objects import object_bounds
+from handsim.builders.scene import resting_position
 from handsim.envs._base import DEFAULT_CAMERA, DEFAULT_SIZE, HandEnv
 from handsim.envs._checks import nonnegative, positive
 from handsim.envs._observation import ContactSummary, ObservationLayout, add_state
+from handsim.io.parametric_skeleton import DEFAULT_BREADTH_RATIO, DEFAULT_HAND_LENGTH_M, default_skeleton
 from handsim.sim.compiled import SceneSetup, SimScene, compile_scene
 from handsim.sim.control import DEFAULT_CONTROL_RATE, substeps_for
+from handsim.sim.hand_pose import hand_frame
 
 ROOT_CONTROLS = ("velocity", "scripted")
 ZERO_ACTIONS = ("open", "mid")
@@ -73,9 +80,6 @@ class GraspScene:
 
 def _wristless_default_hand() -> mujoco.MjSpec:
     """The default hand without its wrist DoFs (the mocap weld moves and turns the root instead)."""
-    from handsim.builders.hand import build_hand
-    from handsim.io.parametric_skeleton import DEFAULT_BREADTH_RATIO, DEFAULT_HAND_LENGTH_M, default_skeleton
-
     skeleton = default_skeleton()
     root = skeleton.joints[0].name
     skeleton = dataclasses.replace(skeleton, dofs=tuple(d for d in skeleton.dofs if d.joint != root))
@@ -122,12 +126,6 @@ def grasp_scene(object_name: str = "tennis_ball", hand_clearance: float = 0.02) 
     Raises:
         UnknownObjectError: ``object_name`` is not in the catalogue (the message lists the names).
     """
-    from handsim.builders import build_object, build_scene
-    from handsim.builders.catalog import get
-    from handsim.builders.objects import object_bounds
-    from handsim.builders.scene import resting_position
-    from handsim.sim.hand_pose import hand_frame
-
     obj = build_object(get(object_name))
     hand = _wristless_default_hand()
     quat = hand_frame(compile_scene(build_scene(hand, obj, table=False)))

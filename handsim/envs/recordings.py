@@ -20,9 +20,11 @@ from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
+from handsim.assets import TZIONAS_DIR
 from handsim.datatypes.trajectory import Trajectory
 from handsim.errors import HandsimError
 from handsim.sim.compiled import SimScene
+from handsim.trials import find_trial, load_trial
 
 DEFAULT_SEQUENCE = ("Models", "20")
 """The bundled Tzionas sequence under :data:`handsim.assets.TZIONAS_DIR`."""
@@ -35,8 +37,6 @@ class RecordingError(HandsimError, ValueError):
 
 def trial_option_names() -> tuple[str, ...]:
     """The trial option keywords an environment passes to :func:`handsim.trials.find_trial`."""
-    from handsim.trials import find_trial
-
     return tuple(p for p in inspect.signature(find_trial).parameters if p != "path")
 
 
@@ -105,8 +105,6 @@ def load_recording(path: str | os.PathLike, **options: Any) -> tuple[SimScene, T
     p = Path(path)
     key = _key(p, options)
     if key not in _CACHE:
-        from handsim.trials import load_trial
-
         loaded = load_trial(p, **options)
         hands = loaded.scene.layout.hands
         if len(hands) > 1:
@@ -132,9 +130,6 @@ def default_replay_inputs() -> tuple[SimScene, Trajectory]:
         the hand of ``Model_Hand_R.SKEL`` with the fitted skin, the cube following its track) and its
         trajectory.
     """
-    from handsim.assets import TZIONAS_DIR
-    from handsim.trials import load_trial
-
     loaded = load_trial(TZIONAS_DIR.joinpath(*DEFAULT_SEQUENCE) / "Model_Hand_R.MOTION")
     return loaded.scene, loaded.trajectory
 

@@ -14,14 +14,18 @@ import math
 from dataclasses import dataclass, fields
 from pathlib import Path
 
+import mujoco
 import numpy as np
 
+from handsim.envs.replay_env import ReplayEnv
 from handsim.envs.replay_reward import STEP_NUMBERS
 from handsim.errors import HandsimError
 from handsim.export.errors import ExportError, RecordMismatchError
+from handsim.runner.portable import record_trial
 from handsim.runner.trial_record import sha256_file
 from handsim.sim.metrics import MetricSpec
-from handsim.sim.replay import ReplayConfig
+from handsim.sim.replay import ReplayConfig, replay
+from handsim.trials import load_trial
 
 ENV_ID = "handsim/Replay-v0"
 """The environment the episodes are steps of."""
@@ -266,11 +270,6 @@ def replay_record(
         RecordMismatchError: The record cannot be reproduced: an input changed or is missing, the trial no
             longer loads, the model or the summary differ (the message lists every difference).
     """
-    from handsim.envs.replay_env import ReplayEnv
-    from handsim.runner.portable import record_trial
-    from handsim.sim.replay import replay
-    from handsim.trials import load_trial
-
     rid = str(record.get("id", "?"))
     if not isinstance(record.get("trial"), dict):
         raise ExportError(f"trial {rid!r}: the record has no trial (the files to load)")
@@ -286,8 +285,6 @@ def replay_record(
         result = replay(loaded.scene, loaded.trajectory, config)
         problems = summary_problems(record["summary"], result.summary, rtol, atol)
         if problems:
-            import mujoco
-
             then = (record.get("versions") or {}).get("mujoco", "not recorded")
             raise RecordMismatchError(
                 f"trial {rid!r}: replaying it now gives other numbers than the record (mujoco "

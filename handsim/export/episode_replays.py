@@ -10,6 +10,8 @@ import multiprocessing
 from collections.abc import Iterator
 from concurrent.futures import ProcessPoolExecutor
 
+from tqdm import tqdm
+
 from handsim.export.episode import ReplayedEpisode, replay_record
 from handsim.export.errors import ExportError, RecordMismatchError
 
@@ -41,8 +43,6 @@ def replayed_episodes(
         Each record's episode, or ``("mismatch" | "error", message)``; closing the generator drops the
         records not started.
     """
-    from tqdm import tqdm
-
     bar = tqdm(total=len(records), unit="trial", desc="export", disable=not progress)
     workers = min(workers, len(records))
     try:

@@ -20,6 +20,7 @@ from collections.abc import Sequence
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
+from handsim.envs.replay_env import ReplayEnv
 from handsim.export.episode import ReplayedEpisode, replay_config
 from handsim.export.episode_replays import replayed_episodes
 from handsim.export.errors import (
@@ -31,11 +32,10 @@ from handsim.export.errors import (
 from handsim.export.minari_writer import MinariWriter
 from handsim.export.run_records import read_run_records, select_records, skip_entry
 from handsim.runner.trial_record import sha256_file
+from handsim.trials import Trial, load_trial
 
 if TYPE_CHECKING:
     import minari
-
-    from handsim.envs.replay_env import ReplayEnv
 
 INSTALL_HINT = "pip install 'handsim[minari]'"
 
@@ -47,7 +47,7 @@ def require_minari() -> Any:
         MissingExtraError: ``minari`` or ``h5py`` is not installed.
     """
     try:
-        import minari
+        import minari  # lazy: optional extra handsim[minari]
     except ImportError as exc:
         raise MissingExtraError(f"the Minari export needs the minari package: {INSTALL_HINT}") from exc
     try:
@@ -66,7 +66,7 @@ def check_dataset_id(dataset_id: str) -> None:
     Raises:
         ExportError: It is not.
     """
-    from minari.dataset.minari_dataset import parse_dataset_id
+    from minari.dataset.minari_dataset import parse_dataset_id  # lazy: optional extra handsim[minari]
 
     try:
         _, _, version = parse_dataset_id(dataset_id)
@@ -135,7 +135,7 @@ def export_minari(
         RecordsError: A line of it is not a record of this handsim's schema.
     """
     minari = require_minari()
-    from minari.storage.datasets_root_dir import get_dataset_path
+    from minari.storage.datasets_root_dir import get_dataset_path  # lazy: optional extra handsim[minari]
 
     check_dataset_id(dataset_id)
     if workers < 1:
@@ -205,9 +205,6 @@ def recover_replay_env(dataset: minari.MinariDataset, episode_index: int, **kwar
     Raises:
         ExportError: The dataset was not written by :func:`export_minari`, or the index is out of range.
     """
-    from handsim.envs.replay_env import ReplayEnv
-    from handsim.trials import Trial, load_trial
-
     if "handsim" not in dataset.storage.metadata:
         raise ExportError("the dataset was not written by handsim's Minari export (no metadata['handsim'])")
     if not 0 <= episode_index < len(dataset):

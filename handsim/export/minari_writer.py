@@ -9,10 +9,13 @@ from __future__ import annotations
 import warnings
 from typing import TYPE_CHECKING, Any
 
+import mujoco
 import numpy as np
+from gymnasium import spaces
 
 from handsim.export.episode import ENV_ID, INFO_DOCS, RESET_SEED, ReplayedEpisode
 from handsim.export.errors import LayoutMismatchError
+from handsim.version import __version__
 
 if TYPE_CHECKING:
     import minari
@@ -90,7 +93,7 @@ class MinariWriter:
         Raises:
             LayoutMismatchError: Its observation layout, hand or control rate differs from the first's.
         """
-        from minari.data_collector import EpisodeBuffer
+        from minari.data_collector import EpisodeBuffer  # lazy: optional extra handsim[minari]
 
         buffer = EpisodeBuffer(
             seed=RESET_SEED,
@@ -118,11 +121,6 @@ class MinariWriter:
         self._exported.append(episode.trial_id)
 
     def _create(self, episode: ReplayedEpisode, buffer: Any) -> minari.MinariDataset:
-        import mujoco
-        from gymnasium import spaces
-
-        import handsim
-
         layout = episode.layout
         ranges = np.asarray(layout.ctrl_range, dtype=np.float64)
         with warnings.catch_warnings():
@@ -140,7 +138,7 @@ class MinariWriter:
                 observation_space=spaces.Box(-np.inf, np.inf, (len(layout.observation_names),), np.float64),
                 action_space=spaces.Box(ranges[:, 0], ranges[:, 1], dtype=np.float64),
                 description=describe(layout),
-                requirements=[f"handsim=={handsim.__version__}", f"mujoco=={mujoco.__version__}"],
+                requirements=[f"handsim=={__version__}", f"mujoco=={mujoco.__version__}"],
             )
 
     def finish(self, source: dict, skipped: list[dict], comparison: dict) -> None:
@@ -151,16 +149,12 @@ class MinariWriter:
             skipped: ``{"id", "status", "reason"}`` per trial not exported.
             comparison: The tolerances of the summary comparison.
         """
-        import mujoco
-
-        import handsim
-
         layout = self._first.layout
         self.dataset.storage.update_metadata(
             {
                 "handsim": {
                     "format": EXPORT_FORMAT,
-                    "handsim_version": handsim.__version__,
+                    "handsim_version": __version__,
                     "mujoco_version": mujoco.__version__,
                     "source": source,
                     "env": {

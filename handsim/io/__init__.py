@@ -26,7 +26,14 @@ from typing import TYPE_CHECKING
 from handsim.datatypes.skeleton import Skeleton
 from handsim.datatypes.trajectory import Trajectory
 from handsim.errors import InputFileError
+from handsim.io.graspdb import read_graspdb_glove
+from handsim.io.scripted import read_scripted_grasp
 from handsim.io.text_files import require_file
+from handsim.io.tzionas import read_tzionas_skeleton
+from handsim.io.tzionas_configs import config_dir_of
+from handsim.io.tzionas_motion import read_tzionas_motion
+from handsim.io.tzionas_sequence import read_tzionas_sequence
+from handsim.io.xmlskel import read_xmlskel
 
 if TYPE_CHECKING:
     from handsim.glove.calibration import GloveCalibration
@@ -73,10 +80,7 @@ def read_skeleton(path: str | Path) -> Skeleton:
     p = Path(path)
     suffix = _suffix_or_error(p, SKELETON_SUFFIXES, "skeleton")
     if suffix == ".xmlskel":
-        from handsim.io.xmlskel import read_xmlskel
-
         return read_xmlskel(p)
-    from handsim.io.tzionas import read_tzionas_skeleton
 
     return read_tzionas_skeleton(p)
 
@@ -113,20 +117,14 @@ def read_trajectory(
     if suffix == ".grasp.json":
         if calibration is not None:
             raise InputFileError(f"{p}: a scripted grasp is synthetic joint angles; it takes no calibration")
-        from handsim.io.scripted import read_scripted_grasp
 
         return read_scripted_grasp(p, skeleton=skeleton)
-    from handsim.io.graspdb import read_graspdb_glove
 
     return read_graspdb_glove(p, skeleton=skeleton, calibration=calibration)
 
 
 def _read_tzionas(path: Path) -> Trajectory:
     """A hand ``.MOTION`` with the sequence's object tracks when its ``Configs/NN`` lists them."""
-    from handsim.io.tzionas_configs import config_dir_of
-    from handsim.io.tzionas_motion import read_tzionas_motion
-    from handsim.io.tzionas_sequence import read_tzionas_sequence
-
     if not path.stem.startswith("Model_Hand"):
         raise InputFileError(
             f"{path}: not a hand motion (Model_Hand_*.MOTION); object motions are read with "

@@ -21,6 +21,7 @@ from handsim.datatypes.mesh import boundary_loops, cap_loops, validate_mesh
 from handsim.datatypes.object_model import Hinge, ObjectModel, ObjectPart
 from handsim.datatypes.skeleton import SkinnedMesh, mj_name
 from handsim.errors import MeshError, SkeletonError
+from handsim.io.tzionas import read_tzionas_skeleton
 
 TZIONAS_DENSITIES = {"Model_Object_Cube": 600.0, "Model_Object_Pipe_Gray": 150.0}
 """Assumed densities in kg/m³: the 53 mm cube as wood (~89 g); the 350 × 48 mm grey bendable pipe as
@@ -44,8 +45,6 @@ def read_tzionas_object(skel_path: str | Path, *, density: float | None = None) 
             one DoF.
         MeshError: The mesh or a part is invalid.
     """
-    from handsim.io.tzionas import read_tzionas_skeleton
-
     path = Path(skel_path)
     skeleton = read_tzionas_skeleton(path)
     mesh = skeleton.mesh

@@ -21,6 +21,8 @@ import time
 from collections.abc import Callable, Sequence
 from pathlib import Path
 
+from tqdm import tqdm
+
 from handsim.runner.errors import RunnerError
 from handsim.runner.local_backend import in_process_outcomes, pool_outcomes
 from handsim.runner.portable import dataset_root, portable_record
@@ -32,6 +34,7 @@ from handsim.runner.records import (
     write_run_info,
 )
 from handsim.runner.run_summary import RunSummary, failure_counts, status_counts
+from handsim.runner.trial_record import versions
 from handsim.runner.worker import run_parameters, trial_outcome, write_outcome_files
 from handsim.sim.replay import ReplayConfig
 from handsim.trials import Discovery, TrialEntry
@@ -115,10 +118,6 @@ def run_dataset(
         RecordsError: ``OUT/records.jsonl`` has a malformed line other than a truncated last one.
         KeyboardInterrupt: Ctrl-C; the records written so far are complete lines (run again to resume).
     """
-    from tqdm import tqdm
-
-    from handsim.runner.trial_record import versions
-
     start = time.perf_counter()
     if backend not in BACKENDS:
         raise RunnerError(f"unknown backend {backend!r}; expected one of {list(BACKENDS)}")

@@ -21,6 +21,8 @@ from collections.abc import Sequence
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
+from handsim.trials import Trial
+
 if TYPE_CHECKING:
     from handsim.trials import Trial, TrialEntry
 
@@ -97,8 +99,6 @@ def record_trial(record: dict, root: str | Path | None) -> Trial:
     Raises:
         TrialError: ``record["trial"]`` is not a trial's fields.
     """
-    from handsim.trials import Trial
-
     fields = dict(record["trial"])
     if root is not None:
         base = Path(root)

@@ -78,7 +78,7 @@ def ray_outcomes(
 def import_ray() -> ModuleType:
     """The ``ray`` module, or a RunnerError saying how to install it."""
     try:
-        import ray
+        import ray  # lazy: optional extra handsim[ray]
     except ImportError:
         raise RunnerError(f"the Ray backend needs Ray: {RAY_INSTALL}") from None
     return ray

@@ -20,6 +20,7 @@ from handsim.runner.trial_record import touching_links
 from handsim.sim.compiled import SimScene
 from handsim.sim.replay import ReplayResult
 from handsim.viz.headless import offscreen_backend
+from handsim.viz.render import render_states
 
 FRAMES_DIR = "frames"
 RENDER_CAMERA = "track"
@@ -83,8 +84,6 @@ def render_pngs(scene: SimScene, result: ReplayResult, frames: list[int]) -> lis
         HandsimError: No OpenGL context (or any error of :func:`handsim.viz.render.render_states`).
         ValueError: The result kept no states.
     """
-    from handsim.viz.render import render_states
-
     if headless_glfw():
         raise HandsimError(
             "MuJoCo was imported with its GLFW OpenGL backend (MUJOCO_GL=glfw) and there is no display; "

@@ -28,8 +28,10 @@ from handsim import lifeline
 from handsim.files import write_atomic
 from handsim.runner.portable import portable_traceback
 from handsim.runner.records import SCHEMA, json_ready
-from handsim.sim.replay import ReplayConfig
-from handsim.trials import TrialEntry
+from handsim.runner.renders import FRAMES_DIR, key_frames, render_pngs, safe_id
+from handsim.runner.trial_record import curves, input_hashes, trajectory_quality, versions
+from handsim.sim.replay import ReplayConfig, replay
+from handsim.trials import TrialEntry, load_trial
 from handsim.viz.headless import prefer_headless_gl
 
 
@@ -89,8 +91,6 @@ def prepare_pool_worker() -> None:
 
 def base_record(entry: TrialEntry, config: ReplayConfig, frames: int) -> dict:
     """A trial's record before it runs: identity, inputs, parameters, versions; status ``"error"``."""
-    from handsim.runner.trial_record import input_hashes, versions
-
     return {
         "schema": SCHEMA,
         "id": entry.id,
@@ -133,8 +133,6 @@ def _replay_config(config: ReplayConfig, scene, frames: int, notes: list[str]) -
 
 
 def _renders(entry: TrialEntry, loaded, result, frames: int, record: dict) -> dict[str, bytes]:
-    from handsim.runner.renders import FRAMES_DIR, key_frames, render_pngs, safe_id
-
     chosen = key_frames(result, frames)
     try:
         pngs = render_pngs(loaded.scene, result, chosen)
@@ -169,10 +167,6 @@ def trial_outcome(entry: TrialEntry, config: ReplayConfig, frames: int = 4) -> T
     Returns:
         The record and the rendered frames' bytes.
     """
-    from handsim.runner.trial_record import curves, trajectory_quality
-    from handsim.sim.replay import replay
-    from handsim.trials import load_trial
-
     start = time.perf_counter()
     timing = {"load_s": 0.0, "replay_s": 0.0, "render_s": 0.0, "total_s": 0.0}
     record = base_record(entry, config, frames)

@@ -14,6 +14,12 @@ import os
 from pathlib import Path, PurePosixPath
 from typing import TYPE_CHECKING
 
+from handsim.builders.arctic_objects import arctic_object
+from handsim.builders.mano_hand import build_mano_hands
+from handsim.io.arctic_hands import arctic_trajectory, hand_side_check
+from handsim.io.arctic_motion import HANDS, read_arctic_sequence
+from handsim.io.mano import MANO_DIR_ENV, find_mano_files
+from handsim.sim.arctic_scene import arctic_scene
 from handsim.trials.base import (
     LoadedTrial,
     Trial,
@@ -55,8 +61,6 @@ def _sequence(path: Path, templates: str | Path | None = None) -> tuple[str, Pat
 
 def _trial(path: Path, options: TrialOptions) -> Trial:
     """The trial of a sequence, nothing checked (``mano_dir``: the option, else ``$HANDSIM_MANO_DIR``)."""
-    from handsim.io.mano import MANO_DIR_ENV
-
     seq, motion, template = _sequence(path, options.templates)
     name = seq.split("_")[0]
     mano_dir = options.mano_dir or os.environ.get(MANO_DIR_ENV) or None
@@ -74,8 +78,6 @@ def _trial(path: Path, options: TrialOptions) -> Trial:
 
 
 def _find(path: Path, options: TrialOptions) -> Trial:
-    from handsim.io.mano import find_mano_files
-
     find_mano_files(options.mano_dir)  # before any work: says which files are needed and where to put them
     _, motion, template = _sequence(path, options.templates)
     if not motion.is_file():
@@ -87,12 +89,6 @@ def _find(path: Path, options: TrialOptions) -> Trial:
 
 
 def _load(trial: Trial, metrics: MetricSpec | None, progress: bool) -> LoadedTrial:
-    from handsim.builders.arctic_objects import arctic_object
-    from handsim.builders.mano_hand import build_mano_hands
-    from handsim.io.arctic_hands import arctic_trajectory, hand_side_check
-    from handsim.io.arctic_motion import HANDS, read_arctic_sequence
-    from handsim.sim.arctic_scene import arctic_scene
-
     sequence = read_arctic_sequence(trial.trajectory_path)
     hands = build_mano_hands(
         trial.mano_dir, {side: sequence.hand(side).shape for side in HANDS}, collision=trial.collision

@@ -23,6 +23,8 @@ from dataclasses import asdict, dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING
 
+from handsim.builders.catalog import resolve
+from handsim.builders.objects import object_spec, prepare_object
 from handsim.errors import HandsimError, InputFileError
 from handsim.io.parametric_skeleton import DEFAULT_HAND_LENGTH_M
 
@@ -235,9 +237,6 @@ def build_objects(
         models: The object models of ``trial.objects`` when the kind made them itself (e.g. an ARCTIC
             object with its recorded hinge range); None: :func:`handsim.builders.catalog.resolve` each.
     """
-    from handsim.builders.catalog import resolve
-    from handsim.builders.objects import object_spec, prepare_object
-
     if models is None:
         models = [
             resolve(o.what, units=trial.units, density=trial.density, mass=trial.mass, force=trial.force)

@@ -8,6 +8,8 @@ from __future__ import annotations
 
 from typing import TYPE_CHECKING
 
+from handsim.builders import default_hand, default_skeleton
+from handsim.sim.scenarios import glove_scene
 from handsim.trials.base import LoadedTrial, Trial, build_objects
 
 if TYPE_CHECKING:
@@ -21,8 +23,6 @@ if TYPE_CHECKING:
 
 def parametric_hand(trial: Trial) -> tuple[Skeleton, mujoco.MjSpec, str]:
     """The parametric default hand of the trial's length: skeleton, hand spec, text for people."""
-    from handsim.builders import default_hand, default_skeleton
-
     skeleton = default_skeleton(trial.hand_length)
     hand = default_hand(trial.hand_length, collision=trial.collision)
     return skeleton, hand, f"parametric default hand, {trial.hand_length:g} m ({skeleton.ndof} DoFs)"
@@ -50,8 +50,6 @@ def glove_loaded(
         notes: Notes of the hand's reader (and of the recording's checks).
         checks: What the recording's checks found (GraspDB14 recordings), or None when not checked.
     """
-    from handsim.sim.scenarios import glove_scene
-
     specs, objects, object_notes = build_objects(trial, progress)
     scene = glove_scene(hand, trajectory, specs[0], spec=metrics)
     return LoadedTrial(

@@ -14,7 +14,17 @@ from __future__ import annotations
 from pathlib import Path, PurePosixPath
 from typing import TYPE_CHECKING
 
+from handsim.builders import build_hand
+from handsim.builders.graspdb_objects import GRASPDB_OBJECTS, graspdb_object
 from handsim.errors import HandsimError
+from handsim.glove import apply_thumb_rest, thumb_rest_note
+from handsim.glove.checks import check_recording
+from handsim.glove.phases import AnnotationMatch
+from handsim.io import read_skeleton, read_trajectory
+from handsim.io.glove_calibration import load_calibration
+from handsim.io.graspdb import graspdb_row_count
+from handsim.io.graspdb_annotations import check_annotation, find_annotation_file, match_annotation
+from handsim.io.graspdb_filenames import filename_datatype, parse_graspdb_filename
 from handsim.io.parametric_skeleton import DEFAULT_HAND_LENGTH_M
 from handsim.trials.base import (
     LoadedTrial,
@@ -25,6 +35,7 @@ from handsim.trials.base import (
     UnsupportedTrialError,
 )
 from handsim.trials.glove import glove_loaded, parametric_hand
+from handsim.trials.graspdb_names import graspdb_meta
 from handsim.trials.kind import TrialKind
 from handsim.trials.sorting import Sorting, TrialEntry, TrialInput, trial_input
 
@@ -68,11 +79,6 @@ def _matches(path: Path) -> bool:
 
 
 def _find(path: Path, options: TrialOptions) -> Trial:
-    from handsim.builders.graspdb_objects import graspdb_object
-    from handsim.io.graspdb import graspdb_row_count
-    from handsim.io.graspdb_annotations import find_annotation_file, match_annotation
-    from handsim.io.graspdb_filenames import parse_graspdb_filename
-
     if options.skeleton is not None and options.hand_length is not None:
         raise TrialError(
             "a hand length is for the parametric default hand; the skeleton gives the hand's size"
@@ -112,13 +118,6 @@ def _find(path: Path, options: TrialOptions) -> Trial:
 
 
 def _load(trial: Trial, metrics: MetricSpec | None, progress: bool) -> LoadedTrial:
-    from handsim.builders import build_hand
-    from handsim.glove import apply_thumb_rest, thumb_rest_note
-    from handsim.glove.checks import check_recording
-    from handsim.io import read_skeleton, read_trajectory
-    from handsim.io.glove_calibration import load_calibration
-    from handsim.io.graspdb_annotations import check_annotation
-
     if trial.skeleton_path is None:
         skeleton, hand, hand_text = parametric_hand(trial)
     else:
@@ -145,9 +144,6 @@ def _load(trial: Trial, metrics: MetricSpec | None, progress: bool) -> LoadedTri
 
 def _no_annotation(trial: Trial, frames: int) -> AnnotationMatch:
     """Why a trial that names no annotation uses none (what :func:`_find` found, or that it names none)."""
-    from handsim.glove.phases import AnnotationMatch
-    from handsim.io.graspdb_annotations import match_annotation
-
     match = match_annotation(trial.trajectory_path, frames)
     if match.path is None:
         return match
@@ -172,10 +168,6 @@ def _inputs(trial: Trial, base: Path) -> tuple[TrialInput, ...]:
 
 
 def _sort_files(sorting: Sorting) -> None:
-    from handsim.builders.graspdb_objects import GRASPDB_OBJECTS
-    from handsim.io.graspdb_filenames import filename_datatype, parse_graspdb_filename
-    from handsim.trials.graspdb_names import graspdb_meta
-
     names = {o.graspdb_id: o.name for o in GRASPDB_OBJECTS}
     open_files = sorting.open_files()
     present = set(open_files)
@@ -239,9 +231,6 @@ def _sort_files(sorting: Sorting) -> None:
 
 def _annotated(annotation: str, files: list[str], base: Path) -> str | None:
     """The recording among ``files`` (beside ``annotation``) whose phase annotation it is, or None."""
-    from handsim.io.graspdb_annotations import find_annotation_file
-    from handsim.io.graspdb_filenames import parse_graspdb_filename
-
     folder = PurePosixPath(annotation).parent
     for f in files:
         p = PurePosixPath(f)

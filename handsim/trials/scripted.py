@@ -10,7 +10,10 @@ from __future__ import annotations
 from pathlib import Path
 from typing import TYPE_CHECKING
 
+from handsim.builders import catalog
+from handsim.builders.graspdb_objects import UnknownObjectError
 from handsim.errors import HandsimError
+from handsim.io.scripted import SYNTHETIC_NOTE, is_scripted_grasp, read_scripted_grasp, scripted_grasp_fields
 from handsim.trials.base import LoadedTrial, Trial, TrialObject, TrialOptions
 from handsim.trials.glove import glove_loaded, parametric_hand
 from handsim.trials.kind import TrialKind
@@ -25,10 +28,6 @@ def _matches(path: Path) -> bool:
 
 
 def _find(path: Path, options: TrialOptions) -> Trial:
-    from handsim.builders import catalog
-    from handsim.builders.graspdb_objects import UnknownObjectError
-    from handsim.io.scripted import SYNTHETIC_NOTE, scripted_grasp_fields
-
     fields = scripted_grasp_fields(path)
     notes = [f"{SYNTHETIC_NOTE}: {path.name}"]
     if options.obj is not None:
@@ -64,16 +63,12 @@ def _find(path: Path, options: TrialOptions) -> Trial:
 
 
 def _load(trial: Trial, metrics: MetricSpec | None, progress: bool) -> LoadedTrial:
-    from handsim.io.scripted import read_scripted_grasp
-
     skeleton, hand, hand_text = parametric_hand(trial)
     trajectory = read_scripted_grasp(trial.trajectory_path, skeleton=skeleton)
     return glove_loaded(trial, hand, hand_text, trajectory, metrics, progress)
 
 
 def _sort_files(sorting: Sorting) -> None:
-    from handsim.io.scripted import is_scripted_grasp, scripted_grasp_fields
-
     for f in sorting.open_files():
         if not is_scripted_grasp(f):
             continue

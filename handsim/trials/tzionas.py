@@ -17,7 +17,13 @@ import re
 from pathlib import Path, PurePosixPath
 from typing import TYPE_CHECKING
 
+from handsim.builders import build_hand
+from handsim.builders.surfaces import FITTED_SKIN
 from handsim.errors import HandsimError
+from handsim.io import read_skeleton, read_trajectory
+from handsim.io.tzionas_configs import config_dir_of, read_models_info
+from handsim.io.tzionas_sequence import object_track_name, read_tzionas_hands, two_hand_models
+from handsim.sim.scenarios import recorded_scene
 from handsim.trials.base import (
     LoadedTrial,
     Trial,
@@ -47,8 +53,6 @@ def _matches(path: Path) -> bool:
 
 
 def _find(path: Path, options: TrialOptions) -> Trial:
-    from handsim.io.tzionas_configs import config_dir_of, read_models_info
-
     models_dir = path if path.is_dir() else path.parent
     info = config_dir_of(models_dir) / "MODELS_INFO.txt"
     if not info.is_file():
@@ -110,8 +114,6 @@ def _check_skeleton(recording: Path, own: list[Path], options: TrialOptions) -> 
 
 
 def _objects(models_dir: Path, info: Path, models: tuple[tuple[str, int], ...]) -> tuple[TrialObject, ...]:
-    from handsim.io.tzionas_sequence import object_track_name
-
     return tuple(
         TrialObject(str(models_dir / f"{name}.SKEL"), object_track_name(name), f"{info.name}:{line}")
         for name, line in models
@@ -123,8 +125,6 @@ def _two_hand_trial(
     path: Path, models_dir: Path, info: Path, models: tuple[tuple[str, int], ...], options: TrialOptions
 ) -> Trial:
     """The trial of a sequence listing two hands: its ``Models/NN`` folder is the recording."""
-    from handsim.io.tzionas_sequence import two_hand_models
-
     skeletons = _hand_skeletons(models_dir, two_hand_models(info, models))
     lines = dict(models)
     for side, skel in skeletons.items():
@@ -162,8 +162,6 @@ def _hands_of(trial: Trial) -> dict[str, tuple[Path, Path]]:
     if not _is_two_hand(trial):
         motion = Path(trial.trajectory_path)
         return {"": (motion, Path(trial.skeleton_path or motion.with_suffix(".SKEL")))}
-    from handsim.io.tzionas_configs import config_dir_of, read_models_info
-    from handsim.io.tzionas_sequence import two_hand_models
 
     folder = Path(trial.trajectory_path)
     info = config_dir_of(folder) / "MODELS_INFO.txt"
@@ -175,12 +173,6 @@ def _hands_of(trial: Trial) -> dict[str, tuple[Path, Path]]:
 
 
 def _load(trial: Trial, metrics: MetricSpec | None, progress: bool) -> LoadedTrial:
-    from handsim.builders import build_hand
-    from handsim.builders.surfaces import FITTED_SKIN
-    from handsim.io import read_skeleton, read_trajectory
-    from handsim.io.tzionas_sequence import read_tzionas_hands
-    from handsim.sim.scenarios import recorded_scene
-
     two = _is_two_hand(trial)
     trajectory = read_tzionas_hands(trial.trajectory_path) if two else read_trajectory(trial.trajectory_path)
     skeletons = {side: read_skeleton(skel) for side, (_, skel) in _hands_of(trial).items()}
@@ -225,8 +217,6 @@ def _siblings(path: Path, exts: tuple[str, ...]) -> list[Path]:
 
 
 def _inputs(trial: Trial, base: Path) -> tuple[TrialInput, ...]:
-    from handsim.io.tzionas_configs import config_dir_of
-
     hands = _hands_of(trial)
     motion, _ = next(iter(hands.values()))
     configs = config_dir_of(motion.parent)

@@ -20,11 +20,11 @@ PHASE_COLOURS = ("#e8eef7", "#f7eee8", "#eef7e8", "#f3e8f7", "#f7f5e8")
 
 def _pyplot():
     try:
-        import matplotlib
+        import matplotlib  # lazy: optional extra handsim[plot]
     except ImportError as exc:
         raise HandsimError('plots need matplotlib: pip install "handsim[plot]"') from exc
     matplotlib.use("Agg")  # files only; never a window
-    import matplotlib.pyplot as plt
+    import matplotlib.pyplot as plt  # lazy: after choosing the Agg backend above
 
     return plt
 

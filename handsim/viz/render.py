@@ -230,7 +230,7 @@ def _encoder(out: Path, width: int, height: int):
 
 def _mp4_writer():
     try:
-        import av
+        import av  # lazy: optional extra handsim[video]
     except ImportError as exc:
         raise HandsimError('.mp4 videos need PyAV: pip install "handsim[video]" (or write a .gif)') from exc
 
@@ -254,7 +254,7 @@ def _mp4_writer():
 
 def _gif_writer():
     try:
-        from PIL import Image
+        from PIL import Image  # lazy: Pillow, matplotlib's dependency (handsim[plot]), for GIFs only
     except ImportError as exc:
         raise HandsimError('.gif videos need Pillow: pip install "handsim[plot]" (or pillow)') from exc
 
