@@ -13,9 +13,9 @@ from gymnasium.utils.env_checker import check_env
 from scipy.spatial.transform import Rotation
 
 import handsim  # noqa: F401  registers the environments
+from handsim.datatypes.rotations import quat_error_rotvec as rotation_error
 from handsim.envs.grasp_env import GraspEnv
 from handsim.envs.replay_env import ReplayEnv
-from handsim.envs.replay_observation import rotation_error
 from handsim.envs.replay_reward import REWARD_TERMS, STEP_NUMBERS
 from tests.helpers import glove_switch_inputs
 from tests.test_vector_env import _pair, _run_both

@@ -37,18 +37,38 @@ def _lint_imports(root: Path) -> subprocess.CompletedProcess:
 def test_import_contracts_are_kept():
     run = _lint_imports(ROOT)
     assert run.returncode == 0, run.stdout + run.stderr
-    assert "Contracts: 2 kept, 0 broken." in run.stdout
+    assert "Contracts: 3 kept, 0 broken." in run.stdout
 
 
-def test_lint_imports_fails_when_a_data_type_imports_the_cli(tmp_path):
+def _package_copy(tmp_path: Path) -> Path:
     def python_only(folder: str, names: list[str]) -> list[str]:  # lint-imports reads Python files only
         return [n for n in names if n == "__pycache__" or not (n.endswith(".py") or Path(folder, n).is_dir())]
 
     shutil.copytree(ROOT / "handsim", tmp_path / "handsim", ignore=python_only)
     shutil.copy(ROOT / "pyproject.toml", tmp_path / "pyproject.toml")
-    skeleton = tmp_path / "handsim" / "datatypes" / "skeleton.py"
-    skeleton.write_text(skeleton.read_text() + "\n\ndef _upward():\n    import handsim.cli  # noqa: F401\n")
-    run = _lint_imports(tmp_path)
+    return tmp_path
+
+
+def _add_lazy_import(module: Path, imported: str) -> None:
+    module.write_text(module.read_text() + f"\n\ndef _added():\n    import {imported}  # noqa: F401\n")
+
+
+def test_lint_imports_fails_when_a_data_type_imports_the_cli(tmp_path):
+    root = _package_copy(tmp_path)
+    _add_lazy_import(root / "handsim" / "datatypes" / "skeleton.py", "handsim.cli")
+    run = _lint_imports(root)
     assert run.returncode == 1
     assert "handsim.datatypes is not allowed to import handsim.cli:" in run.stdout
     assert "handsim.datatypes.skeleton -> handsim.cli" in run.stdout
+
+
+def test_lint_imports_fails_on_a_cycle_within_a_layer(tmp_path):
+    root = _package_copy(tmp_path)  # object_model imports mesh; mesh importing object_model closes a cycle
+    _add_lazy_import(root / "handsim" / "datatypes" / "mesh.py", "handsim.datatypes.object_model")
+    run = _lint_imports(root)
+    assert run.returncode == 1
+    assert "Contracts: 2 kept, 1 broken." in run.stdout
+    assert (
+        "No cycles are allowed in handsim.datatypes." in run.stdout
+        and "- .object_model -> .mesh" in run.stdout
+    )

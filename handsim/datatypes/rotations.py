@@ -153,6 +153,38 @@ def axis_angle_to_matrix(aa: npt.ArrayLike) -> np.ndarray:
     return _scipy_rotation().from_rotvec(flat).as_matrix().reshape((*lead, 3, 3))
 
 
+def quat_error_rotvec(ref: np.ndarray, q: np.ndarray, out: np.ndarray) -> float:
+    """The rotation taking ``q`` to ``ref`` (``ref ⊗ q⁻¹``, world frame) as a rotation vector, in place.
+
+    The per-step path of the environments: one pair of quaternions in Python floats, no SciPy call and no
+    array allocated (:func:`quat_angle` and :func:`quat_to_axis_angle` are the vectorised forms).
+
+    Args:
+        ref: Recorded orientation, unit quaternion w x y z.
+        q: Simulated orientation, unit quaternion w x y z.
+        out: Where the rotation vector goes (3,), rad; its norm is the angle in [0, π].
+
+    Returns:
+        The angle, rad.
+    """
+    w1, x1, y1, z1 = (float(v) for v in ref)
+    w2, x2, y2, z2 = (float(v) for v in q)
+    w = w1 * w2 + x1 * x2 + y1 * y2 + z1 * z2
+    x = -w1 * x2 + x1 * w2 - y1 * z2 + z1 * y2
+    y = -w1 * y2 + x1 * z2 + y1 * w2 - z1 * x2
+    z = -w1 * z2 - x1 * y2 + y1 * x2 + z1 * w2
+    if w < 0.0:  # the shorter way round
+        w, x, y, z = -w, -x, -y, -z
+    sine = math.sqrt(x * x + y * y + z * z)
+    if sine < 1e-12:
+        out[0], out[1], out[2] = 2.0 * x, 2.0 * y, 2.0 * z
+        return 2.0 * sine
+    angle = 2.0 * math.atan2(sine, w)
+    f = angle / sine
+    out[0], out[1], out[2] = f * x, f * y, f * z
+    return angle
+
+
 def rotation_about_axis(axis: npt.ArrayLike, angles: npt.ArrayLike) -> np.ndarray:
     """Rotation matrices about one fixed unit axis.
 

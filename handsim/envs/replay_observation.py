@@ -9,11 +9,11 @@ by world, so their observations are bitwise equal.
 
 from __future__ import annotations
 
-import math
 from typing import NamedTuple
 
 import numpy as np
 
+from handsim.datatypes.rotations import quat_error_rotvec
 from handsim.envs._observation import POSE_LABELS, ContactSummary, ObservationLayout, add_state
 from handsim.sim.compiled import SimScene
 from handsim.sim.control import ControlSchedule
@@ -34,35 +34,6 @@ class ObjectTrack(NamedTuple):
     hinge: int  # the object's hinge angle, or -1
     hinge_error: int  # err_<prefix>hinge, or -1
     ref_hinge: np.ndarray | None  # recorded angles (frames,)
-
-
-def rotation_error(ref: np.ndarray, q: np.ndarray, out: np.ndarray) -> float:
-    """The rotation taking ``q`` to ``ref`` (``ref ⊗ q⁻¹``, world frame) as a rotation vector.
-
-    Args:
-        ref: Recorded orientation, unit quaternion w x y z.
-        q: Simulated orientation, unit quaternion w x y z.
-        out: Where the rotation vector goes (3,), rad; its norm is the angle in [0, π].
-
-    Returns:
-        The angle, rad.
-    """
-    w1, x1, y1, z1 = (float(v) for v in ref)
-    w2, x2, y2, z2 = (float(v) for v in q)
-    w = w1 * w2 + x1 * x2 + y1 * y2 + z1 * z2
-    x = -w1 * x2 + x1 * w2 - y1 * z2 + z1 * y2
-    y = -w1 * y2 + x1 * z2 + y1 * w2 - z1 * x2
-    z = -w1 * z2 - x1 * y2 + y1 * x2 + z1 * w2
-    if w < 0.0:  # the shorter way round
-        w, x, y, z = -w, -x, -y, -z
-    sine = math.sqrt(x * x + y * y + z * z)
-    if sine < 1e-12:
-        out[0], out[1], out[2] = 2.0 * x, 2.0 * y, 2.0 * z
-        return 2.0 * sine
-    angle = 2.0 * math.atan2(sine, w)
-    f = angle / sine
-    out[0], out[1], out[2] = f * x, f * y, f * z
-    return angle
 
 
 class ReplayObservation:
@@ -194,7 +165,7 @@ class ReplayObservation:
                 np.subtract(
                     ref[:3], obs[t.pose : t.pose + 3], out=obs[t.position_error : t.position_error + 3]
                 )
-                rotation_error(
+                quat_error_rotvec(
                     ref[3:], obs[t.pose + 3 : t.pose + 7], obs[t.rotation_error : t.rotation_error + 3]
                 )
                 if t.hinge_error >= 0:
