@@ -10,7 +10,6 @@ recorded state.
 
 from __future__ import annotations
 
-import math
 from dataclasses import asdict, dataclass, field
 
 import mujoco
@@ -23,6 +22,7 @@ from handsim.sim.control import ControlSchedule
 from handsim.sim.layout import _SLOT, CONTACT_SLOTS
 from handsim.sim.placement_types import PlacementSpec
 from handsim.sim.self_contact import self_penetration_track
+from handsim.sim.spec_checks import check_nonnegative, check_positive, check_version
 from handsim.sim.stability import StabilitySpec
 
 METRIC_SPEC_VERSION = "2"
@@ -71,23 +71,14 @@ class MetricSpec:
     stability: StabilitySpec = field(default_factory=StabilitySpec)
 
     def __post_init__(self) -> None:
-        if self.version != METRIC_SPEC_VERSION:
-            raise ValueError(
-                f"unknown metric spec version {self.version!r}; this handsim knows {METRIC_SPEC_VERSION!r}"
-            )
-        for name in ("drift_tolerance", "slip_limit", "contact_gap", "min_hold_window"):
-            value = getattr(self, name)
-            if not (math.isfinite(value) and value > 0):
-                raise ValueError(f"{name} must be a positive finite number, got {value}")
+        check_version(self.version, METRIC_SPEC_VERSION, "metric")
+        check_positive(self, ("drift_tolerance", "slip_limit", "contact_gap", "min_hold_window"))
         if self.hold_orientation not in HOLD_ORIENTATIONS:
             raise ValueError(
                 f"unknown hold_orientation {self.hold_orientation!r}; "
                 f"expected one of {list(HOLD_ORIENTATIONS)}"
             )
-        for name in ("release_delay", "robustness_shift", "robustness_turn_deg"):
-            value = getattr(self, name)
-            if not (math.isfinite(value) and value >= 0):
-                raise ValueError(f"{name} must be a finite number ≥ 0, got {value}")
+        check_nonnegative(self, ("release_delay", "robustness_shift", "robustness_turn_deg"))
 
     def to_dict(self) -> dict:
         """JSON-ready parameters."""

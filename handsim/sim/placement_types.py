@@ -5,13 +5,13 @@ The search itself is :func:`handsim.sim.placement.place_object` (its module docs
 
 from __future__ import annotations
 
-import math
 from dataclasses import asdict, dataclass, field
 
 import numpy as np
 
 from handsim.sim.grip import GripResult
 from handsim.sim.self_contact import SelfPenetration
+from handsim.sim.spec_checks import check_positive, check_version
 from handsim.sim.stability import StabilitySpec
 
 PLACEMENT_SPEC_VERSION = "2"
@@ -50,15 +50,8 @@ class PlacementSpec:
     alternatives: int = 2
 
     def __post_init__(self) -> None:
-        if self.version != PLACEMENT_SPEC_VERSION:
-            raise ValueError(
-                f"unknown placement spec version {self.version!r}; "
-                f"this handsim knows {PLACEMENT_SPEC_VERSION!r}"
-            )
-        for name in ("penetration", "touch", "coarse_step", "fine_step"):
-            value = getattr(self, name)
-            if not (math.isfinite(value) and value > 0):
-                raise ValueError(f"placement {name} must be a positive finite number, got {value}")
+        check_version(self.version, PLACEMENT_SPEC_VERSION, "placement")
+        check_positive(self, ("penetration", "touch", "coarse_step", "fine_step"), label="placement ")
         if not self.search_fractions or not all(0.0 <= s <= 1.0 for s in self.search_fractions):
             raise ValueError(f"search_fractions must be fractions in [0, 1], got {self.search_fractions}")
         for name in ("coarse_points", "seeds"):

@@ -33,6 +33,7 @@ import numpy.typing as npt
 from handsim.datatypes.rotations import quat_angle
 from handsim.errors import SimulationError
 from handsim.sim.compiled import SimScene
+from handsim.sim.spec_checks import check_positive, check_version
 from handsim.sim.stepper import Stepper
 
 STABILITY_SPEC_VERSION = "1"
@@ -81,15 +82,8 @@ class StabilitySpec:
     environment_contacts: bool = False
 
     def __post_init__(self) -> None:
-        if self.version != STABILITY_SPEC_VERSION:
-            raise ValueError(
-                f"unknown stability spec version {self.version!r}; "
-                f"this handsim knows {STABILITY_SPEC_VERSION!r}"
-            )
-        for name in ("duration", "gravity", "max_displacement", "obman_duration"):
-            value = getattr(self, name)
-            if not (math.isfinite(value) and value > 0):
-                raise ValueError(f"{name} must be a positive finite number, got {value}")
+        check_version(self.version, STABILITY_SPEC_VERSION, "stability")
+        check_positive(self, ("duration", "gravity", "max_displacement", "obman_duration"))
         if self.max_rotation_deg is not None and not (
             math.isfinite(self.max_rotation_deg) and self.max_rotation_deg > 0
         ):
