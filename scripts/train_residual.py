@@ -35,6 +35,7 @@ ENV_KWARGS = {
     "reset_noise_scale": 0.01,
     "reference_window": 3,
     "residual_scale": 0.1,
+    "tracking_sigma": 0.02,
 }
 """The training environment's keywords (the ``--drift-limit`` is added): see docs/rl.md for why."""
 PPO_KWARGS = {
