@@ -5,10 +5,10 @@
 
 Needs the optional extra ``rl`` (``pip install -e .[rl]``: stable-baselines3) and ``plot`` (matplotlib).
 
-Training: ``--n-envs`` single ``ReplayEnv`` in SB3's ``DummyVecEnv`` (one process: on 2 shared cores the
-env step, 0.3 ms, is small next to PPO's update; the native ``ReplayVectorEnv`` autoresets on the *next*
-step, gymnasium's convention, while SB3 expects a same-step reset with ``terminal_observation``: an adapter
-is not written yet), ``VecNormalize`` on observations and rewards, PPO with a small initial action std
+Training: ``--n-envs`` single ``ReplayEnv`` in SB3's ``DummyVecEnv`` (``--vec dummy``, the default: one
+process; on 2 shared cores the env step, 0.3 ms, is small next to PPO's update) or the native
+``ReplayVectorEnv`` in same-step autoreset behind an SB3 ``VecEnv`` adapter (``--vec native``),
+``VecNormalize`` on observations and rewards, PPO with a small initial action std
 (``log_std_init``: the policy's own noise must not drop the cube, issue 17). Episodes start at a random
 frame (reference-state initialisation) with seeded reset noise, and end at ``--drift-limit``.
 
@@ -97,6 +97,63 @@ def make_vec_env(env_kwargs: dict, n_envs: int, seed: int):
     return VecNormalize(venv, norm_obs=True, norm_reward=True, clip_obs=10.0, gamma=PPO_KWARGS["gamma"])
 
 
+def native_vec_env(env_kwargs: dict, n_envs: int, seed: int):
+    """SB3's ``VecEnv`` over the native ``ReplayVectorEnv`` (N worlds on MuJoCo's threads), normalised.
+
+    The native env resets an ended world in the same step when asked (``AutoresetMode.SAME_STEP``), which
+    is SB3's contract: the returned observation is the reset's and ``infos[i]["terminal_observation"]`` the
+    one the episode ended with. World i is seeded ``seed + i`` on the first reset, as ``make_vec_env`` does.
+    """
+    from gymnasium.vector import AutoresetMode
+    from stable_baselines3.common.vec_env import VecEnv, VecNormalize
+
+    from handsim.envs import ReplayVectorEnv
+
+    class NativeVecEnv(VecEnv):
+        def __init__(self) -> None:
+            self.worlds = ReplayVectorEnv(n_envs, autoreset_mode=AutoresetMode.SAME_STEP, **env_kwargs)
+            super().__init__(n_envs, self.worlds.single_observation_space, self.worlds.single_action_space)
+            self._seeds = [seed + i for i in range(n_envs)]
+            self._actions = None
+
+        def reset(self):
+            seeds = None if all(s is None for s in self._seeds) else list(self._seeds)
+            obs, _ = self.worlds.reset(seed=seeds)
+            self._reset_seeds()
+            return obs
+
+        def step_async(self, actions) -> None:
+            self._actions = actions
+
+        def step_wait(self):
+            obs, rewards, terminated, truncated, info = self.worlds.step(self._actions)
+            dones = terminated | truncated
+            infos = [{} for _ in range(self.num_envs)]
+            for i in np.flatnonzero(dones):
+                infos[i]["terminal_observation"] = info["final_obs"][i]
+                infos[i]["TimeLimit.truncated"] = bool(truncated[i] and not terminated[i])
+            return obs, rewards.astype(np.float32), dones, infos
+
+        def close(self) -> None:
+            self.worlds.close()
+
+        def get_attr(self, attr_name, indices=None):
+            return [getattr(self.worlds, attr_name)] * len(self._get_indices(indices))
+
+        def set_attr(self, attr_name, value, indices=None) -> None:
+            raise NotImplementedError("the native vector env's worlds share one configuration")
+
+        def env_method(self, method_name, *method_args, indices=None, **method_kwargs):
+            raise NotImplementedError("the native vector env's worlds share one configuration")
+
+        def env_is_wrapped(self, wrapper_class, indices=None):
+            return [False] * len(self._get_indices(indices))
+
+    return VecNormalize(
+        NativeVecEnv(), norm_obs=True, norm_reward=True, clip_obs=10.0, gamma=PPO_KWARGS["gamma"]
+    )
+
+
 def train(args: argparse.Namespace) -> dict:
     """Train, evaluate along the way, write the plot and the table; returns the evaluation record."""
     from stable_baselines3 import PPO
@@ -107,7 +164,8 @@ def train(args: argparse.Namespace) -> dict:
     env_kwargs = {**ENV_KWARGS, "max_object_drift": args.drift_limit}
     if args.trajectory:
         env_kwargs["trajectory"] = args.trajectory
-    venv = make_vec_env(env_kwargs, args.n_envs, args.seed)
+    vectorise = native_vec_env if args.vec == "native" else make_vec_env
+    venv = vectorise(env_kwargs, args.n_envs, args.seed)
     ppo_kwargs = dict(PPO_KWARGS)
     ppo_kwargs["n_steps"] = min(ppo_kwargs["n_steps"], max(64, args.timesteps // args.n_envs))
     ppo_kwargs["batch_size"] = min(ppo_kwargs["batch_size"], ppo_kwargs["n_steps"] * args.n_envs)
@@ -203,6 +261,12 @@ def main(argv: list[str] | None = None) -> dict:
     parser.add_argument("--timesteps", type=int, default=3_000_000)
     parser.add_argument("--minutes", type=float, default=None, help="stop training after this wall time")
     parser.add_argument("--n-envs", type=int, default=2)
+    parser.add_argument(
+        "--vec",
+        choices=("dummy", "native"),
+        default="dummy",
+        help="dummy: SB3's DummyVecEnv of single envs (the measured run); native: the native vector env",
+    )
     parser.add_argument("--seed", type=int, default=0)
     parser.add_argument("--drift-limit", type=float, default=0.05, help="max_object_drift while training, m")
     parser.add_argument("--eval-every", type=int, default=50_000, help="timesteps between evaluations")

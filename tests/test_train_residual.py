@@ -6,6 +6,7 @@ import importlib.util
 import json
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -40,3 +41,30 @@ def test_pure_replay_evaluation_is_deterministic():
     module = _script()
     kwargs = dict(module.ENV_KWARGS, max_object_drift=0.05)
     assert module.evaluate(kwargs) == module.evaluate(kwargs)
+
+
+@pytest.mark.slow
+def test_a_smoke_run_on_the_native_vector_env_trains_and_evaluates(tmp_path):
+    record = _script().main(
+        ["--vec", "native", "--timesteps", "256", "--eval-every", "128", "--out", str(tmp_path)]
+    )
+    assert record["n_envs"] == 2
+    assert record["policy_eval"]["frames"] == 616
+    assert [c["timesteps"] for c in record["curve"][:3]] == [2, 128, 256]
+
+
+def test_the_native_sb3_adapter_returns_the_reset_observation_and_the_terminal_one():
+    module = _script()
+    venv = module.native_vec_env(dict(module.ENV_KWARGS, max_object_drift=1e-6), n_envs=2, seed=0).venv
+    obs = venv.reset()
+    zero = np.zeros((2, *venv.action_space.shape), np.float32)
+    venv.step_async(zero)
+    after, _, dones, infos = venv.step_wait()
+    assert dones.tolist() == [True, True]  # a 1 µm drift limit ends every episode at once
+    for i in range(2):
+        assert infos[i]["TimeLimit.truncated"] is False
+        assert infos[i]["terminal_observation"].shape == obs[i].shape
+        assert not np.array_equal(
+            infos[i]["terminal_observation"], after[i]
+        )  # the returned one is the reset's
+    venv.close()

@@ -175,3 +175,71 @@ def test_native_vector_env_step_raises_for_bad_actions_and_before_reset():
             envs.reset(seed=[1, 2, 3])
     finally:
         envs.close()
+
+
+def _assert_same_step_autoreset(native_out: tuple, sync_out: tuple, step: int) -> None:
+    """As :func:`_assert_same_step`, the masked info values only (the unmasked ones are fill)."""
+    names = ("obs", "reward", "terminated", "truncated")
+    for name, a, b in zip(names, native_out[:4], sync_out[:4], strict=True):
+        assert np.array_equal(a, b), f"step {step}: {name} differs"
+
+    def same(mine: dict, theirs: dict, where: str) -> None:
+        assert set(mine) == set(theirs), f"step {step}: {where} keys"
+        for key, value in theirs.items():
+            if key.startswith("_") or key == "final_info":
+                continue
+            mask = theirs[f"_{key}"]
+            assert np.array_equal(mine[f"_{key}"], mask), f"step {step}: {where}[_{key}]"
+            for i in np.flatnonzero(mask):
+                assert np.array_equal(mine[key][i], value[i]), f"step {step}: {where}[{key!r}][{i}]"
+
+    native_info, sync_info = native_out[4], sync_out[4]
+    same(native_info, sync_info, "info")
+    if "final_info" in sync_info:
+        same(native_info["final_info"], sync_info["final_info"], "final_info")
+
+
+def test_native_vector_env_resets_in_the_same_step_like_sync_vector_env_when_asked():
+    kwargs = {"random_start": True, "max_object_drift": 0.02}
+    native = gym.make_vec(
+        REPLAY,
+        num_envs=3,
+        vectorization_mode="vector_entry_point",
+        autoreset_mode=AutoresetMode.SAME_STEP,
+        **kwargs,
+    )
+    sync = gym.make_vec(
+        REPLAY,
+        num_envs=3,
+        vectorization_mode="sync",
+        vector_kwargs={"autoreset_mode": AutoresetMode.SAME_STEP},
+        **kwargs,
+    )
+    try:
+        assert native.metadata["autoreset_mode"] == AutoresetMode.SAME_STEP
+        native.reset(seed=3)
+        sync.reset(seed=3)
+        rng = np.random.default_rng(3)
+        ended = 0
+        for step in range(150):
+            actions = rng.uniform(-1.2, 1.2, native.action_space.shape).astype(np.float32)
+            out_a, out_b = native.step(actions), sync.step(actions)
+            _assert_same_step_autoreset(out_a, out_b, step)
+            done = out_a[2] | out_a[3]
+            ended += int(done.sum())
+            if done.any():  # the ended worlds' final observation is the step's, the returned one the reset's
+                assert out_a[4]["_final_obs"].tolist() == done.tolist()
+                assert not any(
+                    np.array_equal(out_a[4]["final_obs"][i], out_a[0][i]) for i in np.flatnonzero(done)
+                )
+        assert ended >= 2
+    finally:
+        native.close()
+        sync.close()
+
+
+def test_native_vector_env_refuses_an_unknown_autoreset_mode():
+    with pytest.raises(
+        ValueError, match=r"autoreset_mode must be one of \['NextStep', 'SameStep'\], got 'Disabled'"
+    ):
+        ReplayVectorEnv(1, autoreset_mode="Disabled")

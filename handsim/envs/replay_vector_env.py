@@ -19,6 +19,11 @@ Autoreset follows gymnasium ≥ 1.0's default, ``AutoresetMode.NEXT_STEP``: a wo
 truncated is reset by the next ``step`` call (its action ignored, reward 0, not terminated, not
 truncated, its info the reset's ``frame`` and ``time``). ``reset(seed=s)`` seeds world i with ``s + i``
 (or ``seed[i]`` for a list), as :class:`gymnasium.vector.SyncVectorEnv` does.
+
+With ``autoreset_mode=AutoresetMode.SAME_STEP`` (or its value ``"SameStep"``) a world that ended is reset
+within the same ``step``: its row of the returned observation is the reset's, and ``info["final_obs"]`` /
+``info["final_info"]`` (with their ``_`` masks) hold the observation and the step's info it ended with, as
+:class:`~gymnasium.vector.SyncVectorEnv` gives in that mode (what Stable-Baselines3's ``VecEnv`` expects).
 """
 
 from __future__ import annotations
@@ -80,8 +85,15 @@ class ReplayVectorEnv(gym.vector.VectorEnv):
         nthread: int | None = None,
         render_mode: str | None = None,
         max_episode_steps: int | None = None,
+        autoreset_mode: AutoresetMode | str = AutoresetMode.NEXT_STEP,
         **kwargs: Any,
     ) -> None:
+        modes = {m.value: m for m in (AutoresetMode.NEXT_STEP, AutoresetMode.SAME_STEP)}
+        mode = modes.get(
+            autoreset_mode.value if isinstance(autoreset_mode, AutoresetMode) else autoreset_mode
+        )
+        if mode is None:
+            raise ValueError(f"autoreset_mode must be one of {sorted(modes)}, got {autoreset_mode!r}")
         if int(num_envs) < 1:
             raise ValueError(f"num_envs must be ≥ 1, got {num_envs}")
         if render_mode is not None:
@@ -106,7 +118,12 @@ class ReplayVectorEnv(gym.vector.VectorEnv):
         self.single_action_space = env.action_space
         self.observation_space = batch_space(env.observation_space, self.num_envs)
         self.action_space = batch_space(env.action_space, self.num_envs)
-        self.metadata = {**type(self).metadata, "render_fps": env.metadata["render_fps"]}
+        self.metadata = {
+            **type(self).metadata,
+            "render_fps": env.metadata["render_fps"],
+            "autoreset_mode": mode,
+        }
+        self._same_step = mode == AutoresetMode.SAME_STEP
         self.render_mode = None
         self.observation_names = env.observation_names
         self.observation_slices = env.observation_slices
@@ -315,9 +332,48 @@ class ReplayVectorEnv(gym.vector.VectorEnv):
         if reset_ids is not None:  # the reset worlds' info has the reset's recording
             infos["recording"], infos["_recording"] = np.zeros(n, np.int64), self._autoreset.copy()
         ended = terminated | truncated
+        if self._same_step:
+            if ended.any():
+                infos = self._reset_ended(ended, infos)
+            return self._obs.copy(), rewards, terminated, truncated, infos
         self._autoreset = ended
         self._pending = bool(ended.any())
         return self._obs.copy(), rewards, terminated, truncated, infos
+
+    def _reset_ended(self, ended: np.ndarray, infos: dict[str, Any]) -> dict[str, Any]:
+        """Same-step autoreset: the ended worlds' final observation and info aside, then their reset.
+
+        Returns:
+            The step's info with ``final_obs``/``final_info`` (masked to the ended worlds) and, for those
+            worlds, the reset's numbers, frame, time and recording in place of the step's (the step-only
+            keys masked off), as :class:`gymnasium.vector.SyncVectorEnv` gives in ``SAME_STEP`` mode.
+        """
+        n = self.num_envs
+        final_obs = np.full(n, None, dtype=object)
+        final_info: dict[str, Any] = {}
+        for key, value in infos.items():
+            if key.startswith("_"):
+                continue
+            mask = infos[f"_{key}"] & ended
+            if not mask.any():
+                continue
+            column = np.array(value, copy=True)
+            column[~mask] = None if column.dtype == object else 0
+            final_info[key], final_info[f"_{key}"] = column, mask
+        for i in np.flatnonzero(ended).tolist():
+            final_obs[i] = self._obs[i].copy()
+            frame, numbers = self._reset_world(i, None)
+            for key, value in zip(STEP_NUMBERS, numbers, strict=True):
+                infos[key][i] = value
+                infos[f"_{key}"][i] = True
+            infos["frame"][i], infos["time"][i] = frame, self._times[frame]
+        for key in ("diverged", "action_clipped", "warnings"):  # not in a reset's info
+            if key in infos:
+                infos[f"_{key}"] = infos[f"_{key}"] & ~ended
+        infos["recording"], infos["_recording"] = np.zeros(n, np.int64), ended.copy()
+        infos["final_obs"], infos["_final_obs"] = final_obs, ended.copy()
+        infos["final_info"], infos["_final_info"] = final_info, ended.copy()
+        return infos
 
     def close_extras(self, **kwargs: Any) -> None:
         """Free the template environment's renderer."""
