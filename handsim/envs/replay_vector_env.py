@@ -316,14 +316,8 @@ class ReplayVectorEnv(gym.vector.VectorEnv):
             rewards = columns[0]
         else:
             rewards = np.zeros(n)
-        if reset_ids is not None:  # a reset world's info has the reset's numbers (as SyncVectorEnv gives)
-            for column, key in enumerate(STEP_NUMBERS):
-                if key not in infos:
-                    infos[key], infos[f"_{key}"] = np.zeros(n), np.zeros(n, bool)
-                values, mask = infos[key], infos[f"_{key}"].copy()
-                for i, numbers in reset_numbers.items():
-                    values[i], mask[i] = numbers[column], True
-                infos[f"_{key}"] = mask
+        if reset_ids is not None:
+            self._put_reset_numbers(infos, reset_numbers)
         frame_info = self._frames.copy()  # a reset world's start frame is before the last: not truncated
         truncated = (frame_info >= self._last) & ~terminated
         everyone = np.ones(n, bool)
@@ -360,13 +354,12 @@ class ReplayVectorEnv(gym.vector.VectorEnv):
             column = np.array(value, copy=True)
             column[~mask] = None if column.dtype == object else 0
             final_info[key], final_info[f"_{key}"] = column, mask
+        reset_numbers = {}
         for i in np.flatnonzero(ended).tolist():
             final_obs[i] = self._obs[i].copy()
-            frame, numbers = self._reset_world(i, None)
-            for key, value in zip(STEP_NUMBERS, numbers, strict=True):
-                infos[key][i] = value
-                infos[f"_{key}"][i] = True
+            frame, reset_numbers[i] = self._reset_world(i, None)
             infos["frame"][i], infos["time"][i] = frame, self._times[frame]
+        self._put_reset_numbers(infos, reset_numbers)
         for key in ("diverged", "action_clipped", "warnings"):  # not in a reset's info
             if key in infos:
                 infos[f"_{key}"] = infos[f"_{key}"] & ~ended
@@ -374,6 +367,22 @@ class ReplayVectorEnv(gym.vector.VectorEnv):
         infos["final_obs"], infos["_final_obs"] = final_obs, ended.copy()
         infos["final_info"], infos["_final_info"] = final_info, ended.copy()
         return infos
+
+    def _put_reset_numbers(self, infos: dict[str, Any], reset_numbers: dict[int, tuple[float, ...]]) -> None:
+        """Give each reset world's info the reset's :data:`STEP_NUMBERS` (as ``SyncVectorEnv`` gives them).
+
+        Args:
+            infos: The step's info, changed in place (a missing key is added, masked to the reset worlds).
+            reset_numbers: World → the numbers its reset returned.
+        """
+        n = self.num_envs
+        for column, key in enumerate(STEP_NUMBERS):
+            if key not in infos:
+                infos[key], infos[f"_{key}"] = np.zeros(n), np.zeros(n, bool)
+            values, mask = infos[key], infos[f"_{key}"].copy()
+            for i, numbers in reset_numbers.items():
+                values[i], mask[i] = numbers[column], True
+            infos[f"_{key}"] = mask
 
     def close_extras(self, **kwargs: Any) -> None:
         """Free the template environment's renderer."""
