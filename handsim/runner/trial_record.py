@@ -99,18 +99,19 @@ def curves(result: ReplayResult) -> dict:
     groups = finger_groups(result.scene["links"]) if objects else {}
     contacts = {g: touching[:, links].sum(axis=1).astype(int).tolist() for g, links in groups.items()}
     recorded = result.scene["scenario"] == "recorded" and f.object_position_error.shape[1]
-    values = {  # SI, the curves of handsim.sim.curves; None where the curve does not exist
-        "penetration": f.penetration[idx] if objects else None,
-        "drift": row_max(f.object_position_error[idx]) if recorded else None,
-        "tracking_error": tracking_error(f.tracking_error[idx]),
-        "self_penetration": None if objects else f.self_penetration[idx],
-    }
-    out = {CURVES[k].key: None if v is None else rounded(v, CURVES[k].scale) for k, v in values.items()}
+    hand_only = None if objects else f.self_penetration[idx]
+
+    def curve(name: str, values: np.ndarray | None) -> list | None:
+        """A curve of handsim.sim.curves in its unit; None where it does not exist."""
+        return None if values is None else rounded(values, CURVES[name].scale)
+
     return {
         "time_s": rounded(f.times[idx]),
-        "penetration_mm": out.pop("penetration_mm"),
+        CURVES["penetration"].key: curve("penetration", f.penetration[idx] if objects else None),
         "contacts_per_finger": contacts,
-        **out,
+        CURVES["drift"].key: curve("drift", row_max(f.object_position_error[idx]) if recorded else None),
+        CURVES["tracking_error"].key: curve("tracking_error", tracking_error(f.tracking_error[idx])),
+        CURVES["self_penetration"].key: curve("self_penetration", hand_only),
         "stride": int(idx[1] - idx[0]) if idx.size > 1 else 1,
     }
 

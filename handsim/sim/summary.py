@@ -2,11 +2,11 @@
 
 from __future__ import annotations
 
-import math
 from dataclasses import asdict, dataclass
 
 import numpy as np
 
+from handsim.sim.curves import DEG, MM
 from handsim.sim.curves import slip as slip_curve
 from handsim.sim.metrics import FrameMetrics, MetricSpec
 
@@ -164,19 +164,18 @@ def _hand_numbers(
         tracking: Joint tracking error, rad (N, dofs).
         tips: Fingertip error, m (N, tips).
     """
-    mm, deg = 1000.0, 180.0 / math.pi
     n = penetration.shape[0]
     return {
-        "max_penetration_mm": float(penetration.max() * mm) if n else 0.0,
-        "p95_penetration_mm": float(np.percentile(penetration, 95) * mm) if n else 0.0,
+        "max_penetration_mm": float(penetration.max() * MM) if n else 0.0,
+        "p95_penetration_mm": float(np.percentile(penetration, 95) * MM) if n else 0.0,
         "frames_penetrating_over_1mm": int((penetration > 0.001).sum()),
         "contact_frames": int((count.sum(axis=(1, 2)) > 0).sum()) if count.size else 0,
         "max_contact_links": int((count.sum(axis=2) > 0).sum(axis=1).max()) if n and count.size else 0,
         "max_total_normal_force_n": float(normal.sum(axis=(1, 2)).max()) if n and normal.size else 0.0,
-        "mean_tracking_error_deg": _finite(np.abs(tracking) * deg, np.mean),
-        "max_tracking_error_deg": _finite(np.abs(tracking) * deg, np.max),
-        "mean_tip_error_mm": _finite(tips * mm, np.mean),
-        "max_tip_error_mm": _finite(tips * mm, np.max),
+        "mean_tracking_error_deg": _finite(np.abs(tracking) * DEG, np.mean),
+        "max_tracking_error_deg": _finite(np.abs(tracking) * DEG, np.max),
+        "mean_tip_error_mm": _finite(tips * MM, np.mean),
+        "max_tip_error_mm": _finite(tips * MM, np.max),
     }
 
 
@@ -204,7 +203,6 @@ def summarize(frames: FrameMetrics, spec: MetricSpec) -> dict:
     A scene with several hands adds each hand's :data:`HAND_KEYS` as ``<hand>/<key>`` (``right/…``,
     ``left/…``); the whole-scene numbers cover every hand.
     """
-    mm, deg = 1000.0, 180.0 / math.pi
     n = frames.times.shape[0]
     whole = _hand_numbers(
         frames.contact_count, frames.normal_force, frames.penetration, frames.tracking_error, frames.tip_error
@@ -232,18 +230,18 @@ def summarize(frames: FrameMetrics, spec: MetricSpec) -> dict:
     if np.isfinite(frames.object_position_error).any():
         pos = frames.object_position_error
         summary.update(
-            mean_drift_mm=_finite(pos * mm, np.mean),
-            max_drift_mm=_finite(pos * mm, np.max),
-            final_drift_mm=_finite(pos[-1] * mm, np.max),
+            mean_drift_mm=_finite(pos * MM, np.mean),
+            max_drift_mm=_finite(pos * MM, np.max),
+            final_drift_mm=_finite(pos[-1] * MM, np.max),
             within_tolerance=float(np.mean(pos[np.isfinite(pos)] <= spec.drift_tolerance)),
-            mean_rotation_drift_deg=_finite(frames.object_rotation_error * deg, np.mean),
-            max_rotation_drift_deg=_finite(frames.object_rotation_error * deg, np.max),
-            max_articulation_drift_deg=_finite(np.abs(frames.articulation_error) * deg, np.max),
+            mean_rotation_drift_deg=_finite(frames.object_rotation_error * DEG, np.mean),
+            max_rotation_drift_deg=_finite(frames.object_rotation_error * DEG, np.max),
+            max_articulation_drift_deg=_finite(np.abs(frames.articulation_error) * DEG, np.max),
         )
         if np.isfinite(frames.articulation_error).any():
             summary.update(
-                mean_articulation_drift_deg=_finite(np.abs(frames.articulation_error) * deg, np.mean),
-                final_articulation_drift_deg=_finite(np.abs(frames.articulation_error[-1]) * deg, np.max),
+                mean_articulation_drift_deg=_finite(np.abs(frames.articulation_error) * DEG, np.mean),
+                final_articulation_drift_deg=_finite(np.abs(frames.articulation_error[-1]) * DEG, np.max),
             )
     return summary
 
