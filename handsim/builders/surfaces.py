@@ -14,7 +14,7 @@ pad's force–penetration relation the way the literature measures a fingertip's
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 CONTACT_CONDIM = 4
 """Sliding and torsional friction (no rolling friction): a pinched object resists spinning about the contact
@@ -67,14 +67,7 @@ force at the recorded pose; with this offset it carries the pad's calibrated 1 N
 the cube within 1 cm of its track in 40 / 74 / 76 / 76 % of frames (mean drift 26.5 / 10.5 / 10.5 /
 10.1 mm)."""
 
-FITTED_SKIN = Surface(
-    sliding=SKIN.sliding,
-    torsional=SKIN.torsional,
-    priority=SKIN.priority,
-    solref=PAD_SOLREF,
-    solimp=PAD_SOLIMP,
-    margin=FITTED_SKIN_OFFSET,
-)
+FITTED_SKIN = replace(SKIN, margin=FITTED_SKIN_OFFSET)
 """Skin of a hand whose surface was fitted to observations: :data:`SKIN` with the rest offset
 :data:`FITTED_SKIN_OFFSET`. Hands sized from proportions or driven by a sensor glove (the default hand's
 capsules, GraspDB14 skeletons, MANO) keep :data:`SKIN`: their geometry is the undeformed finger."""

@@ -176,18 +176,18 @@ class ScheduleDriver:
         Returns:
             The frame's warnings (see :meth:`Stepper.step`).
         """
-        k = self.frame
+        k, targets = self.frame, self.targets
         if k == self.switches.release_frame:
-            self._data.eq_active[self.targets.supports] = 0
+            self._data.eq_active[targets.supports] = 0
         if k == self.switches.contact_frame and k > 0:
             self._set_contacts(True)
-        if self.targets.root_pos is not None:
-            if self.targets.all_mocap:
-                self._mocap_pos[:] = self.targets.root_pos[k + 1]
-                self._mocap_quat[:] = self.targets.root_quat[k + 1]
+        if targets.root_pos is not None:
+            if targets.all_mocap:
+                self._mocap_pos[:] = targets.root_pos[k + 1]
+                self._mocap_quat[:] = targets.root_quat[k + 1]
             else:
-                self._mocap_pos[self.targets.mocap] = self.targets.root_pos[k + 1]
-                self._mocap_quat[self.targets.mocap] = self.targets.root_quat[k + 1]
+                self._mocap_pos[targets.mocap] = targets.root_pos[k + 1]
+                self._mocap_quat[targets.mocap] = targets.root_quat[k + 1]
         events = self.stepper.step(ctrl)
         self.frame = k + 1
         return events
