@@ -48,3 +48,26 @@ def test_when_no_feasible_pose_touches_the_hand_the_one_nearest_the_fingertips_i
         "no object pose within 0.001 mm of penetration touches the hand on the closing ramp: placed nearest "
         f"the fingertips' centre without penetration ({placement['candidates']} poses tried)"
     ) in loaded.scene.setup.notes
+
+
+def test_the_search_on_threads_places_as_on_one_thread(graspdb_dir, monkeypatch):
+    """Fit-frame queries and grip tests spread over threads (handsim.sim.parallel): the same placement,
+    bit for bit, as one thread (the trial whose search runs 15 grip tests and ~12 000 poses)."""
+    import pickle
+
+    import handsim.sim.scenarios as scenarios
+
+    placed = []
+    original = scenarios.place_object
+
+    def uncached(*args, **kwargs):
+        placed.append(original(*args, **kwargs, use_cache=False))
+        return placed[-1]
+
+    monkeypatch.setattr(scenarios, "place_object", uncached)
+    for threads in ("1", "2"):
+        monkeypatch.setenv("HANDSIM_THREADS", threads)
+        load_trial(graspdb_dir / "01_ex01-rad-002-grasp-su01.txt")
+    alone, threaded = placed
+    assert threaded.grip_tests == alone.grip_tests == 15
+    assert pickle.dumps(threaded) == pickle.dumps(alone)

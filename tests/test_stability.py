@@ -276,3 +276,13 @@ def test_mocap_target_moves_a_welded_hand(welded_grasp) -> None:
 def test_zero_mocap_quaternion_raises_value_error(welded_grasp) -> None:
     with pytest.raises(ValueError, match=r"mocap_quat must be a non-zero quaternion \(w, x, y, z\)"):
         stability_test(*welded_grasp, mocap_quat=[0.0, 0.0, 0.0, 0.0])
+
+
+@pytest.mark.parametrize("case", ["grasp", "open_hand"])
+def test_directions_on_threads_give_the_results_of_one_thread(case, request, monkeypatch) -> None:
+    """The seven runs go to threads (handsim.sim.parallel): bit for bit what one thread computes."""
+    args = request.getfixturevalue(case)
+    monkeypatch.setenv("HANDSIM_THREADS", "1")
+    alone = stability_test(*args, stop_at_failure=True).to_dict()
+    monkeypatch.setenv("HANDSIM_THREADS", "4")
+    assert stability_test(*args, stop_at_failure=True).to_dict() == alone

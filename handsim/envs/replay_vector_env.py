@@ -29,7 +29,6 @@ within the same ``step``: its row of the returned observation is the reset's, an
 from __future__ import annotations
 
 import math
-import os
 from typing import Any
 
 import gymnasium as gym
@@ -44,6 +43,7 @@ from mujoco import batch as mjbatch
 from handsim.envs.recordings import RecordingError
 from handsim.envs.replay_env import ReplayEnv
 from handsim.envs.replay_reward import DRIFT, STEP_NUMBERS
+from handsim.sim.parallel import available_cores
 from handsim.sim.stepper import warning_events
 
 _INTEGRATION = int(mujoco.mjtState.mjSTATE_INTEGRATION)
@@ -51,8 +51,7 @@ _INTEGRATION = int(mujoco.mjtState.mjSTATE_INTEGRATION)
 
 def _threads(num_envs: int, nthread: int | None) -> int:
     if nthread is None:
-        cores = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else (os.cpu_count() or 1)
-        return max(1, min(num_envs, cores))
+        return max(1, min(num_envs, available_cores()))
     if int(nthread) < 1:
         raise ValueError(f"nthread must be ≥ 1 (or None: one per core, at most one per world), got {nthread}")
     return int(nthread)

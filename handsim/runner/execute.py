@@ -15,7 +15,6 @@ runs :func:`handsim.runner.worker.trial_outcome` per trial; what the run did is 
 from __future__ import annotations
 
 import contextlib
-import os
 import sys
 import time
 from collections.abc import Callable, Sequence
@@ -36,6 +35,7 @@ from handsim.runner.records import (
 from handsim.runner.run_summary import RunSummary, failure_counts, status_counts
 from handsim.runner.trial_record import versions
 from handsim.runner.worker import run_parameters, trial_outcome, write_outcome_files
+from handsim.sim.parallel import available_cores
 from handsim.sim.replay import ReplayConfig
 from handsim.trials import Discovery, TrialEntry
 
@@ -46,9 +46,7 @@ BACKENDS = ("local", "ray")
 
 def default_workers() -> int:
     """The cores this process may use (its CPU affinity where the OS reports one)."""
-    if hasattr(os, "sched_getaffinity"):
-        return max(1, len(os.sched_getaffinity(0)))
-    return max(1, os.cpu_count() or 1)
+    return available_cores()
 
 
 def _entries(source: Discovery | Sequence[TrialEntry]) -> tuple[tuple[TrialEntry, ...], dict]:

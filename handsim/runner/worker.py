@@ -30,6 +30,7 @@ from handsim.runner.portable import portable_traceback
 from handsim.runner.records import SCHEMA, json_ready
 from handsim.runner.renders import FRAMES_DIR, key_frames, render_pngs, safe_id
 from handsim.runner.trial_record import curves, input_hashes, trajectory_quality, versions
+from handsim.sim.parallel import THREADS_ENV
 from handsim.sim.replay import ReplayConfig, replay
 from handsim.trials import TrialEntry, load_trial
 from handsim.viz.headless import prefer_headless_gl
@@ -64,11 +65,13 @@ def run_parameters(config: ReplayConfig, frames: int) -> dict:
 def prepare_worker_process() -> None:
     """Settings of a worker process (pool initializer, start of a Ray task).
 
-    One OpenMP thread (CoACD decompositions: the pool already uses every core), MuJoCo's EGL backend
+    One OpenMP thread (CoACD decompositions) and one simulation thread (:mod:`handsim.sim.parallel`): the
+    pool already uses every core; MuJoCo's EGL backend
     when there is no display (before ``mujoco`` is imported), and Ctrl-C left to the parent process, which
     ends the workers itself.
     """
     os.environ["OMP_NUM_THREADS"] = "1"
+    os.environ[THREADS_ENV] = "1"
     prefer_headless_gl()
     if sys.platform != "win32":
         signal.signal(signal.SIGINT, signal.SIG_IGN)

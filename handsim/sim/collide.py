@@ -85,6 +85,14 @@ class HandObjectCollider:
         self._cores = [_core(model, g) for g in self._hand_geoms]
         self._balls = [_core(model, g) for g in self._obj_geoms]
 
+    def fork(self) -> HandObjectCollider:
+        """A collider on the same model with a data of its own, at this one's posture (for another thread)."""
+        forked = copy.copy(self)
+        forked.data = mujoco.MjData(self.model)
+        forked.data.qpos[:] = self.data.qpos
+        forked.queries = 0
+        return forked
+
     def set_hand(self, qpos: np.ndarray) -> None:
         """Put the hand (and everything else but the object's pose) at ``qpos`` (nq,)."""
         a = self.obj.free_qpos

@@ -20,6 +20,7 @@ from handsim.sim.collide import CLEAR, DEEP, HandObjectCollider
 from handsim.sim.compiled import SimScene
 from handsim.sim.grasp_frame import GraspFrame, flexion_fraction
 from handsim.sim.hand_pose import targets_qpos
+from handsim.sim.parallel import map_runs, sim_threads
 from handsim.sim.placement_poses import (
     axis_aligned_orientations,
     box_grid,
@@ -29,6 +30,8 @@ from handsim.sim.placement_poses import (
 )
 from handsim.sim.placement_types import Candidate, PlacementSpec
 
+MIN_THREAD_QUERIES = 64
+"""Collision queries per thread below which :meth:`PlacementSearch._fits` stays on one thread."""
 SCREEN_MARGIN = 0.0005
 """A pose whose inscribed balls overlap the hand's by more than the penetration tolerance plus this is
 settled as infeasible without a collision query, m: MuJoCo's convex penetration depths (GJK/EPA, tolerance
@@ -105,8 +108,11 @@ class PlacementSearch:
     def _fits(self, frame: int, poses: list[np.ndarray]) -> list[tuple[np.ndarray, int]]:
         """The poses that fit (within the tolerance) and touch the hand at ``frame``, with their links."""
         self.collider.set_hand(targets_qpos(self.scene, self.trajectory, frame))
+        verdicts = self._verdicts(poses)
+        unsettled = [p for p, v in zip(poses, verdicts, strict=True) if v not in (CLEAR, DEEP)]
+        queried = iter(self._depths(unsettled))
         fitting = []
-        for pose, verdict in zip(poses, self._verdicts(poses), strict=True):
+        for pose, verdict in zip(poses, verdicts, strict=True):
             if verdict == CLEAR:  # no link within the touch distance: fits, touches nothing
                 self.screened += 1
                 self._consider(pose, 0.0)
@@ -115,11 +121,31 @@ class PlacementSearch:
                 self.screened += 1
                 self.pruned_deep = True
                 continue
-            depth, links = self.collider.depth_links(pose[:3], pose[3:])
+            depth, links = next(queried)
             self._consider(pose, depth)
             if depth <= self.spec.penetration and links:
                 fitting.append((pose, links))
         return fitting
+
+    def _depths(self, poses: list[np.ndarray]) -> list[tuple[float, int]]:
+        """:meth:`HandObjectCollider.depth_links` of each pose, in order, the poses spread over threads.
+
+        Each thread queries its own copy of the collider's data (the hand at the same posture); the
+        answers are those of one collider querying them all (:mod:`handsim.sim.parallel`).
+        """
+        threads = min(sim_threads(), len(poses) // MIN_THREAD_QUERIES)
+        if threads <= 1:
+            return [self.collider.depth_links(p[:3], p[3:]) for p in poses]
+        colliders = [self.collider, *(self.collider.fork() for _ in range(threads - 1))]
+        chunks = np.array_split(np.arange(len(poses)), threads)
+
+        def run(k: int) -> list[tuple[float, int]]:
+            collider = colliders[k]
+            return [collider.depth_links(poses[i][:3], poses[i][3:]) for i in chunks[k]]
+
+        parts = map_runs(run, range(threads), threads)
+        self.collider.queries += sum(c.queries for c in colliders[1:])
+        return [answer for part in parts for answer in part]
 
     def _ranked(self, fitting: list[tuple[np.ndarray, int]]) -> list[tuple[tuple, np.ndarray]]:
         """Fitting poses ranked by what the recorded closing does to them (best first).

@@ -33,11 +33,14 @@ import numpy.typing as npt
 from handsim.datatypes.rotations import quat_angle
 from handsim.errors import SimulationError
 from handsim.sim.compiled import SimScene
+from handsim.sim.parallel import map_runs
 from handsim.sim.spec_checks import check_positive, check_version
 from handsim.sim.stepper import Stepper
 
 STABILITY_SPEC_VERSION = "1"
 """Version of :class:`StabilitySpec`: bumped whenever a parameter's meaning or a default changes."""
+CHECK_STEPS = 10
+"""MuJoCo steps between two looks at a run (divergence; with ``stop_at_failure``, the displacement)."""
 DIRECTIONS: Mapping[str, tuple[float, float, float]] = MappingProxyType(
     {
         "+x": (1.0, 0.0, 0.0),
@@ -225,9 +228,9 @@ def stability_test(
             the root's position in ``qpos``, so the weld holds the hand where it is.
         mocap_quat: Orientation (4,) of the mocap target (w, x, y, z); default: the root's in ``qpos``.
         stop_at_failure: End a direction's run as soon as the object has moved ``spec.max_displacement``
-            (checked every 10 steps): the direction fails as it would at the end, its displacement and
-            rotation are those at the stop, and ``simulated_time`` says how long it ran. For searches that
-            only need the outcome; off for a full test.
+            (checked every :data:`CHECK_STEPS` steps): the direction fails as it would at the end, its
+            displacement and rotation are those at the stop, and ``simulated_time`` says how long it ran.
+            For searches that only need the outcome; off for a full test.
 
     Returns:
         The per-direction results, the overall success, the ObMan simulation displacement and the spec.
@@ -256,13 +259,13 @@ def stability_test(
     frozen = _frozen_model(model, spec)
     run = _Run(replace(scene, model=frozen), qpos, ctrl, mocap, object_index)
     steps = max(1, round(spec.duration / frozen.opt.timestep))
-    directions = tuple(
-        run.direction(label, spec.gravity * np.asarray(unit), steps, spec, stop_at_failure)
-        for label, unit in DIRECTIONS.items()
-    )
     obman_dir = np.asarray(spec.obman_direction) / np.linalg.norm(spec.obman_direction)
     obman_steps = max(1, round(spec.obman_duration / frozen.opt.timestep))
-    obman = run.direction("obman", spec.gravity * obman_dir, obman_steps, spec, stop_at_failure)
+    jobs = [(label, spec.gravity * np.asarray(unit), steps) for label, unit in DIRECTIONS.items()]
+    jobs.append(("obman", spec.gravity * obman_dir, obman_steps))
+    # The runs are independent (each starts from the same state): on threads, each on its own MjData.
+    results = map_runs(lambda job: run.fork().direction(*job, spec, stop_at_failure), jobs)
+    directions, obman = tuple(results[:-1]), results[-1]
     return StabilityResult(
         directions=directions,
         success=all(d.success for d in directions),
@@ -348,6 +351,12 @@ class _Run:
         depth = np.where(found > 0, np.maximum(-dist, 0.0), 0.0)
         self.start_penetration = float(depth.max()) if depth.size else 0.0
 
+    def fork(self) -> _Run:
+        """The same runs on a data of their own (for another thread); the start facts are shared."""
+        forked = copy.copy(self)
+        forked.stepper = Stepper(self.scene, substeps=1)
+        return forked
+
     def _start(self, gravity: np.ndarray | None = None) -> None:
         """Reset to the start state at rest, supports off, objects weighted by ``gravity``; forward."""
         self.stepper.reset()
@@ -383,14 +392,18 @@ class _Run:
         diverged = False
         done = 0
         com = self.stepper.data.subtree_com[self.object.root_body]
-        for _ in range(steps):
-            events = self.stepper.step()
-            done += 1
+        stepper = self.stepper
+        while done < steps:
+            # MuJoCo steps CHECK_STEPS at a time in native code (bit for bit the single steps): fewer returns
+            # to Python, so the runs on other threads are not kept waiting for the GIL.
+            stepper.substeps = min(CHECK_STEPS, steps - done)
+            events = stepper.step()
+            done += stepper.substeps
             warnings.extend(e.describe() for e in events)
             if any(e.diverged for e in events):
                 diverged = True
                 break
-            if stop_at_failure and done % 10 == 0 and np.linalg.norm(com - com0) >= spec.max_displacement:
+            if stop_at_failure and np.linalg.norm(com - com0) >= spec.max_displacement:
                 break
         vector = tuple(float(x) for x in gravity)
         simulated = done * float(self.model.opt.timestep)

@@ -1,0 +1,73 @@
+"""Independent simulation runs on threads, each on its own ``MjData``.
+
+MuJoCo's ``mj_step`` releases the GIL, so runs on separate ``MjData`` (one shared, read-only ``MjModel``)
+use every core without copying the model or spawning processes.
+
+Used where one result needs several runs that do not depend on each other: the stability test's seven
+gravity runs (:func:`handsim.sim.stability.stability_test`, hence every grip test of the glove placement
+search and the replay's robustness ensemble). Each run computes exactly what it computes alone, in the
+same order of floating-point operations, so results are bit-for-bit those of running them one after the
+other; only the wall time changes.
+
+How many threads: ``$HANDSIM_THREADS`` when set (``1``: everything in the calling thread), else one per
+core this process may use. A dataset run's worker processes set it to 1 (the pool already uses every
+core: :func:`handsim.runner.worker.prepare_worker_process`).
+"""
+
+from __future__ import annotations
+
+import os
+from collections.abc import Callable, Sequence
+from concurrent.futures import ThreadPoolExecutor
+from typing import TypeVar
+
+THREADS_ENV = "HANDSIM_THREADS"
+"""Environment variable: threads for independent simulation runs (a positive integer)."""
+
+T = TypeVar("T")
+R = TypeVar("R")
+
+
+def available_cores() -> int:
+    """The cores this process may use (its CPU affinity where the OS reports one), at least 1."""
+    if hasattr(os, "sched_getaffinity"):
+        return max(1, len(os.sched_getaffinity(0)))
+    return max(1, os.cpu_count() or 1)
+
+
+def sim_threads() -> int:
+    """Threads for independent simulation runs: ``$HANDSIM_THREADS``, else :func:`available_cores`.
+
+    Raises:
+        ValueError: ``$HANDSIM_THREADS`` is set but not a positive integer.
+    """
+    value = os.environ.get(THREADS_ENV, "").strip()
+    if not value:
+        return available_cores()
+    try:
+        threads = int(value)
+    except ValueError:
+        threads = 0
+    if threads < 1:
+        raise ValueError(f"${THREADS_ENV} must be a positive integer (threads), got {value!r}")
+    return threads
+
+
+def map_runs(run: Callable[[T], R], items: Sequence[T], threads: int | None = None) -> list[R]:
+    """``[run(item) for item in items]``, the items spread over ``threads`` threads; results in order.
+
+    Args:
+        run: One independent run; it must not share mutable state (an ``MjData``) with the others.
+        items: Its inputs.
+        threads: Threads to use; None: :func:`sim_threads`. With 1, or one item, no thread is started.
+
+    Returns:
+        The results, in the order of ``items``. An exception of a run is raised here (the first in
+        order), after every run has ended.
+    """
+    count = min(len(items), sim_threads() if threads is None else max(1, int(threads)))
+    if count <= 1:
+        return [run(item) for item in items]
+    with ThreadPoolExecutor(max_workers=count, thread_name_prefix="handsim-sim") as pool:
+        futures = [pool.submit(run, item) for item in items]
+    return [future.result() for future in futures]
