@@ -88,13 +88,14 @@ def evaluate(env_kwargs: dict, policy=None, normalize=None) -> dict:
     }
 
 
-def make_vec_env(env_kwargs: dict, n_envs: int, seed: int):
-    """SB3's DummyVecEnv of ``n_envs`` single ReplayEnv, seeded ``seed + i``, with VecNormalize."""
+def make_vec_env(env_kwargs: dict, n_envs: int, seed: int, env_class=ReplayEnv, gamma: float | None = None):
+    """SB3's DummyVecEnv of ``n_envs`` single ``env_class`` envs, seeded ``seed + i``, with VecNormalize."""
     from stable_baselines3.common.env_util import make_vec_env as sb3_make_vec_env
     from stable_baselines3.common.vec_env import VecNormalize
 
-    venv = sb3_make_vec_env(ReplayEnv, n_envs=n_envs, seed=seed, env_kwargs=env_kwargs)
-    return VecNormalize(venv, norm_obs=True, norm_reward=True, clip_obs=10.0, gamma=PPO_KWARGS["gamma"])
+    venv = sb3_make_vec_env(env_class, n_envs=n_envs, seed=seed, env_kwargs=env_kwargs)
+    gamma = PPO_KWARGS["gamma"] if gamma is None else gamma
+    return VecNormalize(venv, norm_obs=True, norm_reward=True, clip_obs=10.0, gamma=gamma)
 
 
 def native_vec_env(env_kwargs: dict, n_envs: int, seed: int):
@@ -154,10 +155,49 @@ def native_vec_env(env_kwargs: dict, n_envs: int, seed: int):
     )
 
 
+def learn(model, args: argparse.Namespace, measure) -> list[dict]:
+    """``model.learn`` for ``args.timesteps`` or ``args.minutes``, measuring every ``args.eval_every`` steps.
+
+    Args:
+        model: The SB3 model.
+        args: ``timesteps``, ``minutes`` (None: no time limit) and ``eval_every``.
+        measure: ``measure(model)`` → a record (dict) of the policy now.
+
+    Returns:
+        The learning curve: the records, each with ``timesteps`` and ``minutes``; the last one is taken
+        after training ends.
+    """
+    from stable_baselines3.common.callbacks import BaseCallback
+
+    curve: list[dict] = []
+    start = time.monotonic()
+    deadline = start + 60.0 * args.minutes if args.minutes else math.inf
+
+    def record_now() -> None:
+        record = measure(model)
+        record.update(timesteps=model.num_timesteps, minutes=(time.monotonic() - start) / 60)
+        curve.append(record)
+        print(json.dumps(record), flush=True)
+
+    class Progress(BaseCallback):
+        def __init__(self) -> None:
+            super().__init__()
+            self.next_eval = 0
+
+        def _on_step(self) -> bool:
+            if self.num_timesteps >= self.next_eval:
+                self.next_eval += args.eval_every
+                record_now()
+            return time.monotonic() < deadline
+
+    model.learn(total_timesteps=args.timesteps, callback=Progress())
+    record_now()
+    return curve
+
+
 def train(args: argparse.Namespace) -> dict:
     """Train, evaluate along the way, write the plot and the table; returns the evaluation record."""
     from stable_baselines3 import PPO
-    from stable_baselines3.common.callbacks import BaseCallback
 
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
@@ -173,28 +213,8 @@ def train(args: argparse.Namespace) -> dict:
         "MlpPolicy", venv, seed=args.seed, verbose=0, device="cpu", policy_kwargs=POLICY_KWARGS, **ppo_kwargs
     )
     replay = evaluate(env_kwargs)
-    curve: list[dict] = []
-    start = time.monotonic()
-    deadline = start + 60.0 * args.minutes if args.minutes else math.inf
-
-    class Progress(BaseCallback):
-        def __init__(self) -> None:
-            super().__init__()
-            self.next_eval = 0
-
-        def _on_step(self) -> bool:
-            if self.num_timesteps >= self.next_eval:
-                self.next_eval += args.eval_every
-                record = evaluate(env_kwargs, self.model, venv.normalize_obs)
-                record.update(timesteps=self.num_timesteps, minutes=(time.monotonic() - start) / 60)
-                curve.append(record)
-                print(json.dumps(record), flush=True)
-            return time.monotonic() < deadline
-
-    model.learn(total_timesteps=args.timesteps, callback=Progress())
-    final = evaluate(env_kwargs, model, venv.normalize_obs)
-    final.update(timesteps=model.num_timesteps, minutes=(time.monotonic() - start) / 60)
-    curve.append(final)
+    curve = learn(model, args, lambda m: evaluate(env_kwargs, m, venv.normalize_obs))
+    final = curve[-1]
     record = {
         "env_kwargs": {k: v for k, v in env_kwargs.items() if k != "trajectory"},
         "trajectory": args.trajectory or "bundled Tzionas sequence 20",
@@ -248,15 +268,25 @@ def plot(curve: list[dict], replay: dict, path: Path) -> None:
     b.axhline(replay["mean_drift_mm"], ls="--", c="k")
     b.axhline(5, ls=":", c="r")
     b.set(xlabel="timesteps", ylabel="mean cube drift (mm)")
+    save_figure(fig, path)
+
+
+def save_figure(fig, path: Path) -> None:
+    """Lay out, write (100 dpi) and close a matplotlib figure."""
+    import matplotlib.pyplot as plt
+
     fig.tight_layout()
     fig.savefig(path, dpi=100)
     plt.close(fig)
 
 
+def script_parser(doc: str) -> argparse.ArgumentParser:
+    """A command-line parser whose help is the script's docstring, as written."""
+    return argparse.ArgumentParser(description=doc, formatter_class=argparse.RawDescriptionHelpFormatter)
+
+
 def main(argv: list[str] | None = None) -> dict:
-    parser = argparse.ArgumentParser(
-        description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter
-    )
+    parser = script_parser(__doc__)
     parser.add_argument("--trajectory", default=None, help="recording path (default: bundled Tzionas seq 20)")
     parser.add_argument("--timesteps", type=int, default=3_000_000)
     parser.add_argument("--minutes", type=float, default=None, help="stop training after this wall time")
