@@ -6,7 +6,7 @@ import threading
 
 import pytest
 
-from handsim.sim.parallel import THREADS_ENV, available_cores, map_runs, sim_threads
+from handsim.sim.parallel import THREADS_ENV, available_cores, map_on_workers, map_runs, sim_threads
 
 
 def test_results_come_back_in_the_order_of_the_items() -> None:
@@ -55,3 +55,15 @@ def test_a_bad_thread_setting_is_a_clear_error(monkeypatch, value: str) -> None:
     monkeypatch.setenv(THREADS_ENV, value)
     with pytest.raises(ValueError, match=rf"\$HANDSIM_THREADS must be a positive integer .*{value!r}"):
         sim_threads()
+
+
+def test_workers_take_every_nth_item_and_results_come_back_in_order() -> None:
+    seen: dict[str, set[str]] = {"a": set(), "b": set(), "c": set()}
+
+    def run(worker: str, item: int) -> tuple[str, int]:
+        seen[worker].add(threading.current_thread().name)
+        return worker, item * 10
+
+    results = map_on_workers(run, list(range(8)), ["a", "b", "c"])
+    assert results == [("abc"[i % 3], i * 10) for i in range(8)]
+    assert all(len(names) == 1 for names in seen.values())  # a worker's state stays on one thread

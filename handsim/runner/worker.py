@@ -65,10 +65,9 @@ def run_parameters(config: ReplayConfig, frames: int) -> dict:
 def prepare_worker_process() -> None:
     """Settings of a worker process (pool initializer, start of a Ray task).
 
-    One OpenMP thread (CoACD decompositions) and one simulation thread (:mod:`handsim.sim.parallel`): the
-    pool already uses every core; MuJoCo's EGL backend
-    when there is no display (before ``mujoco`` is imported), and Ctrl-C left to the parent process, which
-    ends the workers itself.
+    One OpenMP thread (CoACD decompositions) and one simulation thread (:mod:`handsim.sim.parallel`), as
+    the pool already uses every core; MuJoCo's EGL backend when there is no display (before ``mujoco`` is
+    imported); and Ctrl-C left to the parent process, which ends the workers itself.
     """
     os.environ["OMP_NUM_THREADS"] = "1"
     os.environ[THREADS_ENV] = "1"

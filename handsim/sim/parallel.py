@@ -1,13 +1,14 @@
 """Independent simulation runs on threads, each on its own ``MjData``.
 
-MuJoCo's ``mj_step`` releases the GIL, so runs on separate ``MjData`` (one shared, read-only ``MjModel``)
-use every core without copying the model or spawning processes.
+MuJoCo's ``mj_step`` and ``mj_collision`` release the GIL, so runs on separate ``MjData`` (one shared,
+read-only ``MjModel``) use every core without copying the model or spawning processes.
 
 Used where one result needs several runs that do not depend on each other: the stability test's seven
 gravity runs (:func:`handsim.sim.stability.stability_test`, hence every grip test of the glove placement
-search and the replay's robustness ensemble). Each run computes exactly what it computes alone, in the
-same order of floating-point operations, so results are bit-for-bit those of running them one after the
-other; only the wall time changes.
+search and the replay's robustness ensemble) and the placement search's fit-frame collision queries
+(:class:`handsim.sim.placement_search.PlacementSearch`). Each run computes exactly what it computes alone,
+in the same order of floating-point operations, so results are bit-for-bit those of running them one
+after the other; only the wall time changes.
 
 How many threads: ``$HANDSIM_THREADS`` when set (``1``: everything in the calling thread), else one per
 core this process may use. A dataset run's worker processes set it to 1 (the pool already uses every
@@ -26,6 +27,7 @@ THREADS_ENV = "HANDSIM_THREADS"
 
 T = TypeVar("T")
 R = TypeVar("R")
+W = TypeVar("W")
 
 
 def available_cores() -> int:
@@ -71,3 +73,26 @@ def map_runs(run: Callable[[T], R], items: Sequence[T], threads: int | None = No
     with ThreadPoolExecutor(max_workers=count, thread_name_prefix="handsim-sim") as pool:
         futures = [pool.submit(run, item) for item in items]
     return [future.result() for future in futures]
+
+
+def map_on_workers(run: Callable[[W, T], R], items: Sequence[T], workers: Sequence[W]) -> list[R]:
+    """``[run(worker, item) …]`` with one thread per worker, each item on one worker; results in order.
+
+    For runs that need state of their own (an ``MjData``) but not a fresh one per item: worker ``k`` takes
+    items ``k``, ``k + n``, ``k + 2n`` … (``n`` workers; dealt out so that long and short runs mix) one
+    after the other.
+
+    Args:
+        run: ``run(worker, item)``; a worker's state is used by one thread only.
+        items: The inputs.
+        workers: The per-thread states, e.g. ``[first, *(first.fork() for _ in range(n - 1))]``.
+
+    Returns:
+        The results, in the order of ``items`` (errors as :func:`map_runs`).
+    """
+    n = len(workers)
+    parts = map_runs(lambda k: [run(workers[k], item) for item in items[k::n]], range(n), n)
+    results: list[R] = [None] * len(items)  # type: ignore[list-item]
+    for k, part in enumerate(parts):
+        results[k::n] = part
+    return results

@@ -20,7 +20,7 @@ from handsim.sim.collide import CLEAR, DEEP, HandObjectCollider
 from handsim.sim.compiled import SimScene
 from handsim.sim.grasp_frame import GraspFrame, flexion_fraction
 from handsim.sim.hand_pose import targets_qpos
-from handsim.sim.parallel import map_runs, sim_threads
+from handsim.sim.parallel import map_on_workers, sim_threads
 from handsim.sim.placement_poses import (
     axis_aligned_orientations,
     box_grid,
@@ -137,15 +137,9 @@ class PlacementSearch:
         if threads <= 1:
             return [self.collider.depth_links(p[:3], p[3:]) for p in poses]
         colliders = [self.collider, *(self.collider.fork() for _ in range(threads - 1))]
-        chunks = np.array_split(np.arange(len(poses)), threads)
-
-        def run(k: int) -> list[tuple[float, int]]:
-            collider = colliders[k]
-            return [collider.depth_links(poses[i][:3], poses[i][3:]) for i in chunks[k]]
-
-        parts = map_runs(run, range(threads), threads)
+        answers = map_on_workers(lambda collider, p: collider.depth_links(p[:3], p[3:]), poses, colliders)
         self.collider.queries += sum(c.queries for c in colliders[1:])
-        return [answer for part in parts for answer in part]
+        return answers
 
     def _ranked(self, fitting: list[tuple[np.ndarray, int]]) -> list[tuple[tuple, np.ndarray]]:
         """Fitting poses ranked by what the recorded closing does to them (best first).

@@ -33,7 +33,7 @@ import numpy.typing as npt
 from handsim.datatypes.rotations import quat_angle
 from handsim.errors import SimulationError
 from handsim.sim.compiled import SimScene
-from handsim.sim.parallel import map_runs
+from handsim.sim.parallel import map_on_workers, sim_threads
 from handsim.sim.spec_checks import check_positive, check_version
 from handsim.sim.stepper import Stepper
 
@@ -264,7 +264,8 @@ def stability_test(
     jobs = [(label, spec.gravity * np.asarray(unit), steps) for label, unit in DIRECTIONS.items()]
     jobs.append(("obman", spec.gravity * obman_dir, obman_steps))
     # The runs are independent (each starts from the same state): on threads, each on its own MjData.
-    results = map_runs(lambda job: run.fork().direction(*job, spec, stop_at_failure), jobs)
+    runs = [run, *(run.fork() for _ in range(min(sim_threads(), len(jobs)) - 1))]
+    results = map_on_workers(lambda worker, job: worker.direction(*job, spec, stop_at_failure), jobs, runs)
     directions, obman = tuple(results[:-1]), results[-1]
     return StabilityResult(
         directions=directions,
