@@ -28,6 +28,8 @@ CONFIGURATIONS = [
     (GRASP, {}),
     (GRASP, {"zero_action": "mid"}),
     (GRASP, {"root_control": "scripted"}),
+    (GRASP, {"hand_action": "fingers"}),
+    (GRASP, {"hand_action": "fingers", "root_control": "scripted", "zero_action": "mid"}),
 ]
 
 
@@ -177,6 +179,53 @@ def test_grasp_refuses_an_unknown_zero_action():
         ValueError, match=re.escape("unknown zero_action 'closed'; expected one of ['open', 'mid']")
     ):
         GraspEnv(zero_action="closed")
+
+
+def test_grasp_refuses_an_unknown_hand_action():
+    with pytest.raises(
+        ValueError, match=re.escape("unknown hand_action 'tendons'; expected one of ['joints', 'fingers']")
+    ):
+        GraspEnv(hand_action="tendons")
+
+
+@pytest.mark.parametrize("zero_action", ["open", "mid"])
+def test_a_finger_action_steps_as_the_joint_action_that_gives_each_dof_its_finger_value(zero_action):
+    fingers, joints = (
+        GraspEnv(hand_action="fingers", zero_action=zero_action),
+        GraspEnv(zero_action=zero_action),
+    )
+    names = fingers.scene.layout.dof_names
+    assert fingers.action_names[:6] == (
+        "thumb_opposition",
+        "thumb_flexion",
+        "index",
+        "middle",
+        "ring",
+        "little",
+    )
+    assert fingers.action_names[6:] == joints.action_names[-3:] == ("root_vx", "root_vy", "root_vz")
+    group = {"th": 1, "if": 2, "mf": 3, "rf": 4, "lf": 5}  # written out here, not taken from the env
+    rng = np.random.default_rng(3)
+    fingers.reset(seed=4), joints.reset(seed=4)
+    for _ in range(80):
+        a = rng.uniform(-1.2, 1.2, 9)
+        expanded = np.zeros(len(names) + 3)
+        for i, name in enumerate(names):
+            finger = name.split("_")[0]
+            if "flex" in name:
+                expanded[i] = a[group[finger]]
+            elif finger == "th":
+                expanded[i] = a[0]
+        expanded[-3:] = a[6:]
+        obs_f, reward_f, *_, info_f = fingers.step(a)
+        obs_j, reward_j, *_ = joints.step(expanded)
+        np.testing.assert_array_equal(fingers.data.ctrl, joints.data.ctrl)
+        np.testing.assert_array_equal(obs_f, obs_j)
+        assert reward_f == reward_j and info_f["action_clipped"] == np.count_nonzero(np.abs(a) > 1)
+    ungrouped = [i for i, name in enumerate(names) if "flex" not in name and not name.startswith("th")]
+    lo, hi = fingers.scene.layout.ctrl_range[ungrouped].T
+    rest = np.clip(0.0, lo, hi) if zero_action == "open" else (lo + hi) / 2
+    np.testing.assert_array_equal(fingers.data.ctrl[ungrouped], rest)  # a zero joint action
 
 
 def test_grasp_zero_action_holds_the_hand_open_and_leaves_the_ball_on_the_table():

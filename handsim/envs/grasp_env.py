@@ -44,6 +44,23 @@ from handsim.sim.hand_pose import hand_frame
 ROOT_CONTROLS = ("velocity", "scripted")
 ZERO_ACTIONS = ("open", "mid")
 """What a zero joint action means: the open hand of the reset, or the middle of each joint's range."""
+HAND_ACTIONS = ("joints", "fingers")
+"""What the hand's part of an action holds: one target per DoF, or one per finger group (:data:`FINGERS`)."""
+FINGERS = (
+    ("thumb_opposition", "th", False),
+    ("thumb_flexion", "th", True),
+    ("index", "if", True),
+    ("middle", "mf", True),
+    ("ring", "rf", True),
+    ("little", "lf", True),
+)
+"""``hand_action="fingers"``: (action name, DoF name prefix, flexion DoFs or the others) per action element.
+
+A finger's flexion DoFs (names with ``flex``) move together, each the same fraction of its own range
+(tendon-coupled flexion, as in underactuated hands); the thumb's other DoFs (carpometacarpal abduction and
+pronation, metacarpophalangeal abduction) together set its opposition. The other fingers' abduction and
+pronation DoFs stay at the reset's open hand.
+"""
 GRASP_AHEAD = 0.03
 """The object's centre starts under the point this far ahead of the palm's centre along the fingers, m."""
 CONTACT_LINKS = 3
@@ -76,6 +93,28 @@ class GraspScene:
     grasp_offset: np.ndarray
     root_floor: float
     object_name: str
+
+
+def finger_coupling(dof_names: tuple[str, ...] | list[str]) -> np.ndarray:
+    """The (DoFs × fingers) 0/1 matrix that spreads a ``hand_action="fingers"`` action over the DoFs.
+
+    Args:
+        dof_names: The hand's DoF names, actuator order (the default hand's ``th_…``, ``if_…`` names).
+
+    Returns:
+        Row per DoF, column per :data:`FINGERS` entry: 1 where the DoF belongs to that finger group.
+
+    Raises:
+        ValueError: A finger group has no DoF in ``dof_names`` (the hand is not the default hand).
+    """
+    coupling = np.zeros((len(dof_names), len(FINGERS)))
+    for column, (name, prefix, flexion) in enumerate(FINGERS):
+        for row, dof in enumerate(dof_names):
+            if dof.startswith(prefix + "_") and ("flex" in dof) == flexion:
+                coupling[row, column] = 1.0
+        if not coupling[:, column].any():
+            raise ValueError(f"hand_action='fingers': no DoF of {list(dof_names)} belongs to {name!r}")
+    return coupling
 
 
 def _wristless_default_hand() -> mujoco.MjSpec:
@@ -170,6 +209,9 @@ class GraspEnv(HandEnv):
     ``zero_action="open"`` (default): 0 is the open hand of the reset (each DoF at 0 rad or its nearest
     limit), 0 … 1 goes linearly to the joint's upper limit and 0 … −1 to its lower one, so a policy's
     initial mean action holds the hand open; ``"mid"``: −1 … 1 mapped linearly onto the joint's range.
+    ``hand_action="fingers"``: the hand's part is 6 values (:data:`FINGERS`: thumb opposition, thumb
+    flexion, index, middle, ring, little), each given to every DoF of its group and mapped as above; the
+    other DoFs get 0. :attr:`action_names` names the elements.
 
     **Observation** ``Box(-inf, inf, (n,), float64)``, named in :attr:`observation_names` and
     :attr:`observation_slices`: ``hand_qpos`` (nu, rad), ``root_pose`` (7), ``obj/pose`` (7: position m,
@@ -212,6 +254,8 @@ class GraspEnv(HandEnv):
         hold_weight: Reward per step while holding.
         penetration_weight: Penalty per millimetre of hand–object penetration.
         zero_action: What a zero joint action means, one of :data:`ZERO_ACTIONS`.
+        hand_action: ``"joints"`` (a target per DoF) or ``"fingers"`` (a target per finger group,
+            :data:`FINGERS`), one of :data:`HAND_ACTIONS`.
         terminate_on_success: End the episode at success.
         render_mode: None or ``"rgb_array"``.
         width: Rendered image width, pixels.
@@ -242,6 +286,7 @@ class GraspEnv(HandEnv):
         hold_weight: float = 1.0,
         penetration_weight: float = 0.2,
         zero_action: str = "open",
+        hand_action: str = "joints",
         terminate_on_success: bool = False,
         render_mode: str | None = None,
         width: int = DEFAULT_SIZE,
@@ -252,6 +297,8 @@ class GraspEnv(HandEnv):
             raise ValueError(f"unknown root_control {root_control!r}; expected one of {list(ROOT_CONTROLS)}")
         if zero_action not in ZERO_ACTIONS:
             raise ValueError(f"unknown zero_action {zero_action!r}; expected one of {list(ZERO_ACTIONS)}")
+        if hand_action not in HAND_ACTIONS:
+            raise ValueError(f"unknown hand_action {hand_action!r}; expected one of {list(HAND_ACTIONS)}")
         extent = np.asarray(root_range, dtype=float)
         if extent.shape != (3,) or not np.all(np.isfinite(extent)) or np.any(extent < 0):
             raise ValueError(f"root_range must be 3 finite numbers ≥ 0 (x, y, z), got {extent.tolist()}")
@@ -286,6 +333,14 @@ class GraspEnv(HandEnv):
             self._ctrl_mid, self._ctrl_up = (lo + hi) / 2, (hi - lo) / 2
             self._ctrl_down = self._ctrl_up
         self._ctrl = np.zeros(nu)
+        self.hand_action = hand_action
+        self._coupling = finger_coupling(layout.dof_names) if hand_action == "fingers" else None
+        self._joint_action = np.zeros(nu)
+        n_hand = nu if self._coupling is None else self._coupling.shape[1]
+        self._n_hand = n_hand
+        self.action_names = (
+            tuple(layout.dof_names) if self._coupling is None else tuple(name for name, _, _ in FINGERS)
+        ) + (() if root_control == "scripted" else ("root_vx", "root_vy", "root_vz"))
         self._mocap = layout.mocap
         self._obj = layout.objects[0]
         target_body = int(np.flatnonzero(self.model.body_mocapid == self._mocap)[0])
@@ -316,11 +371,10 @@ class GraspEnv(HandEnv):
         self.observation_names = tuple(obs.names)
         self.observation_slices = dict(obs.slices)
         self.observation_space = spaces.Box(-np.inf, np.inf, (obs.size,), np.float64)
-        size = nu if self._scripted else nu + 3
+        size = n_hand if self._scripted else n_hand + 3
         self.action_space = spaces.Box(-1.0, 1.0, (size,), np.float32)
-        self._action_doc = (
-            f"{nu} joint targets" + ("" if self._scripted else " then 3 root velocities") + " in [-1, 1]"
-        )
+        hand_doc = f"{nu} joint targets" if self._coupling is None else f"{n_hand} finger targets"
+        self._action_doc = hand_doc + ("" if self._scripted else " then 3 root velocities") + " in [-1, 1]"
         self._obs = np.zeros(obs.size)
         self._step_count = 0
         self._held = 0
@@ -406,8 +460,10 @@ class GraspEnv(HandEnv):
         a, _, clipped = self._action(action)  # clipped to the action space
         if not self._started:
             raise gym.error.ResetNeeded("the episode is over or was never started: call reset()")
-        nu = self._nu
-        joints = a[:nu]
+        n_hand = self._n_hand
+        joints = a[:n_hand]
+        if self._coupling is not None:
+            joints = np.matmul(self._coupling, joints, out=self._joint_action)
         np.multiply(joints, np.where(joints >= 0.0, self._ctrl_up, self._ctrl_down), out=self._ctrl)
         np.add(self._ctrl, self._ctrl_mid, out=self._data_ctrl)
         n = self._step_count + 1
@@ -415,7 +471,7 @@ class GraspEnv(HandEnv):
         if self._script is not None:
             target[:] = self._script[n]
         else:
-            target += a[nu:] * self._root_step
+            target += a[n_hand:] * self._root_step
             np.maximum(target, self._root_lo, out=target)
             np.minimum(target, self._root_hi, out=target)
         self._mocap_pos[self._mocap] = target
