@@ -45,8 +45,10 @@ PPO_KWARGS = {
 POLICY_KWARGS = {"net_arch": [256, 256], "log_std_init": -1.0}
 SDE_SAMPLE_FREQ = 8
 """With ``--sde``: steps between new exploration matrices (exploration correlated over 80 ms)."""
-DEMO_CLOSURE = 0.7
-"""The scripted grasp's flexion (fraction of the upper limit): docs/envs.md's demonstration."""
+DEMO_CLOSURE = 0.65
+"""The scripted grasp's flexion (fraction of the upper limit)."""
+DEMO_DESCEND = 0.25
+"""Seconds the scripted grasp lowers the root at half ``root_speed`` (2.5 cm: the palm 5 mm onto the ball)."""
 DEMO_EPISODES = 40
 DEMO_NOISE = 0.1
 BC_STEPS = 3000
@@ -101,13 +103,14 @@ def passes(record: dict) -> bool:
     return record["held"] == 1.0 and record["max_penetration_mm"] <= 1000 * MAX_PENETRATION
 
 
-def scripted_policy(env: GraspEnv, closure: float = DEMO_CLOSURE):
-    """The scripted grasp of docs/envs.md as a function of the step: ``action(step)`` (velocity root).
+def scripted_policy(env: GraspEnv, closure: float = DEMO_CLOSURE, descend: float = DEMO_DESCEND):
+    """The scripted grasp as a function of the step: ``action(step)`` (any root control and hand action).
 
-    Open hand, root down at half ``root_speed`` for 0.2 s (docs/envs.md's script goes down at full speed
-    for 0.1 s: the same 2 cm, but a demonstration's noise would be one-sided at the limit), the fingers'
-    flexion DoFs closed to ``closure`` of their upper limit (the thumb's other DoFs half-way) from 0.1 s
-    over 0.4 s, root up at half ``root_speed`` from 0.8 s.
+    Open hand; root down at half ``root_speed`` for ``descend`` s (0.25 s: 2.5 cm, the 2 cm gap and the
+    palm 5 mm onto the ball); the fingers' flexion DoFs closed to ``closure`` of their upper limit and the
+    thumb's other DoFs half-way (opposition 0.5) from 0.1 s over 0.4 s; root up at half ``root_speed``
+    from 0.8 s. With ``hand_action="fingers"`` the same targets are the finger action (opposition 0.5,
+    every flexion ``closure``: needs ``zero_action="open"``).
     """
     layout = env.scene.layout
     lo, hi = layout.ctrl_range.T
@@ -116,17 +119,24 @@ def scripted_policy(env: GraspEnv, closure: float = DEMO_CLOSURE):
     thumb = np.array([n.startswith("th") for n in layout.dof_names]) & ~flex
     grip = np.where(flex, closure * hi, np.where(thumb, np.clip(0.5 * hi, lo, hi), rest))
     up, down = np.maximum(hi - rest, 1e-12), np.maximum(rest - lo, 1e-12)
+    fingers = env.hand_action == "fingers"
+    if fingers and env.zero_action != "open":
+        raise ValueError("the scripted grasp's finger action needs zero_action='open'")
+    finger_grip = np.array([0.5] + [closure] * 5)
     scripted_root = env.root_control == "scripted"
 
     def action(step: int) -> np.ndarray:
         t = step * env.dt
         c = min(max((t - 0.1) / 0.4, 0.0), 1.0)
-        target = (1 - c) * rest + c * grip
-        joints = np.where(target >= rest, (target - rest) / up, (target - rest) / down)
+        if fingers:
+            hand = c * finger_grip
+        else:
+            target = (1 - c) * rest + c * grip
+            hand = np.where(target >= rest, (target - rest) / up, (target - rest) / down)
         if scripted_root:
-            return joints.astype(np.float32)
-        root = [0.0, 0.0, -0.5 if t < 0.2 else (0.5 if t > 0.8 else 0.0)]
-        return np.concatenate([joints, root]).astype(np.float32)
+            return hand.astype(np.float32)
+        root = [0.0, 0.0, -0.5 if t < descend else (0.5 if t > 0.8 else 0.0)]
+        return np.concatenate([hand, root]).astype(np.float32)
 
     return action
 
@@ -189,6 +199,14 @@ def training_env_kwargs(args: argparse.Namespace) -> dict:
     return {**ENV_KWARGS, "root_control": args.root_control, **json.loads(args.env_kwargs)}
 
 
+def policy_kwargs(args: argparse.Namespace) -> dict:
+    """:data:`POLICY_KWARGS` with the command line's ``--log-std``."""
+    kwargs = dict(POLICY_KWARGS)
+    if args.log_std is not None:
+        kwargs["log_std_init"] = args.log_std
+    return kwargs
+
+
 def train_seed(args: argparse.Namespace, seed: int) -> dict:
     """Train one seed and measure it; writes its policy and normaliser to ``<out>/seed<seed>/``."""
     import torch
@@ -199,19 +217,19 @@ def train_seed(args: argparse.Namespace, seed: int) -> dict:
     out.mkdir(parents=True, exist_ok=True)
     env_kwargs = training_env_kwargs(args)
     venv = make_vec_env(env_kwargs, N_ENVS, seed, env_class=GraspEnv, gamma=PPO_KWARGS["gamma"])
-    ppo_kwargs = dict(PPO_KWARGS)
+    ppo_kwargs = {**PPO_KWARGS, **json.loads(args.ppo_kwargs)}
     ppo_kwargs["n_steps"] = min(ppo_kwargs["n_steps"], max(64, args.timesteps // N_ENVS))
     ppo_kwargs["batch_size"] = min(ppo_kwargs["batch_size"], ppo_kwargs["n_steps"] * N_ENVS)
     if args.sde:
         ppo_kwargs.update(use_sde=True, sde_sample_freq=SDE_SAMPLE_FREQ)
     model = PPO(
-        "MlpPolicy", venv, seed=seed, verbose=0, device="cpu", policy_kwargs=POLICY_KWARGS, **ppo_kwargs
+        "MlpPolicy", venv, seed=seed, verbose=0, device="cpu", policy_kwargs=policy_kwargs(args), **ppo_kwargs
     )
 
     if args.demo:
         observations, actions = demonstrations(env_kwargs, seed)
         pretrain(model, venv, observations, actions, seed)
-    curve = learn(model, args, lambda m: evaluate(env_kwargs, m, venv.normalize_obs))
+    curve = learn(model, args, lambda m: evaluate(env_kwargs, m, venv.normalize_obs), args.critic_warmup)
     model.save(out / "policy.zip")
     venv.save(str(out / "vecnormalize.pkl"))
     final = curve[-1]
@@ -278,10 +296,17 @@ def main(argv: list[str] | None = None) -> dict:
         help="velocity: the policy moves the hand too (Grasp-v0's default); scripted: fingers only",
     )
     parser.add_argument("--env-kwargs", default="{}", help="JSON: GraspEnv keywords over ENV_KWARGS")
+    parser.add_argument("--ppo-kwargs", default="{}", help="JSON: PPO keywords over PPO_KWARGS")
     parser.add_argument(
         "--demo",
         action="store_true",
         help="start PPO from the scripted grasp (behaviour cloning on its noisy demonstrations)",
+    )
+    parser.add_argument(
+        "--critic-warmup",
+        type=int,
+        default=0,
+        help="timesteps at the start during which only the value function learns (after --demo)",
     )
     parser.add_argument("--log-std", type=float, default=None, help="the policy's initial log std")
     parser.add_argument("--sde", action="store_true", help="PPO with state-dependent exploration (gSDE)")
@@ -297,8 +322,10 @@ def main(argv: list[str] | None = None) -> dict:
         seeds = [train_seed(args, s) for s in args.seeds]
     record = {
         "env_kwargs": env_kwargs,
-        "ppo": PPO_KWARGS,
-        "policy": POLICY_KWARGS,
+        "ppo": {**PPO_KWARGS, **json.loads(args.ppo_kwargs)},
+        "policy": policy_kwargs(args),
+        "demo": args.demo,
+        "critic_warmup": args.critic_warmup,
         "n_envs": N_ENVS,
         "zero_action": evaluate(env_kwargs),
         "seeds": seeds,

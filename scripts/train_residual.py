@@ -155,13 +155,28 @@ def native_vec_env(env_kwargs: dict, n_envs: int, seed: int):
     )
 
 
-def learn(model, args: argparse.Namespace, measure) -> list[dict]:
+def set_actor_trainable(model, trainable: bool) -> None:
+    """Let PPO's updates change the policy's action distribution (True) or only its value function (False).
+
+    The actor is SB3's ``mlp_extractor.policy_net``, ``action_net`` and ``log_std``; frozen parameters get
+    no gradient, so the optimiser leaves them as they are.
+    """
+    policy = model.policy
+    actor = [*policy.mlp_extractor.policy_net.parameters(), *policy.action_net.parameters(), policy.log_std]
+    for parameter in actor:
+        parameter.requires_grad_(trainable)
+
+
+def learn(model, args: argparse.Namespace, measure, critic_warmup: int = 0) -> list[dict]:
     """``model.learn`` for ``args.timesteps`` or ``args.minutes``, measuring every ``args.eval_every`` steps.
 
     Args:
         model: The SB3 model.
         args: ``timesteps``, ``minutes`` (None: no time limit) and ``eval_every``.
         measure: ``measure(model)`` → a record (dict) of the policy now.
+        critic_warmup: Timesteps at the start during which only the value function learns (the actor is
+            frozen, :func:`set_actor_trainable`): a policy that starts good (cloned) is then first judged
+            by a critic that knows its returns. They count in the time and step budget.
 
     Returns:
         The learning curve: the records, each with ``timesteps`` and ``minutes``; the last one is taken
@@ -183,14 +198,21 @@ def learn(model, args: argparse.Namespace, measure) -> list[dict]:
         def __init__(self) -> None:
             super().__init__()
             self.next_eval = 0
+            self.frozen = critic_warmup > 0
 
         def _on_step(self) -> bool:
+            if self.frozen and self.num_timesteps > critic_warmup:  # the update after step N is frozen too
+                set_actor_trainable(model, True)
+                self.frozen = False
             if self.num_timesteps >= self.next_eval:
                 self.next_eval += args.eval_every
                 record_now()
             return time.monotonic() < deadline
 
+    if critic_warmup:
+        set_actor_trainable(model, False)
     model.learn(total_timesteps=args.timesteps, callback=Progress())
+    set_actor_trainable(model, True)
     record_now()
     return curve
 

@@ -2,12 +2,12 @@
 
 from __future__ import annotations
 
+import argparse
 import importlib.util
 import json
 import sys
 from pathlib import Path
 
-import numpy as np
 import pytest
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -28,9 +28,10 @@ def script():
         sys.path.remove(str(ROOT / "scripts"))
 
 
-def test_the_scripted_grasp_lifts_and_holds_the_ball(script):
-    """The demonstrator: most evaluation episodes end held, at the scripted policy's 5–6 mm."""
-    env = script.GraspEnv(**script.ENV_KWARGS)
+@pytest.mark.parametrize("hand_action", ["joints", "fingers"])
+def test_the_scripted_grasp_passes_the_acceptance_on_every_evaluation_offset(script, hand_action):
+    """The demonstrator holds the ball to the end of all 10 evaluation episodes at ≤ 5 mm (either action)."""
+    env = script.GraspEnv(**script.ENV_KWARGS, hand_action=hand_action)
     act = script.scripted_policy(env)
     held, deepest = [], 0.0
     for episode in range(script.EVAL_EPISODES):
@@ -41,8 +42,8 @@ def test_the_scripted_grasp_lifts_and_holds_the_ball(script):
             if terminated or truncated:
                 break
         held.append(info["success"] and not terminated)
-    assert np.mean(held) >= 0.5
-    assert 0.003 < deepest < 0.008
+    assert all(held)
+    assert 0.002 < deepest <= script.MAX_PENETRATION
 
 
 def test_zero_action_evaluation_is_deterministic_and_holds_nothing(script):
@@ -58,8 +59,13 @@ def test_a_smoke_run_from_demonstrations_writes_the_table_and_the_curves(script,
     monkeypatch.setattr(script, "BC_STEPS", 20)
     monkeypatch.setattr(script, "EVAL_EPISODES", 2)
     record = script.main(
-        ["--timesteps", "256", "--eval-every", "128", "--seeds", "0", "--demo", "--out", str(tmp_path)]
+        [
+            *("--timesteps", "256", "--eval-every", "128", "--seeds", "0", "--demo", "--out", str(tmp_path)),
+            *("--critic-warmup", "128", "--log-std", "-2", "--env-kwargs", '{"hand_action": "fingers"}'),
+        ]
     )
+    assert record["env_kwargs"]["hand_action"] == "fingers" and record["policy"]["log_std_init"] == -2.0
+    assert record["demo"] and record["critic_warmup"] == 128
     for name in ("learning_curve.png", "evaluation.json", "evaluation.md", "seed0/policy.zip"):
         assert (tmp_path / name).is_file()
     assert json.loads((tmp_path / "evaluation.json").read_text())["zero_action"] == record["zero_action"]
@@ -72,3 +78,22 @@ def test_a_smoke_run_from_demonstrations_writes_the_table_and_the_curves(script,
         "0 of 1 seeds pass (every episode held, ≤ 5 mm).",
         "1 of 1 seeds pass (every episode held, ≤ 5 mm).",
     )
+
+
+@pytest.mark.slow
+def test_the_critic_warmup_trains_the_value_function_only(script):
+    import torch
+    from stable_baselines3 import PPO
+
+    venv = script.make_vec_env({"hand_action": "fingers"}, 2, 0, env_class=script.GraspEnv, gamma=0.99)
+    model = PPO("MlpPolicy", venv, n_steps=64, batch_size=64, n_epochs=2, seed=0, device="cpu")
+    policy = model.policy
+    actor = [*policy.mlp_extractor.policy_net.parameters(), *policy.action_net.parameters(), policy.log_std]
+    critic = [*policy.mlp_extractor.value_net.parameters(), *policy.value_net.parameters()]
+    before = [p.detach().clone() for p in actor + critic]
+    args = argparse.Namespace(timesteps=256, minutes=None, eval_every=10_000)
+    script.learn(model, args, lambda m: {}, critic_warmup=256)
+    after = actor + critic
+    assert all(torch.equal(b, a) for b, a in zip(before[: len(actor)], after[: len(actor)], strict=True))
+    assert not all(torch.equal(b, a) for b, a in zip(before[len(actor) :], after[len(actor) :], strict=True))
+    assert all(p.requires_grad for p in actor)  # trainable again once learn returns
