@@ -28,7 +28,7 @@ import numpy as np
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from train_residual import learn, make_vec_env, save_figure, script_parser
 
-from handsim.envs.grasp_env import GraspEnv
+from handsim.envs.grasp_env import GraspEnv, finger_coupling
 
 ENV_KWARGS = {"object_name": "tennis_ball", "root_control": "velocity"}
 """The training environment's keywords: Grasp-v0's defaults (velocity root, open hand at zero action)."""
@@ -115,14 +115,12 @@ def scripted_policy(env: GraspEnv, closure: float = DEMO_CLOSURE, descend: float
     layout = env.scene.layout
     lo, hi = layout.ctrl_range.T
     rest = np.clip(0.0, lo, hi)
-    flex = np.array(["flex" in n for n in layout.dof_names])
-    thumb = np.array([n.startswith("th") for n in layout.dof_names]) & ~flex
-    grip = np.where(flex, closure * hi, np.where(thumb, np.clip(0.5 * hi, lo, hi), rest))
     up, down = np.maximum(hi - rest, 1e-12), np.maximum(rest - lo, 1e-12)
     fingers = env.hand_action == "fingers"
     if fingers and env.zero_action != "open":
         raise ValueError("the scripted grasp's finger action needs zero_action='open'")
     finger_grip = np.array([0.5] + [closure] * 5)
+    grip = rest + (finger_coupling(layout.dof_names) @ finger_grip) * up  # its joint targets
     scripted_root = env.root_control == "scripted"
 
     def action(step: int) -> np.ndarray:
@@ -199,6 +197,14 @@ def training_env_kwargs(args: argparse.Namespace) -> dict:
     return {**ENV_KWARGS, "root_control": args.root_control, **json.loads(args.env_kwargs)}
 
 
+def ppo_kwargs(args: argparse.Namespace) -> dict:
+    """:data:`PPO_KWARGS` with the command line's ``--ppo-kwargs`` and ``--sde``."""
+    kwargs = {**PPO_KWARGS, **json.loads(args.ppo_kwargs)}
+    if args.sde:
+        kwargs.update(use_sde=True, sde_sample_freq=SDE_SAMPLE_FREQ)
+    return kwargs
+
+
 def policy_kwargs(args: argparse.Namespace) -> dict:
     """:data:`POLICY_KWARGS` with the command line's ``--log-std``."""
     kwargs = dict(POLICY_KWARGS)
@@ -216,14 +222,12 @@ def train_seed(args: argparse.Namespace, seed: int) -> dict:
     out = Path(args.out) / f"seed{seed}"
     out.mkdir(parents=True, exist_ok=True)
     env_kwargs = training_env_kwargs(args)
-    venv = make_vec_env(env_kwargs, N_ENVS, seed, env_class=GraspEnv, gamma=PPO_KWARGS["gamma"])
-    ppo_kwargs = {**PPO_KWARGS, **json.loads(args.ppo_kwargs)}
-    ppo_kwargs["n_steps"] = min(ppo_kwargs["n_steps"], max(64, args.timesteps // N_ENVS))
-    ppo_kwargs["batch_size"] = min(ppo_kwargs["batch_size"], ppo_kwargs["n_steps"] * N_ENVS)
-    if args.sde:
-        ppo_kwargs.update(use_sde=True, sde_sample_freq=SDE_SAMPLE_FREQ)
+    kwargs = ppo_kwargs(args)
+    kwargs["n_steps"] = min(kwargs["n_steps"], max(64, args.timesteps // N_ENVS))
+    kwargs["batch_size"] = min(kwargs["batch_size"], kwargs["n_steps"] * N_ENVS)
+    venv = make_vec_env(env_kwargs, N_ENVS, seed, env_class=GraspEnv, gamma=kwargs["gamma"])
     model = PPO(
-        "MlpPolicy", venv, seed=seed, verbose=0, device="cpu", policy_kwargs=policy_kwargs(args), **ppo_kwargs
+        "MlpPolicy", venv, seed=seed, verbose=0, device="cpu", policy_kwargs=policy_kwargs(args), **kwargs
     )
 
     if args.demo:
@@ -322,7 +326,7 @@ def main(argv: list[str] | None = None) -> dict:
         seeds = [train_seed(args, s) for s in args.seeds]
     record = {
         "env_kwargs": env_kwargs,
-        "ppo": {**PPO_KWARGS, **json.loads(args.ppo_kwargs)},
+        "ppo": ppo_kwargs(args),
         "policy": policy_kwargs(args),
         "demo": args.demo,
         "critic_warmup": args.critic_warmup,

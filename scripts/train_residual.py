@@ -155,15 +155,19 @@ def native_vec_env(env_kwargs: dict, n_envs: int, seed: int):
     )
 
 
+def actor_parameters(model) -> list:
+    """The parameters of the policy's action distribution: SB3's ``mlp_extractor.policy_net``,
+    ``action_net`` and ``log_std`` (the value function has the others)."""
+    policy = model.policy
+    return [*policy.mlp_extractor.policy_net.parameters(), *policy.action_net.parameters(), policy.log_std]
+
+
 def set_actor_trainable(model, trainable: bool) -> None:
     """Let PPO's updates change the policy's action distribution (True) or only its value function (False).
 
-    The actor is SB3's ``mlp_extractor.policy_net``, ``action_net`` and ``log_std``; frozen parameters get
-    no gradient, so the optimiser leaves them as they are.
+    Frozen parameters (:func:`actor_parameters`) get no gradient, so the optimiser leaves them as they are.
     """
-    policy = model.policy
-    actor = [*policy.mlp_extractor.policy_net.parameters(), *policy.action_net.parameters(), policy.log_std]
-    for parameter in actor:
+    for parameter in actor_parameters(model):
         parameter.requires_grad_(trainable)
 
 

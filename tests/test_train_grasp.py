@@ -84,12 +84,15 @@ def test_a_smoke_run_from_demonstrations_writes_the_table_and_the_curves(script,
 def test_the_critic_warmup_trains_the_value_function_only(script):
     import torch
     from stable_baselines3 import PPO
+    from train_residual import actor_parameters  # on sys.path while the script fixture is
 
     venv = script.make_vec_env({"hand_action": "fingers"}, 2, 0, env_class=script.GraspEnv, gamma=0.99)
     model = PPO("MlpPolicy", venv, n_steps=64, batch_size=64, n_epochs=2, seed=0, device="cpu")
     policy = model.policy
-    actor = [*policy.mlp_extractor.policy_net.parameters(), *policy.action_net.parameters(), policy.log_std]
+    actor = actor_parameters(model)
     critic = [*policy.mlp_extractor.value_net.parameters(), *policy.value_net.parameters()]
+    assert {id(p) for p in actor}.isdisjoint(id(p) for p in critic)
+    assert len(actor) + len(critic) == len(list(policy.parameters()))  # together: every parameter
     before = [p.detach().clone() for p in actor + critic]
     args = argparse.Namespace(timesteps=256, minutes=None, eval_every=10_000)
     script.learn(model, args, lambda m: {}, critic_warmup=256)
