@@ -110,7 +110,9 @@ def scripted_policy(env: GraspEnv, closure: float = DEMO_CLOSURE, descend: float
     palm 5 mm onto the ball); the fingers' flexion DoFs closed to ``closure`` of their upper limit and the
     thumb's other DoFs half-way (opposition 0.5) from 0.1 s over 0.4 s; root up at half ``root_speed``
     from 0.8 s. With ``hand_action="fingers"`` the same targets are the finger action (opposition 0.5,
-    every flexion ``closure``: needs ``zero_action="open"``).
+    every flexion ``closure``: needs ``zero_action="open"``). With ``hand_control="rate"`` the hand's part
+    is the rate that moves :attr:`GraspEnv.hand_command` toward those targets (as fast as ``hand_rate``
+    allows), so ``action(step)`` must be called with the env at that step.
     """
     layout = env.scene.layout
     lo, hi = layout.ctrl_range.T
@@ -122,6 +124,7 @@ def scripted_policy(env: GraspEnv, closure: float = DEMO_CLOSURE, descend: float
     finger_grip = np.array([0.5] + [closure] * 5)
     grip = rest + (finger_coupling(layout.dof_names) @ finger_grip) * up  # its joint targets
     scripted_root = env.root_control == "scripted"
+    rate = env.hand_rate * env.dt if env.hand_control == "rate" else None  # command change per step at ±1
 
     def action(step: int) -> np.ndarray:
         t = step * env.dt
@@ -131,6 +134,8 @@ def scripted_policy(env: GraspEnv, closure: float = DEMO_CLOSURE, descend: float
         else:
             target = (1 - c) * rest + c * grip
             hand = np.where(target >= rest, (target - rest) / up, (target - rest) / down)
+        if rate is not None:
+            hand = np.clip((hand - env.hand_command) / rate, -1.0, 1.0)
         if scripted_root:
             return hand.astype(np.float32)
         root = [0.0, 0.0, -0.5 if t < descend else (0.5 if t > 0.8 else 0.0)]

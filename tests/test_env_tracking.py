@@ -30,6 +30,8 @@ CONFIGURATIONS = [
     (GRASP, {"root_control": "scripted"}),
     (GRASP, {"hand_action": "fingers"}),
     (GRASP, {"hand_action": "fingers", "root_control": "scripted", "zero_action": "mid"}),
+    (GRASP, {"hand_action": "fingers", "hand_control": "rate"}),
+    (GRASP, {"hand_control": "rate", "root_control": "scripted", "hand_rate": 1.0}),
 ]
 
 
@@ -186,6 +188,55 @@ def test_grasp_refuses_an_unknown_hand_action():
         ValueError, match=re.escape("unknown hand_action 'tendons'; expected one of ['joints', 'fingers']")
     ):
         GraspEnv(hand_action="tendons")
+
+
+@pytest.mark.parametrize(
+    ("kwargs", "message"),
+    [
+        ({"hand_control": "torque"}, "unknown hand_control 'torque'; expected one of ['position', 'rate']"),
+        ({"hand_control": "rate", "hand_rate": 0.0}, "hand_rate"),
+        ({"hand_rate": -1.0}, "hand_rate"),
+    ],
+)
+def test_grasp_refuses_a_bad_hand_control(kwargs, message):
+    with pytest.raises(ValueError, match=re.escape(message)):
+        GraspEnv(**kwargs)
+
+
+@pytest.mark.parametrize(("hand_action", "hand_rate"), [("fingers", 2.5), ("joints", 1.0)])
+def test_a_rate_action_steps_as_the_position_action_it_integrates_to(hand_action, hand_rate):
+    rate = GraspEnv(hand_action=hand_action, hand_control="rate", hand_rate=hand_rate)
+    position = GraspEnv(hand_action=hand_action)
+    n_hand = rate.action_space.shape[0] - 3
+    command_slice = rate.observation_slices["hand_command"]
+    assert rate.action_names == position.action_names
+    assert rate.observation_names[command_slice][0] == f"hand_command/{rate.action_names[0]}"
+    assert rate.observation_names[: command_slice.start] == position.observation_names
+    rng = np.random.default_rng(5)
+    for seed in (4, 5):  # the command starts again at the open hand after a reset
+        rate.reset(seed=seed), position.reset(seed=seed)
+        np.testing.assert_array_equal(rate.hand_command, np.zeros(n_hand))
+        command = np.zeros(n_hand)
+        for step in range(60):
+            a = rng.uniform(-0.5, 1.3, n_hand + 3) if step < 40 else np.zeros(n_hand + 3)
+            command = np.clip(command + np.clip(a[:n_hand], -1, 1) * (hand_rate * rate.dt), -1, 1)
+            obs_r, reward_r, *_, info_r = rate.step(a)
+            obs_p, reward_p, *_ = position.step(np.concatenate([command, a[n_hand:]]))
+            np.testing.assert_array_equal(rate.data.ctrl, position.data.ctrl)
+            np.testing.assert_array_equal(obs_r[: command_slice.start], obs_p)
+            np.testing.assert_array_equal(obs_r[command_slice], command)
+            np.testing.assert_array_equal(rate.hand_command, command)
+            assert reward_r == reward_p and info_r["action_clipped"] == np.count_nonzero(np.abs(a) > 1)
+        assert np.abs(command).max() > 0.1  # the rates moved the hand, and zero rates then held it
+
+
+def test_a_zero_rate_action_holds_the_hand_open():
+    env = GraspEnv(hand_action="fingers", hand_control="rate")
+    env.reset(seed=0)
+    lo, hi = env.scene.layout.ctrl_range.T
+    for _ in range(50):
+        env.step(np.zeros(env.action_space.shape))
+    np.testing.assert_array_equal(env.data.ctrl, np.clip(0.0, lo, hi))
 
 
 @pytest.mark.parametrize("zero_action", ["open", "mid"])

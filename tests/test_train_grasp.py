@@ -28,10 +28,12 @@ def script():
         sys.path.remove(str(ROOT / "scripts"))
 
 
-@pytest.mark.parametrize("hand_action", ["joints", "fingers"])
-def test_the_scripted_grasp_passes_the_acceptance_on_every_evaluation_offset(script, hand_action):
-    """The demonstrator holds the ball to the end of all 10 evaluation episodes at ≤ 5 mm (either action)."""
-    env = script.GraspEnv(**script.ENV_KWARGS, hand_action=hand_action)
+@pytest.mark.parametrize(
+    ("hand_action", "hand_control"), [("joints", "position"), ("fingers", "position"), ("fingers", "rate")]
+)
+def test_the_scripted_grasp_passes_the_acceptance_on_every_offset(script, hand_action, hand_control):
+    """The demonstrator holds the ball to the end of all 10 evaluation episodes at ≤ 5 mm (any action)."""
+    env = script.GraspEnv(**script.ENV_KWARGS, hand_action=hand_action, hand_control=hand_control)
     act = script.scripted_policy(env)
     held, deepest = [], 0.0
     for episode in range(script.EVAL_EPISODES):

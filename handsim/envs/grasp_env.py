@@ -46,6 +46,11 @@ ZERO_ACTIONS = ("open", "mid")
 """What a zero joint action means: the open hand of the reset, or the middle of each joint's range."""
 HAND_ACTIONS = ("joints", "fingers")
 """What the hand's part of an action holds: one target per DoF, or one per finger group (:data:`FINGERS`)."""
+HAND_CONTROLS = ("position", "rate")
+"""How the hand's part of an action acts: it is the hand command itself, or the command's rate of change."""
+DEFAULT_HAND_RATE = 2.5
+"""``hand_control="rate"``: the hand command's largest change per second, action units (open to a full
+flexion in 0.4 s, the scripted grasp's closing time; measured in ``docs/rl.md``)."""
 FINGERS = (
     ("thumb_opposition", "th", False),
     ("thumb_flexion", "th", True),
@@ -211,7 +216,11 @@ class GraspEnv(HandEnv):
     initial mean action holds the hand open; ``"mid"``: −1 … 1 mapped linearly onto the joint's range.
     ``hand_action="fingers"``: the hand's part is 6 values (:data:`FINGERS`: thumb opposition, thumb
     flexion, index, middle, ring, little), each given to every DoF of its group and mapped as above; the
-    other DoFs get 0. :attr:`action_names` names the elements.
+    other DoFs get 0. :attr:`action_names` names the elements. ``hand_control="rate"``: the hand's part is
+    the rate of change of that command instead (the **hand command**, the values above, starts at 0, the
+    open hand, and moves by ``action · hand_rate · dt`` per step, kept in [−1, 1]; :attr:`hand_command`):
+    a zero action holds the hand still, and exploration noise moves the fingers' targets smoothly rather
+    than jolting them every step.
 
     **Observation** ``Box(-inf, inf, (n,), float64)``, named in :attr:`observation_names` and
     :attr:`observation_slices`: ``hand_qpos`` (nu, rad), ``root_pose`` (7), ``obj/pose`` (7: position m,
@@ -219,7 +228,8 @@ class GraspEnv(HandEnv):
     the mocap target's position, m); ``object_to_grasp`` (3: the object's origin minus the grasp point
     under the palm, m); ``contact_force`` (per hand link, total normal force on the object, N);
     ``penetration`` (deepest, m); ``lift`` (the object's rise above its start, m); ``hold`` (time held
-    so far / ``hold_time``, ≤ 1); ``progress`` (step / steps per episode).
+    so far / ``hold_time``, ≤ 1); ``progress`` (step / steps per episode); with ``hand_control="rate"``
+    also ``hand_command`` (the hand command after the step's action, action units).
 
     **Reward** = the sum of the terms in ``info``:
 
@@ -256,6 +266,9 @@ class GraspEnv(HandEnv):
         zero_action: What a zero joint action means, one of :data:`ZERO_ACTIONS`.
         hand_action: ``"joints"`` (a target per DoF) or ``"fingers"`` (a target per finger group,
             :data:`FINGERS`), one of :data:`HAND_ACTIONS`.
+        hand_control: ``"position"`` (the action is the hand command) or ``"rate"`` (its rate of change),
+            one of :data:`HAND_CONTROLS`.
+        hand_rate: ``hand_control="rate"``: the command's largest change per second, action units.
         terminate_on_success: End the episode at success.
         render_mode: None or ``"rgb_array"``.
         width: Rendered image width, pixels.
@@ -287,6 +300,8 @@ class GraspEnv(HandEnv):
         penetration_weight: float = 0.2,
         zero_action: str = "open",
         hand_action: str = "joints",
+        hand_control: str = "position",
+        hand_rate: float = DEFAULT_HAND_RATE,
         terminate_on_success: bool = False,
         render_mode: str | None = None,
         width: int = DEFAULT_SIZE,
@@ -299,6 +314,8 @@ class GraspEnv(HandEnv):
             raise ValueError(f"unknown zero_action {zero_action!r}; expected one of {list(ZERO_ACTIONS)}")
         if hand_action not in HAND_ACTIONS:
             raise ValueError(f"unknown hand_action {hand_action!r}; expected one of {list(HAND_ACTIONS)}")
+        if hand_control not in HAND_CONTROLS:
+            raise ValueError(f"unknown hand_control {hand_control!r}; expected one of {list(HAND_CONTROLS)}")
         extent = np.asarray(root_range, dtype=float)
         if extent.shape != (3,) or not np.all(np.isfinite(extent)) or np.any(extent < 0):
             raise ValueError(f"root_range must be 3 finite numbers ≥ 0 (x, y, z), got {extent.tolist()}")
@@ -338,6 +355,11 @@ class GraspEnv(HandEnv):
         self._joint_action = np.zeros(nu)
         n_hand = nu if self._coupling is None else self._coupling.shape[1]
         self._n_hand = n_hand
+        self.hand_control = hand_control
+        self._rate = hand_control == "rate"
+        self.hand_rate = positive("hand_rate", hand_rate)
+        self._hand_step = self.hand_rate * self.dt
+        self._command = np.zeros(n_hand)
         self.action_names = (
             tuple(layout.dof_names) if self._coupling is None else tuple(name for name, _, _ in FINGERS)
         ) + (() if root_control == "scripted" else ("root_vx", "root_vy", "root_vz"))
@@ -364,6 +386,8 @@ class GraspEnv(HandEnv):
         self._lift_index = obs.add("lift", ("height",)).start
         self._hold_index = obs.add("hold", ("fraction",)).start
         self._progress_index = obs.add("progress", ("fraction",)).start
+        names = self.action_names[:n_hand]
+        self._command_slice = obs.add("hand_command", names) if self._rate else None
         root = obs.slices["root_pose"].start
         self._root_slice = slice(root, root + 3)
         pose = obs.slices[f"{self._obj.prefix}pose"].start
@@ -373,7 +397,8 @@ class GraspEnv(HandEnv):
         self.observation_space = spaces.Box(-np.inf, np.inf, (obs.size,), np.float64)
         size = n_hand if self._scripted else n_hand + 3
         self.action_space = spaces.Box(-1.0, 1.0, (size,), np.float32)
-        hand_doc = f"{nu} joint targets" if self._coupling is None else f"{n_hand} finger targets"
+        hand_doc = f"{nu} joint" if self._coupling is None else f"{n_hand} finger"
+        hand_doc += " target rates" if self._rate else " targets"
         self._action_doc = hand_doc + ("" if self._scripted else " then 3 root velocities") + " in [-1, 1]"
         self._obs = np.zeros(obs.size)
         self._step_count = 0
@@ -418,6 +443,15 @@ class GraspEnv(HandEnv):
         """Steps per episode."""
         return self._steps
 
+    @property
+    def hand_command(self) -> np.ndarray:
+        """The hand command (a copy, action units).
+
+        The last action's hand part, or with ``hand_control="rate"`` the command its rates have moved to
+        (0 after a reset).
+        """
+        return self._command.copy()
+
     # ---- gymnasium API ----------------------------------------------------------------------------------
     def reset(self, *, seed: int | None = None, options: dict | None = None) -> tuple[np.ndarray, dict]:
         """Open hand at its start pose above the object; the object at a seeded random offset."""
@@ -434,6 +468,7 @@ class GraspEnv(HandEnv):
             )
         self._target[:] = self._root_start
         self._mocap_pos[self._mocap] = self._target
+        self._command[:] = 0.0
         mujoco.mj_forward(self.model, data)
         self._step_count = 0
         self._held = 0
@@ -461,7 +496,13 @@ class GraspEnv(HandEnv):
         if not self._started:
             raise gym.error.ResetNeeded("the episode is over or was never started: call reset()")
         n_hand = self._n_hand
-        joints = a[:n_hand]
+        command = self._command
+        if self._rate:
+            command += a[:n_hand] * self._hand_step
+            np.clip(command, -1.0, 1.0, out=command)
+        else:
+            command[:] = a[:n_hand]
+        joints = command
         if self._coupling is not None:
             joints = np.matmul(self._coupling, joints, out=self._joint_action)
         np.multiply(joints, np.where(joints >= 0.0, self._ctrl_up, self._ctrl_down), out=self._ctrl)
@@ -536,6 +577,8 @@ class GraspEnv(HandEnv):
         self._obs_rel -= self._grasp_offset
         obs[self._lift_index] = self._object_lift() if lift is None else lift
         obs[self._progress_index] = self._step_count / self._steps
+        if self._command_slice is not None:
+            obs[self._command_slice] = self._command
         if lift is None:
             obs[self._hold_index] = 0.0
         return penetration, int(np.count_nonzero(self._obs_force))
