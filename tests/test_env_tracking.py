@@ -32,6 +32,7 @@ CONFIGURATIONS = [
     (GRASP, {"hand_action": "fingers", "root_control": "scripted", "zero_action": "mid"}),
     (GRASP, {"hand_action": "fingers", "hand_control": "rate"}),
     (GRASP, {"hand_control": "rate", "root_control": "scripted", "hand_rate": 1.0}),
+    (GRASP, {"hand_action": "fingers", "hand_control": "rate", "max_penetration": 0.005}),
 ]
 
 
@@ -300,6 +301,33 @@ def test_grasp_penalises_penetration_per_millimetre():
     for _ in range(60):
         _, _, _, _, info = env.step(np.concatenate([np.ones(len(env.dof_names)), [0.0, 0.0, -1.0]]))
         assert info["reward_penetration"] == pytest.approx(-300.0 * info["penetration"], abs=1e-15)
+
+
+def test_grasp_max_penetration_ends_the_episode_at_the_first_deeper_step():
+    """The same pressing actions, with and without the limit: identical until the first step deeper than
+    it, which ends the limited episode (``penetrated``); the unlimited one goes on."""
+    limit = 0.003
+    free, limited = GraspEnv(), GraspEnv(max_penetration=limit)
+    press = np.concatenate([np.ones(len(free.dof_names)), [0.0, 0.0, -1.0]])
+    free.reset(seed=0), limited.reset(seed=0)
+    for step in range(free.max_steps):
+        obs_f, reward_f, terminated_f, _, info_f = free.step(press)
+        obs_l, reward_l, terminated_l, _, info_l = limited.step(press)
+        np.testing.assert_array_equal(obs_f, obs_l)
+        assert reward_f == reward_l and not terminated_f and not info_f["penetrated"]
+        assert terminated_l == info_l["penetrated"] == (info_l["penetration"] > limit)
+        if terminated_l:
+            ended_at = step
+            break
+    assert terminated_l and ended_at > 0  # pressing the closed hand onto the ball went deeper than 3 mm
+    with pytest.raises(gym.error.ResetNeeded):
+        limited.step(press)
+
+
+@pytest.mark.parametrize("value", [0.0, -0.001, float("nan")])
+def test_grasp_refuses_a_max_penetration_that_is_not_positive(value):
+    with pytest.raises(ValueError, match="max_penetration must be a finite number > 0"):
+        GraspEnv(max_penetration=value)
 
 
 def test_fingertip_errors_are_zero_at_a_recorded_state_and_follow_the_sites():

@@ -75,7 +75,9 @@ def test_a_smoke_run_from_demonstrations_writes_the_table_and_the_curves(script,
     assert [c["timesteps"] for c in seed["curve"]][-1] == 256
     table = (tmp_path / "evaluation.md").read_text().splitlines()
     assert table[2].startswith("| zero action (open hand) | 0 % |")
-    assert table[3].startswith("| PPO seed 0 (256 steps, ")
+    assert table[3].startswith("| seed 0: the clone of the script, before PPO | ")  # the curve's first point
+    assert table[4].startswith("| PPO seed 0 (256 steps, ")
+    assert seed["total_minutes"] >= seed["curve"][-1]["minutes"]  # the demonstrations and cloning count too
     assert table[-1] in (
         "0 of 1 seeds pass (every episode held, ≤ 5 mm).",
         "1 of 1 seeds pass (every episode held, ≤ 5 mm).",

@@ -244,7 +244,8 @@ class GraspEnv(HandEnv):
 
     **Episode**: the object starts at a seeded random offset (±``object_xy_noise``) on the table;
     truncated after ``duration`` seconds; terminated when MuJoCo diverges, the object falls off the table,
-    or on success with ``terminate_on_success``.
+    or on success with ``terminate_on_success``, or (with ``max_penetration``) when the hand penetrates the
+    object deeper than that: ``info["penetrated"]``.
 
     Args:
         object_name: Catalogue object (:func:`handsim.builders.catalog.names`).
@@ -270,6 +271,9 @@ class GraspEnv(HandEnv):
             one of :data:`HAND_CONTROLS`.
         hand_rate: ``hand_control="rate"``: the command's largest change per second, action units.
         terminate_on_success: End the episode at success.
+        max_penetration: None (default: never), or end the episode when the deepest hand–object
+            penetration exceeds this, m: a hard constraint on physical plausibility, where the penalty
+            (``penetration_weight``) only prices it.
         render_mode: None or ``"rgb_array"``.
         width: Rendered image width, pixels.
         height: Rendered image height, pixels.
@@ -303,6 +307,7 @@ class GraspEnv(HandEnv):
         hand_control: str = "position",
         hand_rate: float = DEFAULT_HAND_RATE,
         terminate_on_success: bool = False,
+        max_penetration: float | None = None,
         render_mode: str | None = None,
         width: int = DEFAULT_SIZE,
         height: int = DEFAULT_SIZE,
@@ -340,6 +345,9 @@ class GraspEnv(HandEnv):
         self._w_pen = nonnegative("penetration_weight", penetration_weight) * 1000.0  # per m
         self.zero_action = zero_action
         self._terminate_on_success = bool(terminate_on_success)
+        limit = None if max_penetration is None else positive("max_penetration", max_penetration)
+        self.max_penetration = limit
+        self._pen_limit = math.inf if limit is None else limit
         self._scripted = root_control == "scripted"
         self.root_control = root_control
         lo, hi = layout.ctrl_range[:, 0], layout.ctrl_range[:, 1]
@@ -530,7 +538,8 @@ class GraspEnv(HandEnv):
 
         diverged = any(e.diverged for e in events) if events else False
         fell = float(self._obs_object[2]) < FALL_HEIGHT
-        terminated = diverged or fell or (success and self._terminate_on_success)
+        penetrated = penetration > self._pen_limit
+        terminated = diverged or fell or penetrated or (success and self._terminate_on_success)
         truncated = n >= self._steps and not terminated
         if terminated or truncated:
             self._started = False
@@ -542,6 +551,7 @@ class GraspEnv(HandEnv):
             "links_touching": touching,
             "penetration": penetration,
             "fell": fell,
+            "penetrated": penetrated,
             "diverged": diverged,
             "action_clipped": clipped,
         }
