@@ -33,7 +33,7 @@ def script():
 )
 def test_the_scripted_grasp_passes_the_acceptance_on_every_offset(script, hand_action, hand_control):
     """The demonstrator holds the ball to the end of all 10 evaluation episodes at ≤ 5 mm (any action)."""
-    env = script.GraspEnv(**script.ENV_KWARGS, hand_action=hand_action, hand_control=hand_control)
+    env = script.GraspEnv(**{**script.ENV_KWARGS, "hand_action": hand_action, "hand_control": hand_control})
     act = script.scripted_policy(env)
     held, deepest = [], 0.0
     for episode in range(script.EVAL_EPISODES):
@@ -53,6 +53,16 @@ def test_zero_action_evaluation_is_deterministic_and_holds_nothing(script):
     assert first == script.evaluate(script.ENV_KWARGS)
     assert first["held"] == 0.0 and first["episodes"] == script.EVAL_EPISODES
     assert not script.passes(first)
+
+
+def test_the_script_noise_evaluation_is_seeded_and_applies_the_noise(script, monkeypatch):
+    monkeypatch.setattr(script, "EVAL_EPISODES", 2)
+    first = script.main(["--script-noise", "0", "0.5"])["script_noise"]
+    assert first == script.main(["--script-noise", "0", "0.5"])["script_noise"]  # bitwise, seeded noise
+    clean, noisy = first
+    assert (clean["sigma"], noisy["sigma"]) == (0.0, 0.5)
+    assert clean["held"] == 1.0 and clean["return"] != noisy["return"]
+    assert noisy["mean_max_penetration_mm"] != clean["mean_max_penetration_mm"]
 
 
 @pytest.mark.slow
@@ -75,8 +85,9 @@ def test_a_smoke_run_from_demonstrations_writes_the_table_and_the_curves(script,
     assert [c["timesteps"] for c in seed["curve"]][-1] == 256
     table = (tmp_path / "evaluation.md").read_text().splitlines()
     assert table[2].startswith("| zero action (open hand) | 0 % |")
-    assert table[3].startswith("| seed 0: the clone of the script, before PPO | ")  # the curve's first point
-    assert table[4].startswith("| PPO seed 0 (256 steps, ")
+    assert table[3].startswith("| seed 0: the clone of the script, before PPO | ")
+    assert table[4].startswith("| PPO seed 0: kept (") and table[5].startswith("| seed 0: last (256 steps)")
+    assert seed["policy_eval"]["timesteps"] in [c["timesteps"] for c in seed["curve"]]
     assert seed["total_minutes"] >= seed["curve"][-1]["minutes"]  # the demonstrations and cloning count too
     assert table[-1] in (
         "0 of 1 seeds pass (every episode held, ≤ 5 mm).",
