@@ -1,6 +1,6 @@
 """Train PPO on handsim/Grasp-v0 (lift the tennis ball and hold it) for several seeds and measure each.
 
-    python scripts/train_grasp.py --minutes 25 --seeds 0 1 2 --jobs 3 --out docs/rl/grasp   # docs/rl.md's run
+    python scripts/train_grasp.py --minutes 24 --seeds 0 1 2 --jobs 3 --out docs/rl/grasp   # docs/rl.md's run
     python scripts/train_grasp.py --timesteps 512 --seeds 0 --out /tmp/x                   # a smoke run
 
 Needs the optional extras ``rl`` and ``plot``. One seed trains in one process (``--jobs`` seeds at a time,
@@ -90,6 +90,11 @@ VALIDATION_SEED = 2000
 curve measures and that choose the policy kept."""
 
 
+def whole_episode_env(env_kwargs: dict) -> GraspEnv:
+    """The env of ``env_kwargs`` without the training's ``max_penetration``: episodes run to their end."""
+    return GraspEnv(**{**env_kwargs, "max_penetration": None})
+
+
 def evaluate(
     env_kwargs: dict,
     policy=None,
@@ -113,7 +118,7 @@ def evaluate(
         (mean) and ``episodes``. The episodes run to their end whatever the penetration (the training
         env's ``max_penetration`` is not applied): the deepest one is measured, not cut off.
     """
-    env = GraspEnv(**{**env_kwargs, "max_penetration": None})
+    env = whole_episode_env(env_kwargs)
     script = None if script_noise is None else scripted_policy(env)
     rng = np.random.default_rng(0)
     held, depth, lift, total = [], [], [], []
@@ -199,7 +204,7 @@ def demonstrations(env_kwargs: dict, seed: int) -> tuple[np.ndarray, np.ndarray]
     The executed actions are the scripted ones plus seeded Gaussian noise (σ :data:`DEMO_NOISE`), so
     the states cover the neighbourhood of the script's path; the label is the scripted action (DART-style).
     """
-    env = GraspEnv(**{**env_kwargs, "max_penetration": None})  # whole episodes, as scripted
+    env = whole_episode_env(env_kwargs)  # as scripted
     act = scripted_policy(env)
     rng = np.random.default_rng(seed)
     observations, actions = [], []
