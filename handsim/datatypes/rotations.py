@@ -167,8 +167,8 @@ def quat_error_rotvec(ref: np.ndarray, q: np.ndarray, out: np.ndarray) -> float:
     Returns:
         The angle, rad.
     """
-    w1, x1, y1, z1 = (float(v) for v in ref)
-    w2, x2, y2, z2 = (float(v) for v in q)
+    w1, x1, y1, z1 = ref.tolist()
+    w2, x2, y2, z2 = q.tolist()
     w = w1 * w2 + x1 * x2 + y1 * y2 + z1 * z2
     x = -w1 * x2 + x1 * w2 - y1 * z2 + z1 * y2
     y = -w1 * y2 + x1 * z2 + y1 * w2 - z1 * x2

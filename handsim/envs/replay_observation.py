@@ -110,6 +110,7 @@ class ReplayObservation:
             for group, labels in groups:
                 obs.add(f"ref_{group}" if j == 1 else f"ref{j}_{group}", labels)
         self._ref_slice = slice(first, obs.size)
+        self._window = window
         self._window_steps = np.arange(1, window + 1)
         # a track without any valid sample may hold NaN: observed as 0 (its reward term skips those frames)
         self._refs = np.nan_to_num(np.hstack(refs).astype(float), nan=0.0, posinf=0.0, neginf=0.0)
@@ -156,7 +157,11 @@ class ReplayObservation:
             sensordata: The world's sensor values (the fingertip positions MuJoCo's position sensors
                 took in the last ``mj_step``, i.e. at the start of its last substep).
         """
-        obs[self._ref_slice] = self._refs[np.minimum(frame + self._window_steps, self.last)].ravel()
+        after = frame + 1
+        if after + self._window <= self.last + 1:  # the next K frames: a view, no index array
+            obs[self._ref_slice] = self._refs[after : after + self._window].ravel()
+        else:  # the window runs past the last frame: the last frame repeats
+            obs[self._ref_slice] = self._refs[np.minimum(frame + self._window_steps, self.last)].ravel()
         np.subtract(self._ref_ctrl[frame], obs[self._hand_slice], out=obs[self.err_hand])
         np.subtract(self.ref_tips[frame], sensordata[self._tip_sensors], out=obs[self._err_tips])
         for t in self.tracks:
