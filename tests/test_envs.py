@@ -32,7 +32,14 @@ ROOT = Path(__file__).resolve().parents[1]
 REPLAY, GRASP = "handsim/Replay-v0", "handsim/Grasp-v0"
 IDS = (REPLAY, GRASP)
 REPLAY_REWARDS = REWARD_TERMS  # tracking, object, rotation, articulation, held, penetration, action
-GRASP_REWARDS = ("reward_reach", "reward_contact", "reward_lift", "reward_hold", "reward_penetration")
+GRASP_REWARDS = (
+    "reward_reach",
+    "reward_contact",
+    "reward_lift",
+    "reward_hold",
+    "reward_penetration",
+    "reward_success",
+)
 
 
 @functools.lru_cache(maxsize=1)

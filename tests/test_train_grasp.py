@@ -8,6 +8,7 @@ import json
 import sys
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -115,3 +116,30 @@ def test_the_critic_warmup_trains_the_value_function_only(script):
     assert all(torch.equal(b, a) for b, a in zip(before[: len(actor)], after[: len(actor)], strict=True))
     assert not all(torch.equal(b, a) for b, a in zip(before[len(actor) :], after[len(actor) :], strict=True))
     assert all(p.requires_grad for p in actor)  # trainable again once learn returns
+
+
+def test_the_success_reward_is_paid_once_at_the_end_of_a_held_episode(script):
+    """``success_weight``: the scripted grasp, held to the end, earns it on its last step only; the same
+    episode without it differs by exactly that reward; the open hand never earns it."""
+    kwargs = {**script.ENV_KWARGS, "max_penetration": None}
+    paid, plain = script.GraspEnv(**kwargs, success_weight=7.0), script.GraspEnv(**kwargs)
+    act = script.scripted_policy(paid)
+    paid.reset(seed=script.EVAL_SEED), plain.reset(seed=script.EVAL_SEED)
+    for step in range(paid.max_steps):
+        action = act(step)
+        _, reward, terminated, truncated, info = paid.step(action)
+        _, reward_plain, _, _, info_plain = plain.step(action)
+        assert info["reward_success"] == (7.0 if truncated else 0.0) and info_plain["reward_success"] == 0.0
+        assert reward == reward_plain + info["reward_success"]
+    assert truncated and not terminated and info["success"]
+    paid.reset(seed=0)
+    zero = np.zeros(paid.action_space.shape, np.float32)
+    for _ in range(paid.max_steps):
+        _, _, _, truncated, info = paid.step(zero)
+        assert info["reward_success"] == 0.0
+    assert truncated and not info["success"]
+
+
+def test_a_negative_success_weight_is_refused(script):
+    with pytest.raises(ValueError, match="success_weight"):
+        script.GraspEnv(success_weight=-1.0)

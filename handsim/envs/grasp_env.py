@@ -237,7 +237,10 @@ class GraspEnv(HandEnv):
     * ``reward_contact = contact_weight · min(links touching, 3) / 3``;
     * ``reward_lift = lift_weight · clip(lift / lift_height, 0, 1)``;
     * ``reward_hold = hold_weight`` while the object is ``lift_height`` up and touched, else 0;
-    * ``reward_penetration = −penetration_weight · penetration in mm`` (the deepest hand–object one).
+    * ``reward_penetration = −penetration_weight · penetration in mm`` (the deepest hand–object one);
+    * ``reward_success = success_weight`` on the episode's last step (truncated at ``duration``, or ended
+      by ``terminate_on_success``) when the object is held then (``success``), else 0: pays holding *to the
+      end*, where ``reward_hold`` pays every step held (so lifting earlier earns more of it).
 
     **Success** (``info["success"]``, also ``info["is_success"]``): the object has been ``lift_height``
     above its start, touched by the hand, for the last ``hold_time`` seconds.
@@ -263,6 +266,7 @@ class GraspEnv(HandEnv):
         contact_weight: Weight of the contact term.
         lift_weight: Weight of the lift term.
         hold_weight: Reward per step while holding.
+        success_weight: Reward once, at the episode's last step, when the object is held then.
         penetration_weight: Penalty per millimetre of hand–object penetration.
         zero_action: What a zero joint action means, one of :data:`ZERO_ACTIONS`.
         hand_action: ``"joints"`` (a target per DoF) or ``"fingers"`` (a target per finger group,
@@ -301,6 +305,7 @@ class GraspEnv(HandEnv):
         contact_weight: float = 0.1,
         lift_weight: float = 1.0,
         hold_weight: float = 1.0,
+        success_weight: float = 0.0,
         penetration_weight: float = 0.2,
         zero_action: str = "open",
         hand_action: str = "joints",
@@ -342,6 +347,7 @@ class GraspEnv(HandEnv):
         self._w_contact = nonnegative("contact_weight", contact_weight) / CONTACT_LINKS
         self._w_lift = nonnegative("lift_weight", lift_weight) / self._lift_height
         self._w_hold = nonnegative("hold_weight", hold_weight)
+        self._w_success = nonnegative("success_weight", success_weight)
         self._w_pen = nonnegative("penetration_weight", penetration_weight) * 1000.0  # per m
         self.zero_action = zero_action
         self._terminate_on_success = bool(terminate_on_success)
@@ -483,7 +489,7 @@ class GraspEnv(HandEnv):
         self._started = True
         penetration, touching = self._observe()
         lift = float(self._obs[self._lift_index])
-        terms = self._terms(lift, penetration, touching, lifted=False)
+        terms = self._terms(lift, penetration, touching, lifted=False, held_at_end=False)
         return self._obs.copy(), {
             **terms,
             "success": False,
@@ -533,14 +539,15 @@ class GraspEnv(HandEnv):
         self._held = self._held + 1 if lifted else 0
         self._obs[self._hold_index] = min(1.0, self._held / self._hold_steps)
         success = self._held >= self._hold_steps
-        terms = self._terms(lift, penetration, touching, lifted)
-        reward = sum(terms.values())
-
         diverged = any(e.diverged for e in events) if events else False
         fell = float(self._obs_object[2]) < FALL_HEIGHT
         penetrated = penetration > self._pen_limit
-        terminated = diverged or fell or penetrated or (success and self._terminate_on_success)
+        failed = diverged or fell or penetrated
+        terminated = failed or (success and self._terminate_on_success)
         truncated = n >= self._steps and not terminated
+        held_at_end = success and not failed and (terminated or truncated)
+        terms = self._terms(lift, penetration, touching, lifted, held_at_end)
+        reward = sum(terms.values())
         if terminated or truncated:
             self._started = False
         info = {
@@ -559,7 +566,9 @@ class GraspEnv(HandEnv):
             info["warnings"] = tuple(e.describe() for e in events)
         return self._obs.copy(), reward, terminated, truncated, info
 
-    def _terms(self, lift: float, penetration: float, touching: int, lifted: bool) -> dict[str, float]:
+    def _terms(
+        self, lift: float, penetration: float, touching: int, lifted: bool, held_at_end: bool
+    ) -> dict[str, float]:
         """The reward terms, by name, in the order they are summed (see the class)."""
         rel = self._obs_rel
         distance = math.sqrt(float(np.dot(rel, rel)))
@@ -569,6 +578,7 @@ class GraspEnv(HandEnv):
             "reward_lift": self._w_lift * min(max(lift, 0.0), self._lift_height),
             "reward_hold": self._w_hold if lifted else 0.0,
             "reward_penetration": -self._w_pen * penetration,
+            "reward_success": self._w_success if held_at_end else 0.0,
         }
 
     def _object_lift(self) -> float:
