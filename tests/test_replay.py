@@ -9,7 +9,7 @@ from functools import cache
 import numpy as np
 import pytest
 
-from handsim.assets import TZIONAS_DIR
+from handsim.assets import ASSETS_DIR, TZIONAS_DIR
 from handsim.builders import build_hand, build_scene, default_hand
 from handsim.builders.catalog import get, get_graspdb
 from handsim.builders.objects import build_object
@@ -22,10 +22,12 @@ from handsim.io.tzionas_sequence import read_tzionas_sequence
 from handsim.sim.compiled import compile_scene
 from handsim.sim.control import control_schedule
 from handsim.sim.drive import ScenarioSwitches, ScheduleDriver
-from handsim.sim.replay import ReplayConfig, replay
+from handsim.sim.replay import ReplayConfig, member_hold, replay
+from handsim.sim.robustness import ensemble_scenes
 from handsim.sim.scenarios import glove_scene, recorded_scene
 from handsim.sim.stepper import Stepper
 from handsim.sim.warnings import WARNING_NAMES
+from handsim.trials import load_trial
 
 SEQ20 = TZIONAS_DIR / "Models" / "20"
 
@@ -260,3 +262,30 @@ def test_glove_replay_switches_contacts_on_its_own_model_copy_and_leaves_the_sce
     # before contacts act, the fist passes through the ball's place without touching it
     assert not result.frames.hand_contact[: contact + 1, 0].any()
     assert result.frames.penetration[: contact + 1].max() == 0.0  # the sensors follow the contact switch
+
+
+def _member_holds_match_their_whole_replays(scene, trajectory) -> int:
+    """Every ensemble member's hold from its replay up to the window's end equals its whole replay's."""
+    config = ReplayConfig(ensemble=False)
+    schedule = control_schedule(scene, trajectory, config.control_rate)
+    members = ensemble_scenes(scene)
+    lost = 0
+    for label, variant in members:
+        whole = replay(variant, trajectory, config).hold
+        assert member_hold(variant, schedule, config.metrics) == whole, label
+        lost += whole.held is False
+    assert members
+    return lost
+
+
+@pytest.mark.slow
+def test_an_ensemble_member_judged_up_to_the_window_end_is_its_whole_replay_bitwise():
+    loaded = load_trial(ASSETS_DIR / "demo" / "tennis_ball.grasp.json")
+    _member_holds_match_their_whole_replays(loaded.scene, loaded.trajectory)
+
+
+@pytest.mark.slow
+def test_ensemble_members_lost_and_held_are_judged_as_by_their_whole_replays(graspdb_dir):
+    # the mug on the default hand: 6 of 13 members held (tests/test_verdicts.py), so both outcomes occur
+    loaded = load_trial(graspdb_dir / "04_ex01-rad-045-grasp-su03.txt")
+    assert _member_holds_match_their_whole_replays(loaded.scene, loaded.trajectory) > 0

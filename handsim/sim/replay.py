@@ -7,7 +7,7 @@ The gymnasium environments drive the same :class:`~handsim.sim.drive.ScheduleDri
 
 from __future__ import annotations
 
-from dataclasses import asdict, dataclass, field, replace
+from dataclasses import asdict, dataclass, field
 
 import numpy as np
 
@@ -134,12 +134,17 @@ class ReplayResult:
 
 
 def run_schedule(
-    driver: ScheduleDriver,
+    driver: ScheduleDriver, frames: int | None = None
 ) -> tuple[np.ndarray, np.ndarray, list[WarningEvent], WarningEvent | None]:
-    """Step through every frame of the driver's schedule from its current state (frame 0).
+    """Step through the frames of the driver's schedule from its current state (frame 0).
 
     During frame ``k`` (from ``t_k`` to ``t_k+1``) the actuators and the root's mocap target hold the
     references of ``t_k+1``, so the state at ``t_k+1`` is compared with what it was driven towards.
+
+    Args:
+        driver: The driver, at frame 0.
+        frames: Simulate only the first ``frames`` frames (at least 1; the simulation is causal, so these
+            rows are bitwise those of the whole run); None: every frame of the schedule.
 
     Returns:
         qpos and sensordata at each frame time (rows up to the divergence when there is one), the
@@ -147,7 +152,7 @@ def run_schedule(
     """
     model, data = driver.stepper.model, driver.stepper.data
     schedule = driver.schedule
-    n = schedule.frames
+    n = schedule.frames if frames is None else max(1, min(int(frames), schedule.frames))
     qpos = np.empty((n, model.nq))
     sensors = np.empty((n, model.nsensordata))
     qpos[0], sensors[0] = data.qpos, data.sensordata
@@ -212,8 +217,7 @@ def replay(scene: SimScene, trajectory: Trajectory, config: ReplayConfig | None 
             drop_mm=hold.drop * 1000.0,
         )
         if config.ensemble and hold.judged:
-            quiet = replace(config, ensemble=False, keep_states=False, stability_at=None)
-            robustness = hold_robustness(scene, hold, lambda variant: replay(variant, trajectory, quiet).hold)
+            robustness = hold_robustness(scene, hold, lambda variant: member_hold(variant, schedule, spec))
             release_stability = _release_stability(scene, schedule, qpos, release, spec)
         summary.update(_closure(setup.placement))
         summary.update(
@@ -299,6 +303,37 @@ def _hold(
         )
     obj = scene.layout.objects[0]
     return hold_outcome(frames, qpos[:, obj.free_qpos + 2], released, window, spec)
+
+
+def member_hold(scene: SimScene, schedule: ControlSchedule, spec: MetricSpec) -> HoldOutcome | None:
+    """The hold outcome of a robustness-ensemble member: its replay up to the hold window's end only.
+
+    A member's verdict (held, and why not) reads its frames up to the hold window's end and no later
+    (:func:`~handsim.sim.summary.hold_outcome`), and the simulation is causal: so the frames after the
+    window, which the member's :func:`replay` would also simulate, are not simulated. The outcome is
+    bitwise the one of ``replay(scene, trajectory).hold`` (pinned in ``tests/test_replay.py``).
+
+    Args:
+        scene: The member's scene (:func:`handsim.sim.robustness.ensemble_scenes`).
+        schedule: The control schedule of the trajectory on the ensemble's scenes (one for all members: they
+            differ only in the object's starting pose and contact time, not in the hand or the frames).
+        spec: The replay's metric parameters.
+
+    Returns:
+        The hold outcome, or None when the scene has no hold to judge (no release, window or object).
+    """
+    switches = scenario_switches(scene, schedule, spec.release_delay)
+    window = scene.setup.hold_window
+    if switches.release_frame < 0 or window is None or not scene.layout.objects:
+        return None
+    last = int(np.searchsorted(schedule.times, window[1] + 1e-9))  # frames up to the window's end
+    driver = ScheduleDriver(
+        Stepper(scene, schedule.substeps, own_model=switches.contact_frame > 0), schedule, switches
+    )
+    driver.reset()
+    qpos, sensors, _, _ = run_schedule(driver, frames=last)
+    frames = frame_metrics(scene, schedule, qpos, sensors)
+    return _hold(scene, schedule, frames, qpos, switches.release_frame, spec)
 
 
 def _release_stability(
