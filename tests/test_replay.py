@@ -289,3 +289,13 @@ def test_ensemble_members_lost_and_held_are_judged_as_by_their_whole_replays(gra
     # the mug on the default hand: 6 of 13 members held (tests/test_verdicts.py), so both outcomes occur
     loaded = load_trial(graspdb_dir / "04_ex01-rad-045-grasp-su03.txt")
     assert _member_holds_match_their_whole_replays(loaded.scene, loaded.trajectory) > 0
+
+
+@pytest.mark.slow
+def test_the_ensemble_on_threads_judges_as_on_one_thread(graspdb_dir, monkeypatch):
+    loaded = load_trial(graspdb_dir / "04_ex01-rad-045-grasp-su03.txt")
+    robustness = {}
+    for threads in ("1", "2"):
+        monkeypatch.setenv("HANDSIM_THREADS", threads)
+        robustness[threads] = replay(loaded.scene, loaded.trajectory).robustness
+    assert robustness["1"] == robustness["2"] and 0 < robustness["1"].held < robustness["1"].judged

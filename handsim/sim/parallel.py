@@ -5,7 +5,8 @@ read-only ``MjModel``) use every core without copying the model or spawning proc
 
 Used where one result needs several runs that do not depend on each other: the stability test's seven
 gravity runs (:func:`handsim.sim.stability.stability_test`, hence every grip test of the glove placement
-search and the replay's robustness ensemble) and the placement search's fit-frame collision queries
+search and the replay's test at the release), the replays of the robustness ensemble's members
+(:func:`handsim.sim.robustness.hold_robustness`) and the placement search's fit-frame collision queries
 (:class:`handsim.sim.placement_search.PlacementSearch`). Each run computes exactly what it computes alone,
 in the same order of floating-point operations, so results are bit-for-bit those of running them one
 after the other; only the wall time changes.

@@ -15,6 +15,7 @@ from dataclasses import dataclass, replace
 
 from handsim.sim.compiled import SimScene
 from handsim.sim.grip import object_pose_variant
+from handsim.sim.parallel import map_runs
 from handsim.sim.summary import HoldOutcome
 
 
@@ -82,14 +83,18 @@ def hold_robustness(
     Args:
         scene: The glove scene (its winner already replayed).
         winner: The winner's hold outcome.
-        judge: Replays a member's scene and returns its hold outcome (None when it has none).
+        judge: Replays a member's scene and returns its hold outcome (None when it has none); called for
+            the members on :func:`~handsim.sim.parallel.sim_threads` threads, so it must keep its state
+            (``MjData``) to itself.
 
     Returns:
         The robustness (``fraction`` None when no member was judged).
     """
     members = [EnsembleMember("placement", winner.held, winner.reason)]
-    for label, variant in ensemble_scenes(scene):
-        outcome = judge(variant)
+    variants = ensemble_scenes(scene)
+    # independent replays, each on its own data: on threads (handsim.sim.parallel), results in order
+    outcomes = map_runs(judge, [variant for _, variant in variants])
+    for (label, _), outcome in zip(variants, outcomes, strict=True):
         held = None if outcome is None else outcome.held
         members.append(EnsembleMember(label, held, None if outcome is None else outcome.reason))
     judged = [m for m in members if m.held is not None]
