@@ -216,6 +216,26 @@ def test_render_states_raises_error_listing_the_cameras_for_an_unknown_one():
         next(render_states(scene, states[:, :3]))
 
 
+def test_render_states_without_multisampling_renders_the_same_scene_and_leaves_the_model_alone():
+    import numpy as np
+
+    from handsim.builders import build_scene, default_hand
+    from handsim.sim.compiled import compile_scene
+    from handsim.viz.render import render_states
+
+    scene = compile_scene(build_scene(default_hand()))
+    samples = int(scene.model.vis.quality.offsamples)
+    assert samples > 0
+    states = np.tile(scene.model.qpos0, (1, 1))
+    smooth = next(render_states(scene, states, camera="track", width=160, height=120))
+    jagged = next(render_states(scene, states, camera="track", width=160, height=120, multisample=False))
+    assert scene.model.vis.quality.offsamples == samples
+    assert smooth.shape == jagged.shape == (120, 160, 3)
+    differs = np.abs(smooth.astype(int) - jagged.astype(int)).max(axis=2) > 0
+    # the same picture: only edge pixels differ (anti-aliasing), never the image as a whole
+    assert 0 < differs.mean() < 0.2
+
+
 def test_a_diverging_replay_prints_the_divergence_and_exits_3(capsys, monkeypatch):
     from dataclasses import replace
 

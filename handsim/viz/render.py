@@ -19,6 +19,7 @@ from __future__ import annotations
 
 import contextlib
 import os
+import threading
 from collections.abc import Iterator
 from dataclasses import dataclass
 from fractions import Fraction
@@ -40,6 +41,7 @@ VIDEO_FORMATS = {
     ".mp4": 'H.264 video (PyAV: pip install "handsim[video]")',
     ".gif": "animated GIF (Pillow)",
 }
+_SAMPLES_LOCK = threading.Lock()  # a model's offsamples is 0 only while a renderer is made
 _TRACK_DISTANCE = 0.45  # m
 _TRACK_AZIMUTH = 135.0  # degrees
 _TRACK_ELEVATION = -25.0  # degrees
@@ -105,8 +107,21 @@ def _camera(scene: SimScene, camera: str) -> str | mujoco.MjvCamera:
     return camera
 
 
-def _renderer(scene: SimScene, width: int, height: int) -> mujoco.Renderer:
-    return offscreen_renderer(scene.model, width, height)
+def _renderer(scene: SimScene, width: int, height: int, multisample: bool) -> mujoco.Renderer:
+    """The offscreen renderer; without ``multisample`` its context has no multisampled buffer.
+
+    MuJoCo reads ``vis.quality.offsamples`` when it makes the context: it is 0 for that moment only.
+    """
+    model = scene.model
+    samples = int(model.vis.quality.offsamples)
+    if multisample or samples == 0:
+        return offscreen_renderer(model, width, height)
+    with _SAMPLES_LOCK:
+        model.vis.quality.offsamples = 0
+        try:
+            return offscreen_renderer(model, width, height)
+        finally:
+            model.vis.quality.offsamples = samples
 
 
 def render_states(
@@ -118,6 +133,7 @@ def render_states(
     height: int = 480,
     stride: int = 1,
     shadows: bool = True,
+    multisample: bool = True,
 ) -> Iterator[np.ndarray]:
     """Render replay states, one image per ``stride``-th state.
 
@@ -129,6 +145,8 @@ def render_states(
         height: Image height, pixels (at most 960).
         stride: Render states 0, stride, 2 · stride …
         shadows: Cast shadows (3–4× slower with software OpenGL).
+        multisample: Anti-alias edges with the model's multisampling (``vis.quality.offsamples``); off,
+            software OpenGL renders about 1.7× as fast, with jagged edges.
 
     Yields:
         RGB images (height, width, 3), uint8.
@@ -144,7 +162,7 @@ def render_states(
         raise ValueError(f"stride must be ≥ 1, got {stride}")
     cam = _camera(scene, camera)
     data = mujoco.MjData(model)
-    renderer = _renderer(scene, width, height)
+    renderer = _renderer(scene, width, height, multisample)
     renderer.scene.flags[mujoco.mjtRndFlag.mjRND_SHADOW] = shadows
     try:
         for q in qpos[::stride]:
