@@ -14,7 +14,8 @@ the glove's resolution), and every timed run starts with no placement cache (the
 pays its own placement search, as in a first run over GraspDB14.
 
 Each run is a fresh process (imports and in-memory caches cold, as for a user's command), timed from
-its start to the last record. Printed, per worker count: wall time, trials per minute and the scaling
+its start to the last record, with each trial on one thread (``HANDSIM_THREADS=1``, as in a pool worker:
+the 1-worker run is one core's throughput). Printed, per worker count: wall time, trials per minute and the scaling
 2 vs 1 worker; then the per-trial time split from the records (load = read + build + compile + glove
 placement search; replay; render) and the runner's own overhead: wall ÷ trials (1 worker) minus the
 mean time spent inside the trial function (imports, process start, record writing, progress).
@@ -49,6 +50,7 @@ from pathlib import Path
 
 from handsim.assets import TZIONAS_DIR
 from handsim.runner.records import load_records
+from handsim.sim.parallel import THREADS_ENV
 from handsim.trials import discover
 
 SHARED = Path(__file__).resolve().parents[1].parent / "shared" / "data" / "graspdb14"
@@ -103,12 +105,19 @@ print(time.perf_counter() - start)
 
 
 def run(dataset: Path, out: Path, workers: int, frames: int) -> tuple[float, list[dict]]:
-    """One dataset run in a fresh process (imports and in-memory caches cold for every worker count)."""
+    """One dataset run in a fresh process (imports and in-memory caches cold for every worker count).
+
+    Every trial runs on one thread (``HANDSIM_THREADS=1``), as in the pool's worker processes: with one
+    worker the trials run in this fresh process, which would otherwise spread a trial's independent
+    simulation runs (the ensemble, the stability tests) over every core, and the 2-vs-1-worker scaling
+    would compare two cores with two cores.
+    """
     done = subprocess.run(
         [sys.executable, "-c", _RUN, str(dataset), str(out), str(workers), str(frames)],
         check=True,
         capture_output=True,
         text=True,
+        env={**os.environ, THREADS_ENV: "1"},
     )
     return float(done.stdout.split()[-1]), load_records(out).records
 
