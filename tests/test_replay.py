@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import copy
 import pickle
 from dataclasses import fields, replace
 from functools import cache
@@ -299,3 +300,15 @@ def test_the_ensemble_on_threads_judges_as_on_one_thread(graspdb_dir, monkeypatc
         monkeypatch.setenv("HANDSIM_THREADS", threads)
         robustness[threads] = replay(loaded.scene, loaded.trajectory).robustness
     assert robustness["1"] == robustness["2"] and 0 < robustness["1"].held < robustness["1"].judged
+
+
+def test_the_model_hash_is_the_compiled_models_same_spec_same_hash_any_change_another():
+    from handsim.sim.compiled import model_digest
+
+    spec = build_scene(default_hand(), build_object(get("tennis_ball")))
+    first, again = compile_scene(spec), compile_scene(spec)
+    assert first.model_sha256 == again.model_sha256 == model_digest(again.model)
+    assert len(first.model_sha256) == 64
+    changed = copy.deepcopy(again.model)
+    changed.geom_friction[0, 0] += 1e-9  # one number the simulation reads
+    assert model_digest(changed) != first.model_sha256

