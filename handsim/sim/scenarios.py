@@ -285,7 +285,7 @@ def glove_scene(
     """
     spec = spec or MetricSpec()
     grasp = grasp or grasp_frame(trajectory)
-    probe = compile_scene(build_scene(hand, obj, table=False))
+    probe = compile_scene(build_scene(hand, table=False))  # the hand alone: its frame needs no object
     quat = hand_frame(probe)
     search = compile_scene(
         build_scene(hand, obj, hand_quat=quat, hand_pos=(0.0, 0.0, 0.0), table=False, object_support=True)
