@@ -15,10 +15,11 @@ pays its own placement search, as in a first run over GraspDB14.
 
 Each run is a fresh process (imports and in-memory caches cold, as for a user's command), timed from
 its start to the last record, with each trial on one thread (``HANDSIM_THREADS=1``, as in a pool worker:
-the 1-worker run is one core's throughput). Printed, per worker count: wall time, trials per minute and the scaling
-2 vs 1 worker; then the per-trial time split from the records (load = read + build + compile + glove
-placement search; replay; render) and the runner's own overhead: wall ÷ trials (1 worker) minus the
-mean time spent inside the trial function (imports, process start, record writing, progress).
+the 1-worker run is one core's throughput). Printed, per worker count: wall time, trials per minute and
+the scaling 2 vs 1 worker; then the per-trial time split from the records (load = read + build +
+compile + glove placement search; replay; render) and the runner's own overhead: wall ÷ trials (1
+worker) minus the mean time spent inside the trial function (imports, process start, record writing,
+progress).
 ``mj_step``'s share of ``replay()`` is measured in the same run on one trial (a raw ``mj_step`` loop with
 the same inputs).
 
