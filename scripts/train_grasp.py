@@ -280,6 +280,19 @@ def policy_kwargs(args: argparse.Namespace) -> dict:
     return kwargs
 
 
+def linear_decay(rate: float):
+    """SB3's learning-rate schedule falling linearly from ``rate`` to 0 over ``--timesteps``.
+
+    ``model.learn``'s ``progress_remaining`` goes from 1 to 0 over its total, so that the last policy
+    settles; by steps, not time, so that a run is the same whatever the machine's speed.
+    """
+
+    def schedule(progress_remaining: float) -> float:
+        return rate * progress_remaining
+
+    return schedule
+
+
 def validation_score(record: dict) -> tuple:
     """Order of the validation records: passing first, then episodes held, then return."""
     return (passes(record), record["held"], record["return"])
@@ -307,6 +320,8 @@ def train_seed(args: argparse.Namespace, seed: int) -> dict:
     kwargs["n_steps"] = min(kwargs["n_steps"], max(64, args.timesteps // N_ENVS))
     kwargs["batch_size"] = min(kwargs["batch_size"], kwargs["n_steps"] * N_ENVS)
     venv = make_vec_env(env_kwargs, N_ENVS, seed, env_class=GraspEnv, gamma=kwargs["gamma"])
+    if args.lr_decay:
+        kwargs["learning_rate"] = linear_decay(kwargs["learning_rate"])
     model = PPO(
         "MlpPolicy", venv, seed=seed, verbose=0, device="cpu", policy_kwargs=policy_kwargs(args), **kwargs
     )
@@ -428,6 +443,11 @@ def main(argv: list[str] | None = None) -> dict:
     parser.add_argument("--log-std", type=float, default=None, help="the policy's initial log std")
     parser.add_argument("--sde", action="store_true", help="PPO with state-dependent exploration (gSDE)")
     parser.add_argument(
+        "--lr-decay",
+        action="store_true",
+        help="learning rate falling linearly to 0 over --timesteps (set it to what --minutes reaches)",
+    )
+    parser.add_argument(
         "--script-noise",
         type=float,
         nargs="+",
@@ -456,6 +476,7 @@ def main(argv: list[str] | None = None) -> dict:
         "policy": policy_kwargs(args),
         "demo": args.demo,
         "critic_warmup": args.critic_warmup,
+        "lr_decay_timesteps": args.timesteps if args.lr_decay else None,
         "n_envs": N_ENVS,
         "zero_action": evaluate(env_kwargs),
         "seeds": seeds,

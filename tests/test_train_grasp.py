@@ -143,3 +143,18 @@ def test_the_success_reward_is_paid_once_at_the_end_of_a_held_episode(script):
 def test_a_negative_success_weight_is_refused(script):
     with pytest.raises(ValueError, match="success_weight"):
         script.GraspEnv(success_weight=-1.0)
+
+
+@pytest.mark.slow
+def test_the_learning_rate_decays_to_zero_over_the_timesteps_by_steps(script):
+    from stable_baselines3 import PPO
+
+    schedule = script.linear_decay(1e-4)
+    assert schedule(1.0) == 1e-4 and schedule(0.25) == pytest.approx(2.5e-5) and schedule(0.0) == 0.0
+    venv = script.make_vec_env({"hand_action": "fingers"}, 2, 0, env_class=script.GraspEnv, gamma=0.99)
+    model = PPO("MlpPolicy", venv, n_steps=64, batch_size=64, n_epochs=1, seed=0, device="cpu",
+                learning_rate=schedule)  # fmt: skip
+    rates = []
+    model.learn(256, callback=lambda *_: rates.append(model.policy.optimizer.param_groups[0]["lr"]) or True)
+    assert model.policy.optimizer.param_groups[0]["lr"] == 0.0  # the last update at progress 0
+    assert rates[0] == pytest.approx(1e-4)
