@@ -122,7 +122,8 @@ def test_the_success_reward_is_paid_once_at_the_end_of_a_held_episode(script):
     """``success_weight``: the scripted grasp, held to the end, earns it on its last step only; the same
     episode without it differs by exactly that reward; the open hand never earns it."""
     kwargs = {**script.ENV_KWARGS, "max_penetration": None}
-    paid, plain = script.GraspEnv(**kwargs, success_weight=7.0), script.GraspEnv(**kwargs)
+    paid = script.GraspEnv(**{**kwargs, "success_weight": 7.0})
+    plain = script.GraspEnv(**{**kwargs, "success_weight": 0.0})
     act = script.scripted_policy(paid)
     paid.reset(seed=script.EVAL_SEED), plain.reset(seed=script.EVAL_SEED)
     for step in range(paid.max_steps):
