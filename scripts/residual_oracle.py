@@ -62,6 +62,8 @@ class Planner:
         joint_weight: Weight of the joint error in the cost.
         joint_sigma: Joint error scale of the cost, rad.
         seed: Seed of the perturbations.
+        iterations: Rounds of sampling per frame, each around the best sequence of the round before with
+            half its spread (the cross-entropy method's narrowing; 1: plain predictive sampling).
     """
 
     def __init__(
@@ -75,6 +77,7 @@ class Planner:
         joint_weight: float,
         joint_sigma: float,
         seed: int,
+        iterations: int = 1,
     ) -> None:
         self.env, self.task = env, env.task
         self.driver = self.task.driver
@@ -86,6 +89,7 @@ class Planner:
         self.dof_qpos = layout.dof_qpos
         self.ref_ctrl = self.task.ref_ctrl
         self.samples, self.horizon, self.knot, self.sigma = samples, horizon, knot, sigma
+        self.iterations = iterations
         self.joint_scale = joint_weight / joint_sigma**2
         self.knots = math.ceil(horizon / knot) + 1
         self.rng = np.random.default_rng(seed)
@@ -121,11 +125,14 @@ class Planner:
         """The residual to apply at ``frame`` (the simulation is left at ``frame``'s state)."""
         model, data = self.model, self.data
         mujoco.mj_getState(model, data, self._state, _STATE)
-        candidates = [self.nominal]
-        noise = self.rng.normal(0.0, self.sigma, (self.samples - 1, *self.nominal.shape))
-        candidates += [np.clip(self.nominal + n, -1.0, 1.0) for n in noise]
-        costs = [self._cost(self._sequence(c), frame, last) for c in candidates]
-        best = candidates[int(np.argmin(costs))]
+        best, sigma = self.nominal, self.sigma
+        for _ in range(self.iterations):
+            candidates = [best]
+            noise = self.rng.normal(0.0, sigma, (self.samples - 1, *best.shape))
+            candidates += [np.clip(best + n, -1.0, 1.0) for n in noise]
+            costs = [self._cost(self._sequence(c), frame, last) for c in candidates]
+            best = candidates[int(np.argmin(costs))]
+            sigma /= 2
         mujoco.mj_setState(model, data, self._state, _STATE)
         self.driver.frame = frame
         action = self._sequence(best)[0]
@@ -149,6 +156,7 @@ def run_plan(args: argparse.Namespace, env_kwargs: dict) -> tuple[np.ndarray, fl
         joint_weight=args.joint_weight,
         joint_sigma=args.joint_sigma,
         seed=args.seed,
+        iterations=args.iterations,
     )
     last = env.schedule.frames - 1 if args.frames is None else min(args.frames, env.schedule.frames - 1)
     before = np.load(args.prefix) if args.prefix is not None else np.zeros((0, env.action_space.shape[0]))
@@ -189,6 +197,7 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--joint-weight", type=float, default=0.25, help="weight of the joint error")
     parser.add_argument("--joint-sigma", type=float, default=0.02, help="joint error scale, rad")
     parser.add_argument("--seed", type=int, default=0)
+    parser.add_argument("--iterations", type=int, default=1, help="sampling rounds per frame, spread halved")
     parser.add_argument("--frames", type=int, default=None, help="plan only the first N frames")
     parser.add_argument(
         "--prefix", type=Path, default=None, help="actions.npy of an earlier plan, applied up to --plan-from"
@@ -206,7 +215,8 @@ def main(argv: list[str] | None = None) -> int:
     replay = evaluate(env_kwargs)
     if args.frames is not None:  # a smoke run: the rest of the recording runs at zero residual
         planned["planned_frames"] = len(actions)
-    settings = {k: getattr(args, k) for k in ("samples", "horizon", "knot", "sigma", "joint_weight", "seed")}
+    names = ("samples", "horizon", "knot", "sigma", "joint_weight", "seed", "iterations")
+    settings = {k: getattr(args, k) for k in names}
     settings.update(
         joint_sigma=args.joint_sigma,
         prefix=None if args.prefix is None else str(args.prefix),

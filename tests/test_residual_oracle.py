@@ -21,7 +21,15 @@ def _script():
 
 def _planner(module, env, **overrides):
     kwargs = dict(
-        samples=4, horizon=6, knot=3, sigma=0.3, joint_weight=0.25, joint_sigma=0.02, seed=0, **overrides
+        samples=4,
+        horizon=6,
+        knot=3,
+        sigma=0.3,
+        joint_weight=0.25,
+        joint_sigma=0.02,
+        seed=0,
+        iterations=2,
+        **overrides,
     )
     return module.Planner(env, **kwargs)
 
