@@ -191,10 +191,8 @@ def replay(scene: SimScene, trajectory: Trajectory, config: ReplayConfig | None 
     config = config or ReplayConfig()
     spec = config.metrics
     schedule = control_schedule(scene, trajectory, config.control_rate)
-    switches = scenario_switches(scene, schedule, spec.release_delay)
-    stepper = Stepper(scene, schedule.substeps, own_model=switches.contact_frame > 0)
-    driver = ScheduleDriver(stepper, schedule, switches)
-    driver.reset()
+    driver = _driver_at_start(scene, schedule, spec.release_delay)
+    switches = driver.switches
     setup = scene.setup
     release = switches.release_frame
     qpos, sensors, warnings, diverged = run_schedule(driver)
@@ -207,7 +205,7 @@ def replay(scene: SimScene, trajectory: Trajectory, config: ReplayConfig | None 
     flags = replay_flags(scene, trajectory, schedule, switches, frames)
     summary["valid"] = is_valid(flags)
     hold = robustness = release_stability = None
-    if release >= 0 and setup.hold_window is not None and scene.layout.objects:
+    if _judges_hold(scene, release):
         hold = _hold(scene, schedule, frames, qpos, release, spec)
         summary.update(
             held=hold.held,
@@ -322,18 +320,29 @@ def member_hold(scene: SimScene, schedule: ControlSchedule, spec: MetricSpec) ->
     Returns:
         The hold outcome, or None when the scene has no hold to judge (no release, window or object).
     """
-    switches = scenario_switches(scene, schedule, spec.release_delay)
-    window = scene.setup.hold_window
-    if switches.release_frame < 0 or window is None or not scene.layout.objects:
+    driver = _driver_at_start(scene, schedule, spec.release_delay)
+    release = driver.switches.release_frame
+    if not _judges_hold(scene, release):
         return None
-    last = int(np.searchsorted(schedule.times, window[1] + 1e-9))  # frames up to the window's end
-    driver = ScheduleDriver(
-        Stepper(scene, schedule.substeps, own_model=switches.contact_frame > 0), schedule, switches
-    )
-    driver.reset()
+    window_end = scene.setup.hold_window[1]
+    last = int(np.searchsorted(schedule.times, window_end + 1e-9))  # frames up to the window's end
     qpos, sensors, _, _ = run_schedule(driver, frames=last)
     frames = frame_metrics(scene, schedule, qpos, sensors)
-    return _hold(scene, schedule, frames, qpos, switches.release_frame, spec)
+    return _hold(scene, schedule, frames, qpos, release, spec)
+
+
+def _driver_at_start(scene: SimScene, schedule: ControlSchedule, release_delay: float) -> ScheduleDriver:
+    """A driver of the scene's scenario on a fresh stepper (a private model when contacts switch), reset."""
+    switches = scenario_switches(scene, schedule, release_delay)
+    stepper = Stepper(scene, schedule.substeps, own_model=switches.contact_frame > 0)
+    driver = ScheduleDriver(stepper, schedule, switches)
+    driver.reset()
+    return driver
+
+
+def _judges_hold(scene: SimScene, release_frame: int) -> bool:
+    """Whether a replay of the scene judges holding: a release, a hold window and an object."""
+    return release_frame >= 0 and scene.setup.hold_window is not None and bool(scene.layout.objects)
 
 
 def _release_stability(
