@@ -26,10 +26,13 @@ from scipy.spatial import ConvexHull, QhullError
 
 from handsim.datatypes.rotations import quat_to_matrix
 from handsim.sim.compiled import SimScene
+from handsim.sim.hand_samples import HandSamples, hand_samples
+from handsim.sim.object_field import FIELD_REACH, ObjectField, object_field
 
 _HAND_BIT, _OBJECT_BIT = 2, 2
 _NO_LINKS, _NO_DISTANCES = np.zeros(0, dtype=np.int64), np.zeros(0)
 _CHUNK = 4096  # poses per vectorised bound evaluation (memory: chunk × object balls × hand geoms × 3)
+_CLEAR_SLACK = 1e-5  # m: a pose is clear only this much beyond the margin (GJK's distance tolerance)
 UNDECIDED, CLEAR, DEEP = 0, 1, 2
 """What :meth:`HandObjectCollider.screen` says of a pose: run the query; no link within the touch distance;
 deeper than the given depth."""
@@ -83,7 +86,11 @@ class HandObjectCollider:
         self._hand_geoms = np.flatnonzero(is_hand)
         self._obj_geoms = np.flatnonzero(self.is_obj)
         self._cores = [_core(model, g) for g in self._hand_geoms]
+        self._samples: HandSamples | None = None
+        self._samples_step = 0.0
         self._balls = [_core(model, g) for g in self._obj_geoms]
+        self._field: ObjectField | None = None
+        self._field_made = False
 
     def fork(self) -> HandObjectCollider:
         """A collider on the same model with a data of its own, at this one's posture (for another thread)."""
@@ -189,6 +196,8 @@ class HandObjectCollider:
         o_pos = data.geom_xpos[objs] @ rot.T
         o_rb = model.geom_rbound[objs] + model.geom_margin[objs]
         o_frames = [(data.geom_xpos[g].copy(), data.geom_xmat[g].reshape(3, 3).copy()) for g in objs]
+        if not self._field_made:  # the object's own distance bounds, from its frames at the identity pose
+            self._field, self._field_made = object_field(model, data, objs, FIELD_REACH), True
         data.qpos[a : a + 7] = pose
         mujoco.mj_kinematics(model, data)
         # clear: every pair of bounding spheres apart (squared distances as one matrix product per chunk)
@@ -223,7 +232,52 @@ class HandObjectCollider:
                 depth = rad_k[k] - np.linalg.norm(rel - t[:, None] * dir_k[k], axis=1)
                 chunk = overlap[first : first + _CHUNK]
                 np.maximum.at(chunk, n, depth)
+        if self._field is not None:  # only where the spheres and balls left the query open
+            settled = clear | (overlap > floor) if np.isfinite(floor) else clear
+            open_ = np.flatnonzero(~settled)
+            if open_.size:
+                sub_clear, sub_overlap = clear[open_], overlap[open_]
+                self._field_bounds(np.asarray(positions)[open_], rot, sub_clear, sub_overlap)
+                clear[open_], overlap[open_] = sub_clear, sub_overlap
         return clear, overlap
+
+    def _field_bounds(
+        self, positions: np.ndarray, rot: np.ndarray, clear: np.ndarray, overlap: np.ndarray
+    ) -> None:
+        """Tighten ``clear`` and ``overlap`` (in place) by the object's distance field (:mod:`.object_field`).
+
+        A hand geom whose bounding sphere lies farther from the object than its radius plus both margins
+        touches nothing; for the others, a ball inside the geom goes at least its radius minus the signed
+        distance of its centre into the object, and the geom touches nothing when its covering balls all lie
+        farther from the object than their radii plus the margins (:mod:`handsim.sim.hand_samples`).
+        """
+        field = self._field
+        assert field is not None
+        if self._samples is None or self._samples_step != field.spacing:
+            self._samples, self._samples_step = (
+                hand_samples(self.model, self._hand_geoms, field.spacing),
+                field.spacing,
+            )
+        samples, model, data = self._samples, self.model, self.data
+        margin = float(model.geom_margin[self._obj_geoms].max() + model.geom_margin[self._hand_geoms].max())
+        points, inside, reach = samples.world(data), samples.inside, samples.cover + margin + _CLEAR_SLACK
+        centres = data.geom_xpos[self._hand_geoms]
+        sphere_reach = model.geom_rbound[self._hand_geoms] + margin + _CLEAR_SLACK
+        ends = np.searchsorted(samples.geom, self._hand_geoms, side="right")
+        starts = np.searchsorted(samples.geom, self._hand_geoms, side="left")
+        for first in range(0, len(positions), _CHUNK):
+            x = np.asarray(positions[first : first + _CHUNK], dtype=float)
+            _, lower = field.at((centres[None] - x[:, None]) @ rot)
+            near = lower <= sphere_reach  # (n, G): the geom's bounding sphere may reach the object
+            touching = np.zeros(len(x), dtype=bool)
+            deepest = overlap[first : first + _CHUNK]
+            for g in np.flatnonzero(near.any(axis=0)):
+                rows = np.flatnonzero(near[:, g])
+                a, b = starts[g], ends[g]
+                upper, lower_g = field.at((points[a:b][None] - x[rows][:, None]) @ rot)
+                deepest[rows] = np.maximum(deepest[rows], (inside[a:b] - upper).max(axis=1))
+                touching[rows[~(lower_g > reach[a:b]).all(axis=1)]] = True
+            clear[first : first + _CHUNK] |= ~touching
 
 
 def _core(model: mujoco.MjModel, geom: int) -> tuple[np.ndarray, np.ndarray, float]:
