@@ -200,8 +200,7 @@ class HandObjectCollider:
             self._field, self._field_made = object_field(model, data, objs, FIELD_REACH), True
         data.qpos[a : a + 7] = pose
         mujoco.mj_kinematics(model, data)
-        # clear: every pair of bounding spheres apart (squared distances as one matrix product per chunk)
-        centres = (h_pos[None, :, :] - o_pos[:, None, :]).reshape(-1, 3)  # (O·G, 3)
+        centres = (h_pos[None, :, :] - o_pos[:, None, :]).reshape(-1, 3)  # (O·G, 3) sphere pairs, shifted
         reach2 = ((o_rb[:, None] + h_rb[None, :]).reshape(-1) + 1e-6) ** 2
         balls = [(p + m @ c, r) for (p, m), (c, _, r) in zip(o_frames, self._balls, strict=True) if r > 0]
         cores = []
@@ -217,67 +216,90 @@ class HandObjectCollider:
         mid_k = start_k + dir_k / 2
         reach_k = rad_k - floor  # an overlap above the floor needs the segment nearer than this
         cull2 = np.where(reach_k > 0, (reach_k + np.sqrt(len2_k) / 2 + 1e-6) ** 2, -1.0)
-        clear = np.zeros(len(positions), dtype=bool)
+        positions = np.asarray(positions, dtype=float)
+        field = self._field
+        if field is None:  # every pair of bounding spheres apart (squared distances: a matrix product)
+            clear = np.zeros(len(positions), dtype=bool)
+            for first in range(0, len(positions), _CHUNK):
+                x = positions[first : first + _CHUNK]
+                d2 = (
+                    (x * x).sum(axis=1)[:, None]
+                    - 2.0 * (x @ centres.T)
+                    + (centres * centres).sum(axis=1)[None]
+                )
+                clear[first : first + _CHUNK] = (d2 > reach2[None]).all(axis=1)
+        else:  # each hand geom's bounding sphere apart from the object itself
+            near = self._near_geoms(positions, rot)
+            clear = ~near.any(axis=1)
         overlap = np.full(len(positions), -np.inf)
-        for first in range(0, len(positions), _CHUNK):
-            x = np.asarray(positions[first : first + _CHUNK], dtype=float)
-            x2 = (x * x).sum(axis=1)[:, None]
-            d2 = x2 - 2.0 * (x @ centres.T) + (centres * centres).sum(axis=1)[None]
-            clear[first : first + _CHUNK] = (d2 > reach2[None]).all(axis=1)
-            if rad_k.size:
-                near = x2 - 2.0 * (x @ mid_k.T) + (mid_k * mid_k).sum(axis=1)[None] < cull2[None]
-                n, k = np.nonzero(near)
-                rel = x[n] - start_k[k]
-                t = np.clip((rel * dir_k[k]).sum(axis=1) / len2_k[k], 0.0, 1.0)
-                depth = rad_k[k] - np.linalg.norm(rel - t[:, None] * dir_k[k], axis=1)
-                chunk = overlap[first : first + _CHUNK]
-                np.maximum.at(chunk, n, depth)
-        if self._field is not None:  # only where the spheres and balls left the query open
+        open_ = np.flatnonzero(~clear)
+        for first in range(0, len(open_), _CHUNK) if rad_k.size else ():
+            rows = open_[first : first + _CHUNK]
+            x = positions[rows]
+            near_k = (x * x).sum(axis=1)[:, None] - 2.0 * (x @ mid_k.T) + (mid_k * mid_k).sum(axis=1)[None]
+            n, k = np.nonzero(near_k < cull2[None])
+            rel = x[n] - start_k[k]
+            t = np.clip((rel * dir_k[k]).sum(axis=1) / len2_k[k], 0.0, 1.0)
+            depth = rad_k[k] - np.linalg.norm(rel - t[:, None] * dir_k[k], axis=1)
+            deepest = np.full(len(rows), -np.inf)
+            np.maximum.at(deepest, n, depth)
+            overlap[rows] = deepest
+        if field is not None:  # the poses the balls left open: the points of the geoms that may touch
             settled = clear | (overlap > floor) if np.isfinite(floor) else clear
-            open_ = np.flatnonzero(~settled)
-            if open_.size:
-                sub_clear, sub_overlap = clear[open_], overlap[open_]
-                self._field_bounds(np.asarray(positions)[open_], rot, sub_clear, sub_overlap)
-                clear[open_], overlap[open_] = sub_clear, sub_overlap
+            rows = np.flatnonzero(~settled)
+            if rows.size:
+                touching, deepest = self._field_bounds(positions[rows], near[rows], rot)
+                clear[rows] = ~touching
+                overlap[rows] = np.maximum(overlap[rows], deepest)
         return clear, overlap
 
-    def _field_bounds(
-        self, positions: np.ndarray, rot: np.ndarray, clear: np.ndarray, overlap: np.ndarray
-    ) -> None:
-        """Tighten ``clear`` and ``overlap`` (in place) by the object's distance field (:mod:`.object_field`).
-
-        A hand geom whose bounding sphere lies farther from the object than its radius plus both margins
-        touches nothing; for the others, a ball inside the geom goes at least its radius minus the signed
-        distance of its centre into the object, and the geom touches nothing when its covering balls all lie
-        farther from the object than their radii plus the margins (:mod:`handsim.sim.hand_samples`).
-        """
-        field = self._field
+    def _field_inputs(self) -> tuple[ObjectField, HandSamples, float]:
+        """The object's field, the hand's sample balls at its spacing, and the margins of a contact, m."""
+        field, model = self._field, self.model
         assert field is not None
         if self._samples is None or self._samples_step != field.spacing:
-            self._samples, self._samples_step = (
-                hand_samples(self.model, self._hand_geoms, field.spacing),
-                field.spacing,
-            )
-        samples, model, data = self._samples, self.model, self.data
+            self._samples = hand_samples(model, self._hand_geoms, field.spacing)
+            self._samples_step = field.spacing
         margin = float(model.geom_margin[self._obj_geoms].max() + model.geom_margin[self._hand_geoms].max())
-        points, inside, reach = samples.world(data), samples.inside, samples.cover + margin + _CLEAR_SLACK
-        centres = data.geom_xpos[self._hand_geoms]
-        sphere_reach = model.geom_rbound[self._hand_geoms] + margin + _CLEAR_SLACK
-        ends = np.searchsorted(samples.geom, self._hand_geoms, side="right")
-        starts = np.searchsorted(samples.geom, self._hand_geoms, side="left")
+        return field, self._samples, margin + _CLEAR_SLACK
+
+    def _near_geoms(self, positions: np.ndarray, rot: np.ndarray) -> np.ndarray:
+        """(N, G): whether a hand geom's bounding sphere may come within the margins of the object."""
+        field, _, margin = self._field_inputs()
+        centres = self.data.geom_xpos[self._hand_geoms]
+        reach = self.model.geom_rbound[self._hand_geoms] + margin
+        near = np.empty((len(positions), len(centres)), dtype=bool)
         for first in range(0, len(positions), _CHUNK):
-            x = np.asarray(positions[first : first + _CHUNK], dtype=float)
+            x = positions[first : first + _CHUNK]
             _, lower = field.at((centres[None] - x[:, None]) @ rot)
-            near = lower <= sphere_reach  # (n, G): the geom's bounding sphere may reach the object
-            touching = np.zeros(len(x), dtype=bool)
-            deepest = overlap[first : first + _CHUNK]
-            for g in np.flatnonzero(near.any(axis=0)):
-                rows = np.flatnonzero(near[:, g])
-                a, b = starts[g], ends[g]
-                upper, lower_g = field.at((points[a:b][None] - x[rows][:, None]) @ rot)
-                deepest[rows] = np.maximum(deepest[rows], (inside[a:b] - upper).max(axis=1))
-                touching[rows[~(lower_g > reach[a:b]).all(axis=1)]] = True
-            clear[first : first + _CHUNK] |= ~touching
+            near[first : first + _CHUNK] = lower <= reach
+        return near
+
+    def _field_bounds(
+        self, positions: np.ndarray, near: np.ndarray, rot: np.ndarray
+    ) -> tuple[np.ndarray, np.ndarray]:
+        """Whether each pose may touch the hand, and a lower bound of its penetration, from the field.
+
+        For each hand geom ``near`` the object (:meth:`_near_geoms`): a ball inside the geom goes at least
+        its radius minus the signed distance of its centre into the object, and the geom touches nothing
+        when its covering balls all lie farther from the object than their radii plus the margins
+        (:mod:`handsim.sim.hand_samples`, :mod:`handsim.sim.object_field`).
+        """
+        field, samples, margin = self._field_inputs()
+        points, inside, reach = samples.world(self.data), samples.inside, samples.cover + margin
+        starts = np.searchsorted(samples.geom, self._hand_geoms, side="left")
+        ends = np.searchsorted(samples.geom, self._hand_geoms, side="right")
+        touching = np.zeros(len(positions), dtype=bool)
+        deepest = np.full(len(positions), -np.inf)
+        for g in np.flatnonzero(near.any(axis=0)):
+            rows = np.flatnonzero(near[:, g])
+            a, b = starts[g], ends[g]
+            for first in range(0, len(rows), _CHUNK):
+                part = rows[first : first + _CHUNK]
+                upper, lower = field.at((points[a:b][None] - positions[part][:, None]) @ rot)
+                deepest[part] = np.maximum(deepest[part], (inside[a:b] - upper).max(axis=1))
+                touching[part[~(lower > reach[a:b]).all(axis=1)]] = True
+        return touching, deepest
 
 
 def _core(model: mujoco.MjModel, geom: int) -> tuple[np.ndarray, np.ndarray, float]:

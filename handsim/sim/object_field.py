@@ -86,16 +86,21 @@ class ObjectField:
         Returns:
             Two arrays of the points' leading shape, m.
         """
-        nx, ny, nz = self.upper.shape
+        shape = np.asarray(self.upper.shape)
         scaled = (points - self.origin) * (1.0 / self.spacing)
         index = np.rint(scaled)
-        np.clip(index, 0, (nx - 1, ny - 1, nz - 1), out=index)
-        offset = (scaled - index) * self.spacing
-        gap = np.sqrt(np.einsum("...i,...i->...", offset, offset))
-        flat = index.astype(np.intp) @ np.array([ny * nz, nz, 1], dtype=np.intp)
-        outside_box = np.maximum(np.maximum(self.low - points, points - self.high), 0.0)
-        beyond = np.sqrt(np.einsum("...i,...i->...", outside_box, outside_box))  # the object lies in its box
-        return self.upper.ravel().take(flat) + gap, np.maximum(self.lower.ravel().take(flat) - gap, beyond)
+        np.minimum(np.maximum(index, 0.0, out=index), shape - 1.0, out=index)
+        offset = scaled - index
+        gap = np.sqrt(np.einsum("...i,...i->...", offset, offset)) * self.spacing
+        flat = (index @ np.array([shape[1] * shape[2], shape[2], 1.0])).astype(np.intp)  # exact: < 2**53
+        upper = self.upper.ravel().take(flat) + gap
+        lower = self.lower.ravel().take(flat) - gap
+        far = np.flatnonzero(gap.ravel() > 0.87 * self.spacing)  # clamped to the grid's border: off the grid
+        if far.size:  # there the distance to the object's box is the tighter bound
+            off = points.reshape(-1, 3)[far]
+            box = np.maximum(np.maximum(self.low - off, off - self.high), 0.0)
+            lower.ravel()[far] = np.maximum(lower.ravel()[far], np.sqrt(np.einsum("ki,ki->k", box, box)))
+        return upper, lower
 
 
 @dataclass(frozen=True)

@@ -35,7 +35,7 @@ MIN_THREAD_QUERIES = 64
 SCREEN_MARGIN = 0.001
 """A pose whose ball bounds (:meth:`HandObjectCollider.screen`) exceed the penetration tolerance by more than
 this is settled as infeasible without a collision query, m: MuJoCo's capsule–mesh depths came out at most
-0.089 mm below the bounds on the 197 000 queries of the shared mug searches (EPA's error), so the margin is
+0.089 mm below the bounds (EPA's error) on the 197 000 queries of the six shared searches, so the margin is
 11× that; the winner does not depend on it (docs/replay.md)."""
 _FINGERS = frozenset({"index", "middle", "ring", "little"})
 
