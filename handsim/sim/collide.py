@@ -174,13 +174,16 @@ class HandObjectCollider:
         Args:
             positions: Object positions (N, 3), m.
             quat: The object's orientation (w, x, y, z) for all of them.
-            floor: Overlaps not above this may be reported as −inf (pairs too far apart are not computed).
+            floor: Overlaps not above this may be reported as −inf (pairs too far apart are not computed);
+                one above it (a finite floor) may be reported as any value above it (the bounds stop looking).
 
         Returns:
-            Per position: whether every object geom's bounding sphere lies farther than the touch distance
-            from every hand geom's (clear); and the largest overlap of a ball inscribed in an object geom
-            with a capsule core inscribed in a hand geom, m (a lower bound of the penetration; −inf without
-            cores).
+            Per position: whether the query would find no link within the touch distance (clear: every
+            object geom's bounding sphere lies farther than the touch distance from every hand geom's, or,
+            with the object's field, every hand geom is shown apart from the object); and a lower bound of
+            the penetration, m: the largest overlap of a ball inscribed in an object geom with a capsule
+            core inscribed in a hand geom, or, with the field, of a ball inside a hand geom with the object
+            (−inf without either).
         """
         model, data = self.model, self.data
         mujoco.mj_kinematics(model, data)
@@ -248,7 +251,7 @@ class HandObjectCollider:
             settled = clear | (overlap > floor) if np.isfinite(floor) else clear
             rows = np.flatnonzero(~settled)
             if rows.size:
-                touching, deepest = self._field_bounds(positions[rows], near[rows], rot)
+                touching, deepest = self._field_bounds(positions[rows], near[rows], rot, floor)
                 clear[rows] = ~touching
                 overlap[rows] = np.maximum(overlap[rows], deepest)
         return clear, overlap
@@ -276,14 +279,15 @@ class HandObjectCollider:
         return near
 
     def _field_bounds(
-        self, positions: np.ndarray, near: np.ndarray, rot: np.ndarray
+        self, positions: np.ndarray, near: np.ndarray, rot: np.ndarray, floor: float
     ) -> tuple[np.ndarray, np.ndarray]:
         """Whether each pose may touch the hand, and a lower bound of its penetration, from the field.
 
-        For each hand geom ``near`` the object (:meth:`_near_geoms`): a ball inside the geom goes at least
-        its radius minus the signed distance of its centre into the object, and the geom touches nothing
-        when its covering balls all lie farther from the object than their radii plus the margins
-        (:mod:`handsim.sim.hand_samples`, :mod:`handsim.sim.object_field`).
+        For each hand geom ``near`` the object (:meth:`_near_geoms`), the geoms with fewer points first: a
+        ball inside the geom goes at least its radius minus the signed distance of its centre into the
+        object, and the geom touches nothing when its covering balls all lie farther from the object than
+        their radii plus the margins (:mod:`handsim.sim.hand_samples`, :mod:`handsim.sim.object_field`). A
+        pose whose bound exceeds ``floor`` is settled (it touches) and its other geoms are not looked at.
         """
         field, samples, margin = self._field_inputs()
         points, inside, reach = samples.world(self.data), samples.inside, samples.cover + margin
@@ -291,15 +295,18 @@ class HandObjectCollider:
         ends = np.searchsorted(samples.geom, self._hand_geoms, side="right")
         touching = np.zeros(len(positions), dtype=bool)
         deepest = np.full(len(positions), -np.inf)
-        for g in np.flatnonzero(near.any(axis=0)):
-            rows = np.flatnonzero(near[:, g])
+        open_ = np.ones(len(positions), dtype=bool)
+        for g in sorted(np.flatnonzero(near.any(axis=0)), key=lambda g: ends[g] - starts[g]):
+            rows = np.flatnonzero(near[:, g] & open_)
             a, b = starts[g], ends[g]
             for first in range(0, len(rows), _CHUNK):
                 part = rows[first : first + _CHUNK]
                 upper, lower = field.at((points[a:b][None] - positions[part][:, None]) @ rot)
                 deepest[part] = np.maximum(deepest[part], (inside[a:b] - upper).max(axis=1))
                 touching[part[~(lower > reach[a:b]).all(axis=1)]] = True
-        return touching, deepest
+            if np.isfinite(floor):
+                open_[rows[deepest[rows] > floor]] = False
+        return touching | ~open_, deepest
 
 
 def _core(model: mujoco.MjModel, geom: int) -> tuple[np.ndarray, np.ndarray, float]:
