@@ -13,6 +13,7 @@ import pytest
 from scipy.spatial import ConvexHull
 from test_placement_cache import _bits, _search_inputs
 
+import handsim.sim.object_field as object_field_module
 from handsim.sim.collide import HandObjectCollider
 from handsim.sim.hand_samples import hand_samples
 from handsim.sim.object_field import object_field
@@ -103,6 +104,23 @@ def test_the_field_is_made_once_per_object_and_not_for_spheres(mug_collider, mon
     (ball_scene, *_), _ = _search_inputs(monkeypatch, tmp_path)  # the demo tennis ball: one sphere
     ball = HandObjectCollider(ball_scene, 0.002)
     assert object_field(ball.model, ball.data, np.flatnonzero(ball.is_obj), 0.01) is None
+
+
+def test_the_field_is_kept_on_disk_bit_for_bit_and_a_corrupt_entry_is_replaced(mug_collider, tmp_path):
+    model, data, geoms = mug_collider.model, mug_collider.data, np.flatnonzero(mug_collider.is_obj)
+    object_field_module._CACHE.clear()
+    made = object_field(model, data, geoms, 0.01, cache_dir=tmp_path)
+    entries = list((tmp_path / "field").rglob("*.pkl"))
+    assert len(entries) == 1
+    object_field_module._CACHE.clear()
+    read = object_field(model, data, geoms, 0.01, cache_dir=tmp_path)
+    assert read is not made and _bits(read) == _bits(made)
+    entries[0].write_bytes(entries[0].read_bytes()[:-10] + b"0123456789")
+    object_field_module._CACHE.clear()
+    again = object_field(model, data, geoms, 0.01, cache_dir=tmp_path)
+    assert _bits(again) == _bits(made)
+    object_field_module._CACHE.clear()
+    assert _bits(object_field(model, data, geoms, 0.01, cache_dir=tmp_path)) == _bits(made)  # replaced
 
 
 def test_hand_balls_lie_inside_their_geoms_and_cover_them(mug_collider):

@@ -19,6 +19,9 @@ A ball of radius ``r`` centred at ``q`` then goes at least ``r − upper[g] − 
 (penetration depth of a ball into a convex part is ``r`` minus the signed distance of its centre), and a
 capsule whose core stays farther than ``r`` plus the touch distance touches nothing.
 
+:func:`object_field` makes a field once per object (about 0.4 s for the 16 convex parts of GraspDB14's mug)
+and keeps it in memory and on disk (``<cache dir>/field/``, entries like the placements').
+
 Only objects made of convex meshes, boxes and spheres get a field (MuJoCo collides a mesh as its vertices'
 convex hull, which is what the planes and surface samples here describe); other geoms give None and the
 collider's sphere bounds apply alone. So does an object of spheres only: a sphere's inscribed ball is its
@@ -32,10 +35,21 @@ import hashlib
 import math
 from collections import OrderedDict
 from dataclasses import dataclass
+from pathlib import Path
 
 import mujoco
 import numpy as np
+import scipy
 from scipy.spatial import ConvexHull, QhullError, cKDTree
+
+from handsim.builders.hull_cache import default_cache_dir
+from handsim.sim.placement_cache import (
+    CorruptEntryError,
+    code_fingerprint,
+    entry_path,
+    read_entry,
+    write_entry,
+)
 
 MAX_NODES = 160_000
 """Grid nodes at most: the spacing grows from :data:`MIN_SPACING` until the padded box holds no more."""
@@ -53,6 +67,9 @@ PAD = 0.02
 """The grid covers the object's box grown by this on every side, m (beyond it bounds still hold, looser)."""
 _CACHE: OrderedDict[str, ObjectField | None] = OrderedDict()
 _CACHE_SIZE = 8
+_SHAPES = frozenset(
+    int(t) for t in (mujoco.mjtGeom.mjGEOM_MESH, mujoco.mjtGeom.mjGEOM_BOX, mujoco.mjtGeom.mjGEOM_SPHERE)
+)
 
 
 @dataclass(frozen=True)
@@ -121,9 +138,20 @@ class _Part:
 
 
 def object_field(
-    model: mujoco.MjModel, data: mujoco.MjData, geoms: np.ndarray, reach: float
+    model: mujoco.MjModel,
+    data: mujoco.MjData,
+    geoms: np.ndarray,
+    reach: float,
+    *,
+    use_cache: bool = True,
+    cache_dir: str | Path | None = None,
 ) -> ObjectField | None:
-    """The field of an object's colliding geoms, computed once per distinct object (kept for reuse).
+    """The field of an object's colliding geoms, computed once per distinct object.
+
+    A field is kept in memory for the process and on disk like the placements
+    (:mod:`handsim.sim.placement_cache`, ``<cache dir>/field/``), keyed by the SHA-256 of the object's
+    geoms (types, sizes, frames, mesh vertices), the field's parameters, the MuJoCo, NumPy and SciPy
+    versions and handsim's source files; an entry that cannot be trusted is recomputed and replaced.
 
     Args:
         model: The model holding the object.
@@ -132,6 +160,8 @@ def object_field(
         geoms: The object's colliding geom ids.
         reach: Outside the parts, signed-distance upper bounds are kept only within this distance of the
             object (+inf beyond), m: farther points cannot decide a query.
+        use_cache: Read and write the disk cache (the in-memory one is always used).
+        cache_dir: Root of the disk cache; :func:`handsim.builders.hull_cache.default_cache_dir` when None.
 
     Returns:
         The field, or None when a geom is neither a mesh, a box nor a sphere, a part is degenerate, or every
@@ -139,20 +169,50 @@ def object_field(
     """
     frames = [(data.geom_xpos[g].copy(), data.geom_xmat[g].reshape(3, 3).copy()) for g in geoms]
     key = _key(model, geoms, frames, reach)
-    if key in _CACHE:
-        _CACHE.move_to_end(key)
-        return _CACHE[key]
+    if key not in _CACHE:
+        _CACHE[key] = _stored_or_made(model, geoms, frames, reach, key, use_cache, cache_dir)
+        if len(_CACHE) > _CACHE_SIZE:
+            _CACHE.popitem(last=False)
+    _CACHE.move_to_end(key)
+    return _CACHE[key]
+
+
+def _stored_or_made(
+    model: mujoco.MjModel,
+    geoms: np.ndarray,
+    frames: list,
+    reach: float,
+    key: str,
+    use_cache: bool,
+    cache_dir: str | Path | None,
+) -> ObjectField | None:
+    kinds = {int(model.geom_type[g]) for g in geoms}
+    if not kinds or not kinds <= _SHAPES or kinds == {int(mujoco.mjtGeom.mjGEOM_SPHERE)}:
+        return None
+    path = entry_path(cache_dir if cache_dir is not None else default_cache_dir(), key, "field")
+    if use_cache and path.is_file():
+        try:
+            return read_entry(path, key, {(ObjectField.__module__, ObjectField.__qualname__): ObjectField})  # type: ignore[return-value]
+        except CorruptEntryError:
+            pass  # recomputed and replaced below
     parts = [_part(model, int(g), pos, mat) for g, (pos, mat) in zip(geoms, frames, strict=True)]
-    useful = parts and all(p is not None for p in parts) and any(p.centre is None for p in parts)  # type: ignore[union-attr]
-    field = _field(parts, reach) if useful else None  # type: ignore[arg-type]
-    _CACHE[key] = field
-    if len(_CACHE) > _CACHE_SIZE:
-        _CACHE.popitem(last=False)
+    if any(p is None for p in parts):
+        return None
+    field = _field(parts, reach)  # type: ignore[arg-type]
+    if use_cache:
+        try:
+            write_entry(path, key, field)
+        except OSError:  # a read-only or full disk: the field is still used
+            pass
     return field
 
 
 def _key(model: mujoco.MjModel, geoms: np.ndarray, frames: list, reach: float) -> str:
-    digest = hashlib.sha256(repr((float(reach), MAX_NODES, MIN_SPACING, PAD)).encode())
+    digest = hashlib.sha256(
+        f"handsim-object-field/mujoco {mujoco.__version__}/numpy {np.__version__}/scipy {scipy.__version__}/"
+        f"code {code_fingerprint()}\n".encode()
+    )
+    digest.update(repr((float(reach), MAX_NODES, MIN_SPACING, PAD, OUTER_PLANES, INNER_VERTICES)).encode())
     for g, (pos, mat) in zip(geoms, frames, strict=True):
         digest.update(np.array([model.geom_type[g]], dtype=np.int64).tobytes())
         digest.update(np.ascontiguousarray(model.geom_size[g], dtype=float).tobytes())
