@@ -185,68 +185,19 @@ class HandObjectCollider:
             core inscribed in a hand geom, or, with the field, of a ball inside a hand geom with the object
             (−inf without either).
         """
-        model, data = self.model, self.data
-        mujoco.mj_kinematics(model, data)
+        mujoco.mj_kinematics(self.model, self.data)
         rot = quat_to_matrix(quat)
-        hand = self._hand_geoms
-        h_pos, h_rb = data.geom_xpos[hand].copy(), model.geom_rbound[hand] + model.geom_margin[hand]
-        # bounding spheres of the object's geoms (relative to its free joint's frame)
-        a = self.obj.free_qpos
-        pose = data.qpos[a : a + 7].copy()
-        data.qpos[a : a + 7] = [0, 0, 0, 1, 0, 0, 0]
-        mujoco.mj_kinematics(model, data)
-        objs = self._obj_geoms
-        o_pos = data.geom_xpos[objs] @ rot.T
-        o_rb = model.geom_rbound[objs] + model.geom_margin[objs]
-        o_frames = [(data.geom_xpos[g].copy(), data.geom_xmat[g].reshape(3, 3).copy()) for g in objs]
-        if not self._field_made:  # the object's own distance bounds, from its frames at the identity pose
-            self._field, self._field_made = object_field(model, data, objs, FIELD_REACH), True
-        data.qpos[a : a + 7] = pose
-        mujoco.mj_kinematics(model, data)
-        centres = (h_pos[None, :, :] - o_pos[:, None, :]).reshape(-1, 3)  # (O·G, 3) sphere pairs, shifted
-        reach2 = ((o_rb[:, None] + h_rb[None, :]).reshape(-1) + 1e-6) ** 2
-        balls = [(p + m @ c, r) for (p, m), (c, _, r) in zip(o_frames, self._balls, strict=True) if r > 0]
-        cores = []
-        for g, (c, axis, r) in zip(hand, self._cores, strict=True):
-            if r > 0:
-                m = data.geom_xmat[g].reshape(3, 3)
-                cores.append((data.geom_xpos[g] + m @ c, m @ axis, r))
-        # deep: ball b (centre x + q_b) against core c (segment s_c + t·d_c): one segment per pair, shifted
-        start_k = np.array([s - v - rot @ q for q, _ in balls for s, v, _ in cores]).reshape(-1, 3)
-        dir_k = np.array([2 * v for _ in balls for _, v, _ in cores]).reshape(-1, 3)
-        rad_k = np.array([rb + rc for _, rb in balls for _, _, rc in cores])
-        len2_k = np.maximum((dir_k * dir_k).sum(axis=1), 1e-300)
-        mid_k = start_k + dir_k / 2
-        reach_k = rad_k - floor  # an overlap above the floor needs the segment nearer than this
-        cull2 = np.where(reach_k > 0, (reach_k + np.sqrt(len2_k) / 2 + 1e-6) ** 2, -1.0)
+        frames = self._object_frames()
         positions = np.asarray(positions, dtype=float)
         field = self._field
-        if field is None:  # every pair of bounding spheres apart (squared distances: a matrix product)
-            clear = np.zeros(len(positions), dtype=bool)
-            for first in range(0, len(positions), _CHUNK):
-                x = positions[first : first + _CHUNK]
-                d2 = (
-                    (x * x).sum(axis=1)[:, None]
-                    - 2.0 * (x @ centres.T)
-                    + (centres * centres).sum(axis=1)[None]
-                )
-                clear[first : first + _CHUNK] = (d2 > reach2[None]).all(axis=1)
+        if field is None:
+            clear = self._spheres_apart(positions, rot, frames)
         else:  # each hand geom's bounding sphere apart from the object itself
             near = self._near_geoms(positions, rot)
             clear = ~near.any(axis=1)
         overlap = np.full(len(positions), -np.inf)
-        open_ = np.flatnonzero(~clear)
-        for first in range(0, len(open_), _CHUNK) if rad_k.size else ():
-            rows = open_[first : first + _CHUNK]
-            x = positions[rows]
-            near_k = (x * x).sum(axis=1)[:, None] - 2.0 * (x @ mid_k.T) + (mid_k * mid_k).sum(axis=1)[None]
-            n, k = np.nonzero(near_k < cull2[None])
-            rel = x[n] - start_k[k]
-            t = np.clip((rel * dir_k[k]).sum(axis=1) / len2_k[k], 0.0, 1.0)
-            depth = rad_k[k] - np.linalg.norm(rel - t[:, None] * dir_k[k], axis=1)
-            deepest = np.full(len(rows), -np.inf)
-            np.maximum.at(deepest, n, depth)
-            overlap[rows] = deepest
+        rows = np.flatnonzero(~clear)
+        overlap[rows] = self._ball_overlaps(positions[rows], rot, frames, floor)
         if field is not None:  # the poses the balls left open: the points of the geoms that may touch
             settled = clear | (overlap > floor) if np.isfinite(floor) else clear
             rows = np.flatnonzero(~settled)
@@ -255,6 +206,72 @@ class HandObjectCollider:
                 clear[rows] = ~touching
                 overlap[rows] = np.maximum(overlap[rows], deepest)
         return clear, overlap
+
+    def _object_frames(self) -> list[tuple[np.ndarray, np.ndarray]]:
+        """The object's colliding geoms' frames (position, rotation) in its own frame; the hand as set.
+
+        The first call also makes the object's distance field (:func:`.object_field.object_field`).
+        """
+        model, data, a = self.model, self.data, self.obj.free_qpos
+        pose = data.qpos[a : a + 7].copy()
+        data.qpos[a : a + 7] = [0, 0, 0, 1, 0, 0, 0]
+        mujoco.mj_kinematics(model, data)
+        frames = [(data.geom_xpos[g].copy(), data.geom_xmat[g].reshape(3, 3).copy()) for g in self._obj_geoms]
+        if not self._field_made:
+            self._field, self._field_made = object_field(model, data, self._obj_geoms, FIELD_REACH), True
+        data.qpos[a : a + 7] = pose
+        mujoco.mj_kinematics(model, data)
+        return frames
+
+    def _spheres_apart(self, positions: np.ndarray, rot: np.ndarray, frames: list) -> np.ndarray:
+        """Whether every object geom's bounding sphere lies beyond the margins from every hand geom's."""
+        model, data, hand = self.model, self.data, self._hand_geoms
+        h_pos, h_rb = data.geom_xpos[hand], model.geom_rbound[hand] + model.geom_margin[hand]
+        o_pos = np.array([p for p, _ in frames]) @ rot.T
+        o_rb = model.geom_rbound[self._obj_geoms] + model.geom_margin[self._obj_geoms]
+        centres = (h_pos[None, :, :] - o_pos[:, None, :]).reshape(-1, 3)  # (O·G, 3) sphere pairs, shifted
+        reach2 = ((o_rb[:, None] + h_rb[None, :]).reshape(-1) + 1e-6) ** 2
+        clear = np.zeros(len(positions), dtype=bool)
+        for first in range(0, len(positions), _CHUNK):  # squared distances: one matrix product per chunk
+            x = positions[first : first + _CHUNK]
+            d2 = (x * x).sum(axis=1)[:, None] - 2.0 * (x @ centres.T) + (centres * centres).sum(axis=1)[None]
+            clear[first : first + _CHUNK] = (d2 > reach2[None]).all(axis=1)
+        return clear
+
+    def _ball_overlaps(
+        self, positions: np.ndarray, rot: np.ndarray, frames: list, floor: float
+    ) -> np.ndarray:
+        """The largest overlap of a ball inscribed in an object geom with a hand geom's capsule core, m.
+
+        −inf where no pair comes near enough to overlap by more than ``floor`` (or without balls or cores).
+        """
+        data = self.data
+        balls = [(p + m @ c, r) for (p, m), (c, _, r) in zip(frames, self._balls, strict=True) if r > 0]
+        cores = []
+        for g, (c, axis, r) in zip(self._hand_geoms, self._cores, strict=True):
+            if r > 0:
+                m = data.geom_xmat[g].reshape(3, 3)
+                cores.append((data.geom_xpos[g] + m @ c, m @ axis, r))
+        overlap = np.full(len(positions), -np.inf)
+        if not balls or not cores:
+            return overlap
+        # ball b (centre x + q_b) against core c (segment s_c + t·d_c): one segment per pair, shifted
+        start_k = np.array([s - v - rot @ q for q, _ in balls for s, v, _ in cores]).reshape(-1, 3)
+        dir_k = np.array([2 * v for _ in balls for _, v, _ in cores]).reshape(-1, 3)
+        rad_k = np.array([rb + rc for _, rb in balls for _, _, rc in cores])
+        len2_k = np.maximum((dir_k * dir_k).sum(axis=1), 1e-300)
+        mid_k = start_k + dir_k / 2
+        reach_k = rad_k - floor  # an overlap above the floor needs the segment nearer than this
+        cull2 = np.where(reach_k > 0, (reach_k + np.sqrt(len2_k) / 2 + 1e-6) ** 2, -1.0)
+        for first in range(0, len(positions), _CHUNK):
+            x = positions[first : first + _CHUNK]
+            near = (x * x).sum(axis=1)[:, None] - 2.0 * (x @ mid_k.T) + (mid_k * mid_k).sum(axis=1)[None]
+            n, k = np.nonzero(near < cull2[None])
+            rel = x[n] - start_k[k]
+            t = np.clip((rel * dir_k[k]).sum(axis=1) / len2_k[k], 0.0, 1.0)
+            depth = rad_k[k] - np.linalg.norm(rel - t[:, None] * dir_k[k], axis=1)
+            np.maximum.at(overlap[first : first + _CHUNK], n, depth)
+        return overlap
 
     def _field_inputs(self) -> tuple[ObjectField, HandSamples, float]:
         """The object's field, the hand's sample balls at its spacing, and the margins of a contact, m."""
