@@ -33,6 +33,7 @@ from __future__ import annotations
 
 import hashlib
 import math
+import threading
 from collections import OrderedDict
 from dataclasses import dataclass
 from pathlib import Path
@@ -67,6 +68,7 @@ PAD = 0.02
 """The grid covers the object's box grown by this on every side, m (beyond it bounds still hold, looser)."""
 _CACHE: OrderedDict[str, ObjectField | None] = OrderedDict()
 _CACHE_SIZE = 8
+_LOCK = threading.Lock()
 _SHAPES = frozenset(
     int(t) for t in (mujoco.mjtGeom.mjGEOM_MESH, mujoco.mjtGeom.mjGEOM_BOX, mujoco.mjtGeom.mjGEOM_SPHERE)
 )
@@ -169,12 +171,16 @@ def object_field(
     """
     frames = [(data.geom_xpos[g].copy(), data.geom_xmat[g].reshape(3, 3).copy()) for g in geoms]
     key = _key(model, geoms, frames, reach)
-    if key not in _CACHE:
-        _CACHE[key] = _stored_or_made(model, geoms, frames, reach, key, use_cache, cache_dir)
+    with _LOCK:  # searches on several threads share the fields
+        if key in _CACHE:
+            _CACHE.move_to_end(key)
+            return _CACHE[key]
+    field = _stored_or_made(model, geoms, frames, reach, key, use_cache, cache_dir)
+    with _LOCK:
+        _CACHE[key] = field
         if len(_CACHE) > _CACHE_SIZE:
             _CACHE.popitem(last=False)
-    _CACHE.move_to_end(key)
-    return _CACHE[key]
+    return field
 
 
 def _stored_or_made(
