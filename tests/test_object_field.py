@@ -79,9 +79,10 @@ def mug_collider(tmp_path_factory) -> HandObjectCollider:
     return HandObjectCollider(scene, 0.002)
 
 
-def test_the_field_bounds_the_exact_signed_distance_of_the_mugs_parts(mug_collider):
+def test_the_field_bounds_the_exact_signed_distance_of_the_mugs_parts(mug_collider, tmp_path):
     parts = _at_identity(mug_collider)
-    field = object_field(mug_collider.model, mug_collider.data, np.flatnonzero(mug_collider.is_obj), 0.01)
+    geoms = np.flatnonzero(mug_collider.is_obj)
+    field = object_field(mug_collider.model, mug_collider.data, geoms, 0.01, cache_dir=tmp_path)
     assert field is not None
     low, high = np.min([p.min(axis=0) for p in parts], axis=0), np.max([p.max(axis=0) for p in parts], axis=0)
     rng = np.random.default_rng(3)
@@ -99,11 +100,11 @@ def test_the_field_bounds_the_exact_signed_distance_of_the_mugs_parts(mug_collid
 
 def test_the_field_is_made_once_per_object_and_not_for_spheres(mug_collider, monkeypatch, tmp_path):
     geoms = np.flatnonzero(mug_collider.is_obj)
-    first = object_field(mug_collider.model, mug_collider.data, geoms, 0.01)
-    assert object_field(mug_collider.model, mug_collider.data, geoms, 0.01) is first
+    first = object_field(mug_collider.model, mug_collider.data, geoms, 0.01, cache_dir=tmp_path)
+    assert object_field(mug_collider.model, mug_collider.data, geoms, 0.01, cache_dir=tmp_path) is first
     (ball_scene, *_), _ = _search_inputs(monkeypatch, tmp_path)  # the demo tennis ball: one sphere
     ball = HandObjectCollider(ball_scene, 0.002)
-    assert object_field(ball.model, ball.data, np.flatnonzero(ball.is_obj), 0.01) is None
+    assert object_field(ball.model, ball.data, np.flatnonzero(ball.is_obj), 0.01, cache_dir=tmp_path) is None
 
 
 def test_the_field_is_kept_on_disk_bit_for_bit_and_a_corrupt_entry_is_replaced(mug_collider, tmp_path):
