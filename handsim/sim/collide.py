@@ -256,9 +256,12 @@ class HandObjectCollider:
         if not balls or not cores:
             return overlap
         # ball b (centre x + q_b) against core c (segment s_c + t·d_c): one segment per pair, shifted
-        start_k = np.array([s - v - rot @ q for q, _ in balls for s, v, _ in cores]).reshape(-1, 3)
-        dir_k = np.array([2 * v for _ in balls for _, v, _ in cores]).reshape(-1, 3)
-        rad_k = np.array([rb + rc for _, rb in balls for _, _, rc in cores])
+        core_start = np.array([s - v for s, v, _ in cores])
+        core_dir = np.array([2 * v for _, v, _ in cores])
+        core_radius = np.array([r for _, _, r in cores])
+        start_k = np.concatenate([core_start - rot @ q for q, _ in balls])  # pairs ball by ball
+        dir_k = np.tile(core_dir, (len(balls), 1))
+        rad_k = np.concatenate([rb + core_radius for _, rb in balls])
         len2_k = np.maximum((dir_k * dir_k).sum(axis=1), 1e-300)
         mid_k = start_k + dir_k / 2
         reach_k = rad_k - floor  # an overlap above the floor needs the segment nearer than this
