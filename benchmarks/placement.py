@@ -7,9 +7,8 @@ For each of the three shared GraspDB14 trials on both hands (the parametric defa
 
 * placement: :func:`handsim.sim.placement.place_object` as :func:`handsim.sim.scenarios.glove_scene` calls
   it (candidates, fit frames, grip tests, the robustness perturbations' fit frames), timed by wrapping it,
-  with the placement cache off (the search itself; the object's distance field is made by the first call
-  on each object, or read from the disk cache, and kept, like the convex hulls); ``cached``: the same
-  call answered by the cache (a fresh temporary cache directory, written once, then read);
+  with the placement cache off (the search itself); ``cached``: the same call answered by the cache (a
+  fresh temporary cache directory, written once, then read);
 * load: the whole :func:`handsim.trials.load_trial` (read, build, compile, placement);
 * replay: one :func:`handsim.sim.replay.replay` without the robustness ensemble (the replay a user waits
   for once the scene is built), and with it (the winner, its alternatives and perturbations, and the grip

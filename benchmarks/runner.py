@@ -10,9 +10,8 @@ cache on disk (a cache folder of the benchmark's own, ``HANDSIM_CACHE_DIR``).
 The placement search is content-cached (:mod:`handsim.sim.placement_cache`): byte-identical copies would
 share one search, which a real dataset, whose recordings all differ, never does. So every copy differs
 from the others in one sample (the first row's last sensor value moved by ``copy × 1e-5`` rad, far below
-the glove's resolution), and every timed run starts with no placement cache (the hulls and the objects'
-distance fields kept: both are made once per object, as a run over GraspDB14 makes them once for its
-object set): each trial pays its own placement search, as in a first run over GraspDB14.
+the glove's resolution), and every timed run starts with no placement cache (the hulls kept): each trial
+pays its own placement search, as in a first run over GraspDB14.
 
 Each run is a fresh process (imports and in-memory caches cold, as for a user's command), timed from
 its start to the last record, with each trial on one thread (``HANDSIM_THREADS=1``, as in a pool worker:
@@ -91,7 +90,7 @@ def _perturbed(text: str, copy: int) -> str:
 
 
 def _without_placements() -> None:
-    """Remove the benchmark cache's placement entries (the hull and object-field entries stay)."""
+    """Remove the benchmark cache's placement entries (the hull entries stay)."""
     shutil.rmtree(Path(os.environ["HANDSIM_CACHE_DIR"]) / "placement", ignore_errors=True)
 
 

@@ -60,7 +60,7 @@ def _search_inputs(monkeypatch, tmp_path, **options) -> tuple[tuple, dict]:
     return seen[0]
 
 
-@pytest.mark.parametrize("obj", ["tennis_ball", "mug"])
+@pytest.mark.parametrize("obj", ["tennis_ball", "mug", "business_card"])
 def test_the_bounds_never_contradict_mujocos_collision_detection(monkeypatch, tmp_path, obj):
     (scene, trajectory, grasp, *_), _ = _search_inputs(monkeypatch, tmp_path, obj=obj)
     collider = HandObjectCollider(scene, 0.002)
@@ -72,8 +72,11 @@ def test_the_bounds_never_contradict_mujocos_collision_detection(monkeypatch, tm
     clear, overlap = collider.bounds(positions, quat)
     depths = np.array([collider.touch_at(p, quat).depth for p in positions])
     links = np.array([collider.touch_at(p, quat).links.size for p in positions])
-    assert clear.sum() > 0 and (overlap > 0.002 + SCREEN_MARGIN).sum() > 0  # both bounds decide some poses
-    assert (links[clear] == 0).all()
+    assert clear.sum() > 0 and (links[clear] == 0).all()
+    if obj == "business_card":  # a box bounds no depth: MuJoCo's capsule–box depths can fall far short
+        assert np.isneginf(overlap).all()
+        return
+    assert (overlap > 0.002 + SCREEN_MARGIN).sum() > 0  # both bounds decide some poses
     assert (overlap <= depths + SCREEN_MARGIN / 10).all()  # EPA's tolerance, well inside the margin
 
 
@@ -83,6 +86,22 @@ def test_the_search_screened_by_bounds_is_the_search_by_collision_queries(monkey
     exact, ranked_exact = _searched(scene, trajectory, grasp, spec, screen=False)
     assert screened.screened > 0 and exact.screened == 0
     assert screened.collider.queries < exact.collider.queries
+    assert screened.collider.queries + screened.screened == exact.collider.queries
+    assert screened.feasible_poses == exact.feasible_poses
+    assert _bits(ranked) == _bits(ranked_exact)
+    assert _bits(screened.nearest) == _bits(exact.nearest)
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("obj", ["mug", "bowl", "business_card", "bottle_crate"])
+def test_the_screened_search_is_the_search_by_collision_queries_on_catalogue_objects(
+    monkeypatch, tmp_path, obj
+):
+    # convex meshes (mug, bowl) and boxes (card, crate): MuJoCo's capsule depths against a box can fall
+    # far short of the true penetration, so boxes bound no depth and the two searches still agree
+    (scene, trajectory, grasp, spec, *_), _ = _search_inputs(monkeypatch, tmp_path, obj=obj)
+    screened, ranked = _searched(scene, trajectory, grasp, spec, screen=True)
+    exact, ranked_exact = _searched(scene, trajectory, grasp, spec, screen=False)
     assert screened.collider.queries + screened.screened == exact.collider.queries
     assert screened.feasible_poses == exact.feasible_poses
     assert _bits(ranked) == _bits(ranked_exact)

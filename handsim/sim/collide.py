@@ -9,9 +9,10 @@ recompiled.
 :meth:`HandObjectCollider.screen` settles many poses at one posture without running collision detection,
 where cheap bounds already decide a query's outcome: a pose whose geoms' bounding spheres all lie farther
 than the touch distance from every hand geom's is clear (the query would find nothing, as MuJoCo's own
-bounding-sphere test would), and a pose where a ball inscribed in one of the object's convex geoms overlaps
-a ball or capsule core inscribed in a hand geom by more than a depth is at least that deep (separating two
-convex shapes takes at least the overlap of balls they contain).
+bounding-sphere test would), and a pose where a ball inscribed in one of the object's sphere or convex-mesh
+geoms overlaps a ball or capsule core inscribed in a hand geom by more than a depth is at least that deep
+(separating two convex shapes takes at least the overlap of balls they contain; boxes and cylinders bound no
+depth, :meth:`HandObjectCollider.bounds` says why).
 """
 
 from __future__ import annotations
@@ -26,13 +27,13 @@ from scipy.spatial import ConvexHull, QhullError
 
 from handsim.datatypes.rotations import quat_to_matrix
 from handsim.sim.compiled import SimScene
-from handsim.sim.hand_samples import HandSamples, hand_samples
-from handsim.sim.object_field import FIELD_REACH, ObjectField, object_field
 
 _HAND_BIT, _OBJECT_BIT = 2, 2
 _NO_LINKS, _NO_DISTANCES = np.zeros(0, dtype=np.int64), np.zeros(0)
+_NO_CORE = (np.zeros(3), np.zeros(3), 0.0)
+_BALL_TYPES = frozenset({int(mujoco.mjtGeom.mjGEOM_SPHERE), int(mujoco.mjtGeom.mjGEOM_MESH)})
+"""Object geom types whose inscribed ball bounds a query's depth (:meth:`HandObjectCollider.bounds`)."""
 _CHUNK = 4096  # poses per vectorised bound evaluation (memory: chunk × object balls × hand geoms × 3)
-_CLEAR_SLACK = 1e-5  # m: a pose is clear only this much beyond the margin (GJK's distance tolerance)
 UNDECIDED, CLEAR, DEEP = 0, 1, 2
 """What :meth:`HandObjectCollider.screen` says of a pose: run the query; no link within the touch distance;
 deeper than the given depth."""
@@ -86,11 +87,11 @@ class HandObjectCollider:
         self._hand_geoms = np.flatnonzero(is_hand)
         self._obj_geoms = np.flatnonzero(self.is_obj)
         self._cores = [_core(model, g) for g in self._hand_geoms]
-        self._samples: HandSamples | None = None
-        self._samples_step = 0.0
-        self._balls = [_core(model, g) for g in self._obj_geoms]
-        self._field: ObjectField | None = None
-        self._field_made = False
+        # MuJoCo's capsule–box routine can miss a capsule crossing a thin plate: boxes (and cylinders, not
+        # checked) bound no depth; spheres and convex meshes do (bounds())
+        self._balls = [
+            _core(model, g) if int(model.geom_type[g]) in _BALL_TYPES else _NO_CORE for g in self._obj_geoms
+        ]
 
     def fork(self) -> HandObjectCollider:
         """A collider on the same model with a data of its own, at this one's posture (for another thread)."""
@@ -174,159 +175,72 @@ class HandObjectCollider:
         Args:
             positions: Object positions (N, 3), m.
             quat: The object's orientation (w, x, y, z) for all of them.
-            floor: Overlaps not above this may be reported as −inf (pairs too far apart are not computed);
-                one above it (a finite floor) may be reported as any value above it (the bounds stop looking).
+            floor: Overlaps not above this may be reported as −inf (pairs too far apart are not computed).
 
         Returns:
-            Per position: whether the query would find no link within the touch distance (clear: every
-            object geom's bounding sphere lies farther than the touch distance from every hand geom's, or,
-            with the object's field, every hand geom is shown apart from the object); and a lower bound of
-            the penetration, m: the largest overlap of a ball inscribed in an object geom with a capsule
-            core inscribed in a hand geom, or, with the field, of a ball inside a hand geom with the object
-            (−inf without either).
+            Per position: whether every object geom's bounding sphere lies farther than the touch distance
+            from every hand geom's (clear); and the largest overlap of a ball inscribed in one of the
+            object's sphere or convex-mesh geoms with a capsule core inscribed in a hand geom, m (a lower
+            bound of MuJoCo's penetration depth; −inf without either). The search judges MuJoCo's depths,
+            and those are not always the true penetration: a box gives no bound (MuJoCo's capsule–box
+            routine can miss a capsule crossing a thin plate), nor does a cylinder (not checked); a convex
+            mesh's inscribed ball lies deep in it, where MuJoCo's capsule–mesh depths came out within
+            0.9 mm of the bound on 613 000 queries (``placement_search.SCREEN_MARGIN``).
         """
-        mujoco.mj_kinematics(self.model, self.data)
+        model, data = self.model, self.data
+        mujoco.mj_kinematics(model, data)
         rot = quat_to_matrix(quat)
-        frames = self._object_frames()
-        positions = np.asarray(positions, dtype=float)
-        field = self._field
-        if field is None:
-            clear = self._spheres_apart(positions, rot, frames)
-        else:  # each hand geom's bounding sphere apart from the object itself
-            near = self._near_geoms(positions, rot)
-            clear = ~near.any(axis=1)
-        overlap = np.full(len(positions), -np.inf)
-        rows = np.flatnonzero(~clear)
-        overlap[rows] = self._ball_overlaps(positions[rows], rot, frames, floor)
-        if field is not None:  # the poses the balls left open: the points of the geoms that may touch
-            settled = clear | (overlap > floor) if np.isfinite(floor) else clear
-            rows = np.flatnonzero(~settled)
-            if rows.size:
-                touching, deepest = self._field_bounds(positions[rows], near[rows], rot, floor)
-                clear[rows] = ~touching
-                overlap[rows] = np.maximum(overlap[rows], deepest)
-        return clear, overlap
-
-    def _object_frames(self) -> list[tuple[np.ndarray, np.ndarray]]:
-        """The object's colliding geoms' frames (position, rotation) in its own frame; the hand as set.
-
-        The first call also makes the object's distance field (:func:`.object_field.object_field`).
-        """
-        model, data, a = self.model, self.data, self.obj.free_qpos
+        hand = self._hand_geoms
+        h_pos, h_rb = data.geom_xpos[hand].copy(), model.geom_rbound[hand] + model.geom_margin[hand]
+        # bounding spheres of the object's geoms (relative to its free joint's frame)
+        a = self.obj.free_qpos
         pose = data.qpos[a : a + 7].copy()
         data.qpos[a : a + 7] = [0, 0, 0, 1, 0, 0, 0]
         mujoco.mj_kinematics(model, data)
-        frames = [(data.geom_xpos[g].copy(), data.geom_xmat[g].reshape(3, 3).copy()) for g in self._obj_geoms]
-        if not self._field_made:
-            self._field, self._field_made = object_field(model, data, self._obj_geoms, FIELD_REACH), True
+        objs = self._obj_geoms
+        o_pos = data.geom_xpos[objs] @ rot.T
+        o_rb = model.geom_rbound[objs] + model.geom_margin[objs]
+        o_frames = [(data.geom_xpos[g].copy(), data.geom_xmat[g].reshape(3, 3).copy()) for g in objs]
         data.qpos[a : a + 7] = pose
         mujoco.mj_kinematics(model, data)
-        return frames
-
-    def _spheres_apart(self, positions: np.ndarray, rot: np.ndarray, frames: list) -> np.ndarray:
-        """Whether every object geom's bounding sphere lies beyond the margins from every hand geom's."""
-        model, data, hand = self.model, self.data, self._hand_geoms
-        h_pos, h_rb = data.geom_xpos[hand], model.geom_rbound[hand] + model.geom_margin[hand]
-        o_pos = np.array([p for p, _ in frames]) @ rot.T
-        o_rb = model.geom_rbound[self._obj_geoms] + model.geom_margin[self._obj_geoms]
-        centres = (h_pos[None, :, :] - o_pos[:, None, :]).reshape(-1, 3)  # (O·G, 3) sphere pairs, shifted
+        # clear: every pair of bounding spheres apart (squared distances as one matrix product per chunk)
+        centres = (h_pos[None, :, :] - o_pos[:, None, :]).reshape(-1, 3)  # (O·G, 3)
         reach2 = ((o_rb[:, None] + h_rb[None, :]).reshape(-1) + 1e-6) ** 2
-        clear = np.zeros(len(positions), dtype=bool)
-        for first in range(0, len(positions), _CHUNK):  # squared distances: one matrix product per chunk
-            x = positions[first : first + _CHUNK]
-            d2 = (x * x).sum(axis=1)[:, None] - 2.0 * (x @ centres.T) + (centres * centres).sum(axis=1)[None]
-            clear[first : first + _CHUNK] = (d2 > reach2[None]).all(axis=1)
-        return clear
-
-    def _ball_overlaps(
-        self, positions: np.ndarray, rot: np.ndarray, frames: list, floor: float
-    ) -> np.ndarray:
-        """The largest overlap of a ball inscribed in an object geom with a hand geom's capsule core, m.
-
-        −inf where no pair comes near enough to overlap by more than ``floor`` (or without balls or cores).
-        """
-        data = self.data
-        balls = [(p + m @ c, r) for (p, m), (c, _, r) in zip(frames, self._balls, strict=True) if r > 0]
+        balls = [(p + m @ c, r) for (p, m), (c, _, r) in zip(o_frames, self._balls, strict=True) if r > 0]
         cores = []
-        for g, (c, axis, r) in zip(self._hand_geoms, self._cores, strict=True):
+        for g, (c, axis, r) in zip(hand, self._cores, strict=True):
             if r > 0:
                 m = data.geom_xmat[g].reshape(3, 3)
                 cores.append((data.geom_xpos[g] + m @ c, m @ axis, r))
-        overlap = np.full(len(positions), -np.inf)
-        if not balls or not cores:
-            return overlap
-        # ball b (centre x + q_b) against core c (segment s_c + t·d_c): one segment per pair, shifted
-        core_start = np.array([s - v for s, v, _ in cores])
-        core_dir = np.array([2 * v for _, v, _ in cores])
-        core_radius = np.array([r for _, _, r in cores])
-        start_k = np.concatenate([core_start - rot @ q for q, _ in balls])  # pairs ball by ball
-        dir_k = np.tile(core_dir, (len(balls), 1))
-        rad_k = np.concatenate([rb + core_radius for _, rb in balls])
+        # deep: ball b (centre x + q_b) against core c (segment s_c + t·d_c): one segment per pair, shifted
+        if balls and cores:  # the pairs ball by ball, each over all cores
+            core_start = np.array([s - v for s, v, _ in cores])
+            core_radius = np.array([r for _, _, r in cores])
+            start_k = np.concatenate([core_start - rot @ q for q, _ in balls])
+            dir_k = np.tile(np.array([2 * v for _, v, _ in cores]), (len(balls), 1))
+            rad_k = np.concatenate([rb + core_radius for _, rb in balls])
+        else:
+            start_k, dir_k, rad_k = np.zeros((0, 3)), np.zeros((0, 3)), np.zeros(0)
         len2_k = np.maximum((dir_k * dir_k).sum(axis=1), 1e-300)
         mid_k = start_k + dir_k / 2
         reach_k = rad_k - floor  # an overlap above the floor needs the segment nearer than this
         cull2 = np.where(reach_k > 0, (reach_k + np.sqrt(len2_k) / 2 + 1e-6) ** 2, -1.0)
+        clear = np.zeros(len(positions), dtype=bool)
+        overlap = np.full(len(positions), -np.inf)
         for first in range(0, len(positions), _CHUNK):
-            x = positions[first : first + _CHUNK]
-            near = (x * x).sum(axis=1)[:, None] - 2.0 * (x @ mid_k.T) + (mid_k * mid_k).sum(axis=1)[None]
-            n, k = np.nonzero(near < cull2[None])
-            rel = x[n] - start_k[k]
-            t = np.clip((rel * dir_k[k]).sum(axis=1) / len2_k[k], 0.0, 1.0)
-            depth = rad_k[k] - np.linalg.norm(rel - t[:, None] * dir_k[k], axis=1)
-            np.maximum.at(overlap[first : first + _CHUNK], n, depth)
-        return overlap
-
-    def _field_inputs(self) -> tuple[ObjectField, HandSamples, float]:
-        """The object's field, the hand's sample balls at its spacing, and the margins of a contact, m."""
-        field, model = self._field, self.model
-        assert field is not None
-        if self._samples is None or self._samples_step != field.spacing:
-            self._samples = hand_samples(model, self._hand_geoms, field.spacing)
-            self._samples_step = field.spacing
-        margin = float(model.geom_margin[self._obj_geoms].max() + model.geom_margin[self._hand_geoms].max())
-        return field, self._samples, margin + _CLEAR_SLACK
-
-    def _near_geoms(self, positions: np.ndarray, rot: np.ndarray) -> np.ndarray:
-        """(N, G): whether a hand geom's bounding sphere may come within the margins of the object."""
-        field, _, margin = self._field_inputs()
-        centres = self.data.geom_xpos[self._hand_geoms]
-        reach = self.model.geom_rbound[self._hand_geoms] + margin
-        near = np.empty((len(positions), len(centres)), dtype=bool)
-        for first in range(0, len(positions), _CHUNK):
-            x = positions[first : first + _CHUNK]
-            _, lower = field.at((centres[None] - x[:, None]) @ rot)
-            near[first : first + _CHUNK] = lower <= reach
-        return near
-
-    def _field_bounds(
-        self, positions: np.ndarray, near: np.ndarray, rot: np.ndarray, floor: float
-    ) -> tuple[np.ndarray, np.ndarray]:
-        """Whether each pose may touch the hand, and a lower bound of its penetration, from the field.
-
-        For each hand geom ``near`` the object (:meth:`_near_geoms`), the geoms with fewer points first: a
-        ball inside the geom goes at least its radius minus the signed distance of its centre into the
-        object, and the geom touches nothing when its covering balls all lie farther from the object than
-        their radii plus the margins (:mod:`handsim.sim.hand_samples`, :mod:`handsim.sim.object_field`). A
-        pose whose bound exceeds ``floor`` is settled (it touches) and its other geoms are not looked at.
-        """
-        field, samples, margin = self._field_inputs()
-        points, inside, reach = samples.world(self.data), samples.inside, samples.cover + margin
-        starts = np.searchsorted(samples.geom, self._hand_geoms, side="left")
-        ends = np.searchsorted(samples.geom, self._hand_geoms, side="right")
-        touching = np.zeros(len(positions), dtype=bool)
-        deepest = np.full(len(positions), -np.inf)
-        open_ = np.ones(len(positions), dtype=bool)
-        for g in sorted(np.flatnonzero(near.any(axis=0)), key=lambda g: ends[g] - starts[g]):
-            rows = np.flatnonzero(near[:, g] & open_)
-            a, b = starts[g], ends[g]
-            for first in range(0, len(rows), _CHUNK):
-                part = rows[first : first + _CHUNK]
-                upper, lower = field.at((points[a:b][None] - positions[part][:, None]) @ rot)
-                deepest[part] = np.maximum(deepest[part], (inside[a:b] - upper).max(axis=1))
-                touching[part[~(lower > reach[a:b]).all(axis=1)]] = True
-            if np.isfinite(floor):
-                open_[rows[deepest[rows] > floor]] = False
-        return touching | ~open_, deepest
+            x = np.asarray(positions[first : first + _CHUNK], dtype=float)
+            x2 = (x * x).sum(axis=1)[:, None]
+            d2 = x2 - 2.0 * (x @ centres.T) + (centres * centres).sum(axis=1)[None]
+            clear[first : first + _CHUNK] = (d2 > reach2[None]).all(axis=1)
+            if rad_k.size:
+                near = x2 - 2.0 * (x @ mid_k.T) + (mid_k * mid_k).sum(axis=1)[None] < cull2[None]
+                n, k = np.nonzero(near)
+                rel = x[n] - start_k[k]
+                t = np.clip((rel * dir_k[k]).sum(axis=1) / len2_k[k], 0.0, 1.0)
+                depth = rad_k[k] - np.linalg.norm(rel - t[:, None] * dir_k[k], axis=1)
+                chunk = overlap[first : first + _CHUNK]
+                np.maximum.at(chunk, n, depth)
+        return clear, overlap
 
 
 def _core(model: mujoco.MjModel, geom: int) -> tuple[np.ndarray, np.ndarray, float]:

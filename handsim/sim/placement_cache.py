@@ -11,9 +11,7 @@ gives new keys: a stale entry is never read). A hit gives the stored
 NumPy arrays).
 
 Entries live in ``cache_dir/placement/<key[:2]>/<key>.pkl`` (``cache_dir`` as for the convex hulls:
-:func:`handsim.builders.hull_cache.default_cache_dir`), written atomically (temporary file, then rename);
-the objects' distance fields of the placement screen (:mod:`handsim.sim.object_field`) are entries of the
-same kind under ``cache_dir/field/``.
+:func:`handsim.builders.hull_cache.default_cache_dir`), written atomically (temporary file, then rename).
 An entry whose checksum, format or key does not match is ignored and replaced, with a note; it is never
 trusted. A value changed at run time rather than in a source file (a module constant patched by a
 script) is not in the key: such a caller passes ``use_cache=False`` to
@@ -56,7 +54,7 @@ class CorruptEntryError(Exception):
 
 
 @lru_cache(maxsize=1)
-def code_fingerprint() -> str:
+def _code_fingerprint() -> str:
     """SHA-256 of every handsim source file (path and bytes), read once per process."""
     h = hashlib.sha256()
     for path in sorted(_PACKAGE.rglob("*.py")):
@@ -86,7 +84,7 @@ def placement_key(scene: SimScene, trajectory: Trajectory, grasp: GraspFrame, ar
     h = hashlib.sha256()
     h.update(
         f"handsim-placement/{CACHE_FORMAT_VERSION}/mujoco {mujoco.__version__}/numpy {np.__version__}/"
-        f"code {code_fingerprint()}\n".encode()
+        f"code {_code_fingerprint()}\n".encode()
     )
     model = np.zeros(mujoco.mj_sizeModel(scene.model), dtype=np.uint8)
     mujoco.mj_saveModel(scene.model, None, model)
@@ -100,9 +98,9 @@ def placement_key(scene: SimScene, trajectory: Trajectory, grasp: GraspFrame, ar
     return h.hexdigest()
 
 
-def entry_path(cache_dir: str | Path, key: str, kind: str = "placement") -> Path:
-    """Where the entry of ``key`` lives under ``cache_dir`` (``kind``: its folder, one per kind of entry)."""
-    return Path(cache_dir) / kind / key[:2] / f"{key}.pkl"
+def entry_path(cache_dir: str | Path, key: str) -> Path:
+    """Where the entry of ``key`` lives under ``cache_dir``."""
+    return Path(cache_dir) / "placement" / key[:2] / f"{key}.pkl"
 
 
 def read_entry(path: Path, key: str, allowed: dict) -> object:
