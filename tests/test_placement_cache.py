@@ -80,16 +80,23 @@ def test_the_bounds_never_contradict_mujocos_collision_detection(monkeypatch, tm
     assert (overlap <= depths + SCREEN_MARGIN / 10).all()  # EPA's tolerance, well inside the margin
 
 
-def test_the_search_screened_by_bounds_is_the_search_by_collision_queries(monkeypatch, tmp_path):
-    (scene, trajectory, grasp, spec, *_), _ = _search_inputs(monkeypatch, tmp_path)
+def _screened_and_exact(monkeypatch, tmp_path, **options) -> tuple:
+    """The search of ``_search_inputs(**options)`` with and without the bounds, checked to be the same one:
+    every pose counted, the same feasible poses, ranked candidates and nearest pose, bit for bit."""
+    (scene, trajectory, grasp, spec, *_), _ = _search_inputs(monkeypatch, tmp_path, **options)
     screened, ranked = _searched(scene, trajectory, grasp, spec, screen=True)
     exact, ranked_exact = _searched(scene, trajectory, grasp, spec, screen=False)
-    assert screened.screened > 0 and exact.screened == 0
-    assert screened.collider.queries < exact.collider.queries
     assert screened.collider.queries + screened.screened == exact.collider.queries
     assert screened.feasible_poses == exact.feasible_poses
     assert _bits(ranked) == _bits(ranked_exact)
     assert _bits(screened.nearest) == _bits(exact.nearest)
+    return screened, exact
+
+
+def test_the_search_screened_by_bounds_is_the_search_by_collision_queries(monkeypatch, tmp_path):
+    screened, exact = _screened_and_exact(monkeypatch, tmp_path)
+    assert screened.screened > 0 and exact.screened == 0
+    assert screened.collider.queries < exact.collider.queries
 
 
 @pytest.mark.slow
@@ -99,13 +106,7 @@ def test_the_screened_search_is_the_search_by_collision_queries_on_catalogue_obj
 ):
     # convex meshes (mug, bowl) and boxes (card, crate): MuJoCo's capsule depths against a box can fall
     # far short of the true penetration, so boxes bound no depth and the two searches still agree
-    (scene, trajectory, grasp, spec, *_), _ = _search_inputs(monkeypatch, tmp_path, obj=obj)
-    screened, ranked = _searched(scene, trajectory, grasp, spec, screen=True)
-    exact, ranked_exact = _searched(scene, trajectory, grasp, spec, screen=False)
-    assert screened.collider.queries + screened.screened == exact.collider.queries
-    assert screened.feasible_poses == exact.feasible_poses
-    assert _bits(ranked) == _bits(ranked_exact)
-    assert _bits(screened.nearest) == _bits(exact.nearest)
+    _screened_and_exact(monkeypatch, tmp_path, obj=obj)
 
 
 def test_a_cached_placement_is_the_computed_one_bit_for_bit(monkeypatch, tmp_path):

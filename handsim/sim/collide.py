@@ -184,8 +184,8 @@ class HandObjectCollider:
             bound of MuJoCo's penetration depth; −inf without either). The search judges MuJoCo's depths,
             and those are not always the true penetration: a box gives no bound (MuJoCo's capsule–box
             routine can miss a capsule crossing a thin plate), nor does a cylinder (not checked); a convex
-            mesh's inscribed ball lies deep in it, where MuJoCo's capsule–mesh depths came out within
-            0.9 mm of the bound on 613 000 queries (``placement_search.SCREEN_MARGIN``).
+            mesh's inscribed ball lies deep in it, where MuJoCo's capsule–mesh depths stay close to the
+            bound (``placement_search.SCREEN_MARGIN`` gives the measured shortfall and the margin).
         """
         model, data = self.model, self.data
         mujoco.mj_kinematics(model, data)
