@@ -14,8 +14,8 @@ from dataclasses import asdict, dataclass, field
 from typing import Any
 
 import numpy as np
-import trimesh
 
+from handsim.datatypes.mesh_mass import mesh_volume
 from handsim.errors import MeshError
 
 _PREPROCESS_MODES = ("auto", "on", "off")
@@ -126,7 +126,7 @@ class ConvexHull:
     @property
     def volume(self) -> float:
         """Volume in m³."""
-        return float(trimesh.Trimesh(self.vertices, self.faces, process=False).volume)
+        return mesh_volume(self.vertices, self.faces)
 
 
 @dataclass(frozen=True)

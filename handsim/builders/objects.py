@@ -27,13 +27,13 @@ from dataclasses import dataclass, field
 
 import mujoco
 import numpy as np
-import trimesh
 
 from handsim.builders.decompose import decompose
 from handsim.builders.decomposition_types import Decomposition, DecompositionParams
 from handsim.builders.geom_classes import add_geom_classes
 from handsim.builders.surfaces import CONTACT_CONDIM, OBJECT, Surface
 from handsim.datatypes.mesh import Mesh
+from handsim.datatypes.mesh_mass import mesh_mass
 from handsim.datatypes.object_model import Hinge, ObjectModel, Primitive
 from handsim.datatypes.physical_ranges import DENSITY, OBJECT_MASS
 from handsim.datatypes.rotations import quat_to_matrix
@@ -135,13 +135,10 @@ def _mass_properties(model: ObjectModel) -> tuple[dict[str, MassProperties], lis
     """Each part's mass properties from its mesh and the density (or the total mass), with notes."""
     notes: list[str] = []
     if model.density is not None:
-        masses = {p.name: _mesh_mass_properties(p.mesh.to_trimesh(), model.density) for p in model.parts}
+        masses = {p.name: _mesh_mass_properties(p.mesh, model.density) for p in model.parts}
     else:
-        solids = {
-            p.name: p.mesh.to_trimesh() if p.mesh.watertight else p.mesh.to_trimesh().convex_hull
-            for p in model.parts
-        }
-        volume = sum(float(s.volume) for s in solids.values())
+        solids = {p.name: p.mesh if p.mesh.watertight else _convex_hull(p.mesh) for p in model.parts}
+        volume = sum(s.volume for s in solids.values())
         density = model.mass / volume
         masses = {name: _mesh_mass_properties(solid, density) for name, solid in solids.items()}
         hulled = [p.name for p in model.parts if not p.mesh.watertight]
@@ -151,6 +148,16 @@ def _mass_properties(model: ObjectModel) -> tuple[dict[str, MassProperties], lis
                 "from their convex hulls"
             )
     return masses, notes
+
+
+def _convex_hull(mesh: Mesh) -> Mesh:
+    """The convex hull of an open mesh (its solid for the mass, when the total mass is given)."""
+    hull = mesh.to_trimesh().convex_hull
+    return Mesh(
+        np.asarray(hull.vertices, dtype=float),
+        np.asarray(hull.faces, dtype=np.int64),
+        source=f"convex hull of {mesh.source}",
+    )
 
 
 def _check_mass(model: ObjectModel, masses: dict[str, MassProperties], force: bool) -> None:
@@ -185,18 +192,12 @@ def hinge_friction(hinge: Hinge, child: MassProperties, gravity: float = 9.81) -
     return 1.5 * child.mass * gravity * lever
 
 
-def _mesh_mass_properties(mesh: trimesh.Trimesh, density: float) -> MassProperties:
+def _mesh_mass_properties(mesh: Mesh, density: float) -> MassProperties:
     """Mass, centre of mass and inertia of a closed mesh of uniform density."""
-    volume = float(mesh.volume)
-    if not volume > 0:
-        raise ModelError(f"{mesh.metadata.get('name', 'mesh')}: volume {volume} m³ is not positive")
-    props = trimesh.triangles.mass_properties(mesh.triangles, density=density)
-    return MassProperties(
-        mass=float(props.mass),
-        com=np.asarray(props.center_mass, dtype=float),
-        inertia=np.asarray(props.inertia, dtype=float),
-        volume=volume,
-    )
+    props = mesh_mass(mesh.vertices, mesh.faces, density)
+    if not props.volume > 0:
+        raise ModelError(f"{mesh.source or 'mesh'}: volume {props.volume} m³ is not positive")
+    return MassProperties(mass=props.mass, com=props.center_mass, inertia=props.inertia, volume=props.volume)
 
 
 def object_spec(

@@ -14,6 +14,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 import numpy.typing as npt
 
+from handsim.datatypes.mesh_mass import mesh_volume
 from handsim.errors import MeshError
 
 if TYPE_CHECKING:
@@ -49,7 +50,7 @@ class Mesh:
     @property
     def volume(self) -> float:
         """Enclosed volume in m³ (meaningful only for a watertight mesh)."""
-        return float(self.to_trimesh().volume)
+        return mesh_volume(self.vertices, self.faces)
 
     def to_trimesh(self) -> trimesh.Trimesh:
         """The mesh as a :class:`trimesh.Trimesh` (no processing)."""
