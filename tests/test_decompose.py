@@ -196,6 +196,22 @@ def test_decompose_reads_second_call_from_cache(
     assert_same_hulls(first, again)
 
 
+def test_a_cache_hit_computes_no_hull(
+    annulus: Mesh, decomposed: tuple[Decomposition, Path], monkeypatch: pytest.MonkeyPatch
+) -> None:
+    # The cache is read before the convexity test (only concave meshes are ever cached), so a warm build
+    # needs no qhull and imports neither trimesh nor SciPy.
+    first, cache = decomposed
+
+    def no_hull(points: np.ndarray) -> None:
+        raise AssertionError("a cache hit computed a hull")
+
+    monkeypatch.setattr(dec, "_hull_of", no_hull)
+    again = decompose(annulus, PARAMS, cache_dir=cache)
+    assert again.from_cache is True
+    assert_same_hulls(first, again)
+
+
 def test_decompose_uses_default_cache_dir_from_environment(
     annulus: Mesh, decomposed: tuple[Decomposition, Path], monkeypatch: pytest.MonkeyPatch
 ) -> None:
@@ -259,7 +275,7 @@ def _rewrite(entry: Path, target: Path, change: str) -> None:
             arrays["faces"] = arrays["faces"].copy()
             arrays["faces"][0, 0] = 10_000
         del arrays["checksum"]
-        arrays["checksum"] = np.array(hull_cache._checksum(arrays))
+        arrays["checksum"] = np.array(hull_cache.array_checksum(arrays))
     with open(target, "wb") as f:
         np.savez(f, **arrays)
 

@@ -13,7 +13,9 @@ split into convex pieces. :func:`decompose` does that:
 - Results are cached (:mod:`handsim.builders.hull_cache`) in ``cache_dir/coacd/<key[:2]>/<key>.npz``,
   keyed by :func:`cache_key`, with the catalogue's objects pre-decomposed in a read-only bundled cache
   (:func:`bundled_entry`). Entries are written atomically and carry a checksum; a corrupt entry is
-  deleted, rebuilt and reported in :attr:`Decomposition.notes`. Only successes are cached.
+  deleted, rebuilt and reported in :attr:`Decomposition.notes`. Only successes are cached, so an entry
+  exists only for a mesh found concave: the cache is read before the convexity test, and a hit computes
+  no hull (nor imports trimesh and SciPy).
 - Every hull returned is recomputed by qhull (consistent outward faces) and has at least 4
   non-coplanar vertices, as MuJoCo requires; flat pieces from CoACD are dropped with a note.
 
@@ -33,8 +35,6 @@ import contextlib
 from pathlib import Path
 
 import numpy as np
-import trimesh
-from scipy.spatial import QhullError
 
 from handsim.builders.coacd_process import run_worker
 from handsim.builders.decomposition_types import (
@@ -83,36 +83,19 @@ def decompose(
     """
     name = mesh.source or "<unnamed mesh>"
     key = cache_key(mesh, params)
-    hull = _hull_if_convex(mesh)
-    if hull is not None:
-        return Decomposition(hulls=(hull,), key=key, skipped="mesh is convex")
-
     notes: list[str] = []
     path: Path | None = None
     if use_cache:
+        # looked up before the convexity test: only a mesh found concave is ever decomposed and cached, so
+        # a hit needs no hull (qhull, and importing trimesh and SciPy: 0.7 s of a warm object build)
         root = Path(cache_dir) if cache_dir is not None else default_cache_dir()
         path = root / "coacd" / key[:2] / f"{key}.npz"
-        if path.exists():
-            try:
-                hulls, coacd_seconds, old_notes = read_entry(path)
-            except CorruptEntryError as e:
-                notes.append(f"cache entry {path} was corrupt ({e}) and was rebuilt")
-                with contextlib.suppress(OSError):  # the rebuilt entry replaces it anyway
-                    path.unlink(missing_ok=True)
-            else:
-                return Decomposition(
-                    hulls=hulls, key=key, from_cache=True, coacd_seconds=coacd_seconds, notes=old_notes
-                )
-        bundled = bundled_entry(key)
-        if bundled.exists():
-            try:
-                hulls, coacd_seconds, old_notes = read_entry(bundled)
-            except CorruptEntryError as e:
-                notes.append(f"bundled cache entry {bundled} is corrupt ({e}); decomposing anew")
-            else:
-                return Decomposition(
-                    hulls=hulls, key=key, from_cache=True, coacd_seconds=coacd_seconds, notes=old_notes
-                )
+        cached = _cached(path, bundled_entry(key), key, notes)
+        if cached is not None:
+            return cached
+    hull = _hull_if_convex(mesh)
+    if hull is not None:
+        return Decomposition(hulls=(hull,), key=key, skipped="mesh is convex")
 
     raw, seconds = run_worker(mesh, params, name, progress)
     hulls, dropped = _usable_hulls(raw, name)
@@ -130,6 +113,31 @@ def decompose(
     )
 
 
+def _cached(path: Path, bundled: Path, key: str, notes: list[str]) -> Decomposition | None:
+    """The decomposition cached at ``path`` (else in the bundled cache), or None.
+
+    A corrupt entry at ``path`` is deleted (the rebuilt one replaces it) and a corrupt bundled entry
+    ignored, each with a note appended to ``notes``.
+    """
+    for where, own in ((path, True), (bundled, False)):
+        if not where.exists():
+            continue
+        try:
+            hulls, coacd_seconds, old_notes = read_entry(where)
+        except CorruptEntryError as e:
+            if own:
+                notes.append(f"cache entry {where} was corrupt ({e}) and was rebuilt")
+                with contextlib.suppress(OSError):  # the rebuilt entry replaces it anyway
+                    where.unlink(missing_ok=True)
+            else:
+                notes.append(f"bundled cache entry {where} is corrupt ({e}); decomposing anew")
+            continue
+        return Decomposition(
+            hulls=hulls, key=key, from_cache=True, coacd_seconds=coacd_seconds, notes=old_notes
+        )
+    return None
+
+
 # ----------------------------------------------------------------------------------------------- hulls
 
 
@@ -141,6 +149,9 @@ def _hull_of(points: np.ndarray) -> ConvexHull | None:
     singular = np.linalg.svd(p - p.mean(axis=0), compute_uv=False)
     if singular[0] <= 0 or singular[-1] / singular[0] < FLATNESS_TOL:
         return None
+    import trimesh  # lazy: trimesh and SciPy (0.7 s), only when a hull is computed
+    from scipy.spatial import QhullError
+
     try:
         hull = trimesh.convex.convex_hull(p)
     except (QhullError, ValueError):
