@@ -71,9 +71,10 @@ class GraspDBObject:
     notes: tuple[str, ...]
 
     def mesh(self) -> Mesh:
-        """The object's watertight triangle mesh in metres, in the object frame (cached per process).
+        """The object's watertight triangle mesh in metres, in the object frame (cached).
 
-        The arrays are read-only: they are shared by every caller.
+        Cached per process, and on disk across processes (:mod:`handsim.builders.mesh_cache`). The arrays
+        are read-only: they are shared by every caller.
         """
         return _cached_mesh(self.name)
 
@@ -97,7 +98,7 @@ class GraspDBObject:
 
 
 def clear_mesh_cache() -> None:
-    """Forget the cached meshes (they are regenerated, identically, on the next call)."""
+    """Forget this process's meshes (read back from the disk cache, or regenerated identically, next call)."""
     _cached_mesh.cache_clear()
 
 
@@ -325,15 +326,22 @@ _BY_ID = {o.graspdb_id: o for o in GRASPDB_OBJECTS}
 
 @functools.cache
 def _cached_mesh(name: str) -> Mesh:
-    # lazy: trimesh and SciPy, only when a mesh is generated; the table (handsim catalog) needs neither
+    # lazy: the disk cache (handsim.builders.mesh_cache) keeps trimesh and SciPy off a warm build
+    from handsim.builders.mesh_cache import generated_mesh
+
+    mesh = generated_mesh(name, lambda: _generate(name))
+    mesh.vertices.flags.writeable = False
+    mesh.faces.flags.writeable = False
+    return mesh
+
+
+def _generate(name: str) -> Mesh:
+    """Generate and validate the mesh of ``name`` (trimesh and SciPy)."""
     from handsim.builders.graspdb_meshes import generate_mesh
 
     obj = _BY_NAME[name]
     vertices, faces = generate_mesh(name, obj.primitives)
-    mesh = validate_mesh(vertices, faces, f"graspdb14:{name}", require_watertight=True)
-    mesh.vertices.flags.writeable = False
-    mesh.faces.flags.writeable = False
-    return mesh
+    return validate_mesh(vertices, faces, f"graspdb14:{name}", require_watertight=True)
 
 
 def graspdb_object(name_or_id: str | int) -> GraspDBObject:

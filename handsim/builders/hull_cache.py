@@ -102,7 +102,8 @@ class CorruptEntryError(Exception):
     """A cache entry that cannot be trusted; the message says why."""
 
 
-def _checksum(arrays: dict[str, np.ndarray]) -> str:
+def array_checksum(arrays: dict[str, np.ndarray]) -> str:
+    """SHA-256 of named arrays (names, dtypes, shapes and bytes, in name order): an entry's checksum."""
     h = hashlib.sha256()
     for k in sorted(arrays):
         a = np.ascontiguousarray(arrays[k])
@@ -117,7 +118,7 @@ def write_entry(path: Path, hulls: tuple[ConvexHull, ...], seconds: float, notes
     arrays["coacd_seconds"] = np.array(seconds, dtype=np.float64)
     arrays["notes"] = np.array(notes, dtype=str) if notes else np.zeros(0, dtype="<U1")
     arrays["format"] = np.array(CACHE_FORMAT_VERSION, dtype=np.int64)
-    arrays["checksum"] = np.array(_checksum(arrays))
+    arrays["checksum"] = np.array(array_checksum(arrays))
     buffer = io.BytesIO()
     np.savez(buffer, **arrays)
     write_atomic(path, buffer.getvalue())
@@ -144,7 +145,7 @@ def read_entry(path: Path) -> tuple[tuple[ConvexHull, ...], float, tuple[str, ..
         if arrays["format"].shape != () or int(arrays["format"]) != CACHE_FORMAT_VERSION:
             raise ValueError(f"format {arrays['format']!r}, expected {CACHE_FORMAT_VERSION}")
         stored = str(arrays.pop("checksum"))
-        if _checksum(arrays) != stored:
+        if array_checksum(arrays) != stored:
             raise ValueError("checksum mismatch")
         raw = unpack_hulls(arrays)
         seconds = float(arrays["coacd_seconds"])

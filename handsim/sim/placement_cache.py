@@ -23,7 +23,6 @@ from __future__ import annotations
 import hashlib
 import json
 import pickle
-from functools import lru_cache
 from pathlib import Path
 from typing import Protocol
 
@@ -36,10 +35,10 @@ from handsim.files import write_atomic
 from handsim.io.safe_pickle import loads_restricted_pickle
 from handsim.sim.compiled import SimScene
 from handsim.sim.grasp_frame import GraspFrame
+from handsim.version import source_fingerprint
 
 CACHE_FORMAT_VERSION = 1  # bump when the entry layout changes
 _MAGIC = b"handsim-placement\n"
-_PACKAGE = Path(__file__).resolve().parents[1]
 
 
 class _Hasher(Protocol):
@@ -51,16 +50,6 @@ class _Hasher(Protocol):
 
 class CorruptEntryError(Exception):
     """A placement cache entry that cannot be trusted; the message says why."""
-
-
-@lru_cache(maxsize=1)
-def _code_fingerprint() -> str:
-    """SHA-256 of every handsim source file (path and bytes), read once per process."""
-    h = hashlib.sha256()
-    for path in sorted(_PACKAGE.rglob("*.py")):
-        h.update(f"{path.relative_to(_PACKAGE).as_posix()}\n".encode())
-        h.update(path.read_bytes())
-    return h.hexdigest()
 
 
 def _update_array(h: _Hasher, name: str, array: np.ndarray | None) -> None:
@@ -84,7 +73,7 @@ def placement_key(scene: SimScene, trajectory: Trajectory, grasp: GraspFrame, ar
     h = hashlib.sha256()
     h.update(
         f"handsim-placement/{CACHE_FORMAT_VERSION}/mujoco {mujoco.__version__}/numpy {np.__version__}/"
-        f"code {_code_fingerprint()}\n".encode()
+        f"code {source_fingerprint()}\n".encode()
     )
     model = np.zeros(mujoco.mj_sizeModel(scene.model), dtype=np.uint8)
     mujoco.mj_saveModel(scene.model, None, model)
