@@ -31,15 +31,16 @@ seconds of this process (:data:`CLOCK`):
 Where the remaining time goes (measured with cProfile and per-part CPU timers on this 2-core machine):
 
 * ``replay()``: the stepping loop is at the raw loop (its Python is ~1 µs per frame: one method call, a
-  bytes comparison of the warning counters, two row copies). Outside it, per replay: the control schedule
-  (resampling the recording to the control rate, slerp of root and object poses: 0.5 ms glove, 1.7 ms
-  Tzionas, 4 ms ARCTIC), a fresh ``MjData`` (its 15 MB arena) with the model copy the glove's contact
-  switch needs and the reset's first ``mj_forward`` (~1 ms), the fingertips' kinematic targets (one
-  ``mj_kinematics`` per frame, ~1.5 µs of MuJoCo plus ~2 µs of Python each: 1.6 ms glove, 2.3 ms
-  Tzionas, 5 ms ARCTIC; a numpy forward kinematics over all frames at once was tried and is no faster at
-  these sizes — its 3×3 products per joint cost what MuJoCo's whole pass does), the other per-frame
-  metrics (~1 ms: contact slots, poses, tracking) and the summary and plausibility flags (~0.7 ms). On
-  the glove scene (78 ms of stepping) these ~5 ms are the 5–7 % between ``replay()`` and raw.
+  bytes comparison of the warning counters, two row copies; 1.1 ms over the glove's 469 frames). Outside
+  it, per replay: the control schedule (resampling the recording to the control rate, slerp of root and
+  object poses: 0.5 ms glove, 1.7 ms Tzionas, 4 ms ARCTIC), a fresh ``MjData`` (its 15 MB arena, 0.5 ms)
+  with the model copy the glove's contact switch needs (0.3 ms) and the reset's first ``mj_forward``, the
+  fingertips' kinematic targets (one ``mj_kinematics`` per frame in the finished run's own ``MjData``,
+  which saves allocating another; ~1.5 µs of MuJoCo plus ~2 µs of Python each: 1.4 ms glove, 2.3 ms
+  Tzionas, 5 ms ARCTIC; a numpy forward kinematics over all frames at once was tried and is no faster
+  at these sizes — its 3×3 products per joint cost what MuJoCo's whole pass does), the other per-frame
+  metrics (~0.6 ms: contact slots, poses, tracking) and the summary and plausibility flags (~0.7 ms). On
+  the glove scene (73–78 ms of stepping) these ~6 ms are the 6–9 % between ``replay()`` and raw.
 * ``env.step``: ~20 numpy calls on preallocated buffers (action check, controls, mocap targets, two state
   gathers, the contact-force product, references, reward terms) and the ``info`` dict: 15–25 µs on a
   quiet machine, ~40 µs on a loaded one, against ~250 µs of ``mj_step × 5`` on the Tzionas scene.

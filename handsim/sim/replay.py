@@ -196,7 +196,7 @@ def replay(scene: SimScene, trajectory: Trajectory, config: ReplayConfig | None 
     setup = scene.setup
     release = switches.release_frame
     qpos, sensors, warnings, diverged = run_schedule(driver)
-    frames = frame_metrics(scene, schedule, qpos, sensors)
+    frames = frame_metrics(scene, schedule, qpos, sensors, scratch=driver.stepper.data)  # the run is over
     summary = summarize(frames, spec)
     if not scene.layout.objects:
         summary.update(hand_only_summary(frames, scene.layout.link_names))
@@ -327,7 +327,7 @@ def member_hold(scene: SimScene, schedule: ControlSchedule, spec: MetricSpec) ->
     window_end = scene.setup.hold_window[1]
     last = int(np.searchsorted(schedule.times, window_end + 1e-9))  # frames up to the window's end
     qpos, sensors, _, _ = run_schedule(driver, frames=last)
-    frames = frame_metrics(scene, schedule, qpos, sensors)
+    frames = frame_metrics(scene, schedule, qpos, sensors, scratch=driver.stepper.data)  # the run is over
     return _hold(scene, schedule, frames, qpos, release, spec)
 
 
