@@ -27,8 +27,6 @@ from collections.abc import Mapping
 from dataclasses import dataclass, replace
 
 import numpy as np
-import trimesh
-from scipy.spatial import cKDTree
 
 from handsim.datatypes.object_model import ObjectModel
 from handsim.datatypes.rotations import axis_angle_to_matrix, quat_to_matrix
@@ -217,6 +215,9 @@ def surface_distances(
         The smallest distance from any point to the surface, metres (N,), and the largest depth of a point
         inside the object, metres (N,; 0 when none is inside).
     """
+    import trimesh  # lazy: trimesh and SciPy (0.2-0.7 s), only where an ARCTIC fit is checked against
+    from scipy.spatial import cKDTree  # its object: a glove replay imports this module and needs neither
+
     n = len(points)
     pos, quat = track.pose[:, :3], track.pose[:, 3:]
     rotation = quat_to_matrix(quat)
