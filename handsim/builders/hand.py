@@ -21,7 +21,6 @@ from dataclasses import dataclass
 
 import mujoco
 import numpy as np
-from scipy.optimize import linprog
 from scipy.spatial import ConvexHull, QhullError
 
 from handsim.builders.geom_classes import add_geom_classes
@@ -272,6 +271,8 @@ def _overlapping_hulls(hulls: dict[int, ConvexHull]) -> set[tuple[int, int]]:
     Two convex hulls intersect iff some point satisfies both hulls' facet inequalities: a linear
     feasibility problem.
     """
+    from scipy.optimize import linprog  # lazy: SciPy's optimisers (60 ms), only where a hull needs one
+
     equations = {i: hull.equations for i, hull in hulls.items()}
     pairs = set()
     keys = sorted(equations)

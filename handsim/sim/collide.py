@@ -22,7 +22,6 @@ from dataclasses import dataclass
 
 import mujoco
 import numpy as np
-from scipy.optimize import linprog
 from scipy.spatial import ConvexHull, QhullError
 
 from handsim.datatypes.rotations import quat_to_matrix
@@ -274,6 +273,8 @@ def _inscribed_ball(points: np.ndarray) -> tuple[np.ndarray, float]:
 
     MuJoCo collides a mesh geom as its vertices' convex hull. Radius 0 when the hull is flat or degenerate.
     """
+    from scipy.optimize import linprog  # lazy: SciPy's optimisers (60 ms), only where a hull needs one
+
     try:
         hull = ConvexHull(points)
     except (QhullError, ValueError):
