@@ -81,7 +81,10 @@ class HandObjectCollider:
         self.touch = touch
         self.link_index = np.full(model.nbody, -1)
         self.link_index[layout.link_bodies] = np.arange(layout.link_bodies.size)
-        self.data = mujoco.MjData(model)
+        # the link of each colliding hand geom, -1 for every other geom: only hand–object pairs collide here
+        # (contype and conaffinity above), so a contact's link is the larger of its two geoms'
+        self._geom_link = np.where(is_hand, self.link_index[body_of], -1)
+        self._bind(mujoco.MjData(model))
         self.queries = 0
         self._hand_geoms = np.flatnonzero(is_hand)
         self._obj_geoms = np.flatnonzero(self.is_obj)
@@ -92,10 +95,16 @@ class HandObjectCollider:
             _core(model, g) if int(model.geom_type[g]) in _BALL_TYPES else _NO_CORE for g in self._obj_geoms
         ]
 
+    def _bind(self, data: mujoco.MjData) -> None:
+        """Query with ``data``: views of the object's pose in its ``qpos``, written by every query."""
+        a = self.obj.free_qpos
+        self.data = data
+        self._object_pos, self._object_quat = data.qpos[a : a + 3], data.qpos[a + 3 : a + 7]
+
     def fork(self) -> HandObjectCollider:
         """A collider on the same model with a data of its own, at this one's posture (for another thread)."""
         forked = copy.copy(self)
-        forked.data = mujoco.MjData(self.model)
+        forked._bind(mujoco.MjData(self.model))
         forked.data.qpos[:] = self.data.qpos
         forked.queries = 0
         return forked
@@ -109,20 +118,20 @@ class HandObjectCollider:
 
     def _contacts(self, pos: np.ndarray, quat: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Link index and distance of each hand–object contact within the touch distance at a pose."""
-        d, a = self.data, self.obj.free_qpos
-        d.qpos[a : a + 3] = pos
-        d.qpos[a + 3 : a + 7] = quat
-        mujoco.mj_kinematics(self.model, d)
-        mujoco.mj_collision(self.model, d)
+        d, model = self.data, self.model
+        self._object_pos[:] = pos
+        self._object_quat[:] = quat
+        mujoco.mj_kinematics(model, d)
+        mujoco.mj_collision(model, d)
         self.queries += 1
-        n = d.ncon
-        if n == 0:
+        if d.ncon == 0:
             return _NO_LINKS, _NO_DISTANCES
-        geom = d.contact.geom[:n]
-        dist = d.contact.dist[:n]
-        other = np.where(self.is_obj[geom[:, 0]], geom[:, 1], geom[:, 0])
-        link = self.link_index[self.model.geom_bodyid[other]]
-        keep = (link >= 0) & (dist <= self.touch)
+        contact = d.contact  # the ncon contacts, each of a hand geom and an object geom
+        link = self._geom_link[contact.geom].max(axis=1)
+        dist = contact.dist  # a view of MuJoCo's contacts, which the next query overwrites
+        keep = dist <= self.touch
+        if keep.all():  # the usual case: the object's margin is the touch distance
+            return link, dist.copy()
         return link[keep], dist[keep]
 
     def touch_at(self, pos: np.ndarray, quat: np.ndarray) -> Touch:
@@ -139,7 +148,7 @@ class HandObjectCollider:
         link, dist = self._contacts(pos, quat)
         if not link.size:
             return 0.0, 0
-        return float(max(0.0, -dist.min())), len(set(link.tolist()))
+        return max(0.0, -min(dist.tolist())), len(set(link.tolist()))  # a few contacts: Python's min
 
     def hand_spheres(self) -> tuple[np.ndarray, np.ndarray]:
         """Centres (G, 3) and bounding radii (G,) of the hand's colliding geoms at the current posture.
