@@ -157,3 +157,28 @@ def test_a_cache_that_cannot_be_written_gives_the_placement_with_a_note(monkeypa
     assert f"; could not write placement cache entry {blocker / 'placement'}" in placement.note
     fresh = place_object(*args, **kwargs, use_cache=False)
     assert _bits(dataclasses.replace(placement, note=fresh.note)) == _bits(fresh)
+
+
+def test_the_contacts_of_an_articulated_objects_own_parts_are_not_the_hands(tmp_path):
+    # An ARCTIC-style box whose lid sinks 1 mm into its base: their explicit contact pair (no contype filter
+    # stops it) collides in the placement's collider too, and must count as no hand link and no depth.
+    import trimesh
+
+    from handsim.builders import build_object, build_scene, default_hand
+    from handsim.builders.arctic_objects import arctic_object
+    from handsim.sim.compiled import compile_scene
+
+    folder = tmp_path / "box"
+    folder.mkdir()
+    for name, (low, high) in (("bottom", (-60.0, 0.0)), ("top", (-1.0, 10.0))):
+        box = trimesh.creation.box(extents=(120.0, high - low, 160.0))
+        box.apply_translation([-60.0, (low + high) / 2, 0.0])
+        box.export(folder / f"{name}.obj")
+    scene = compile_scene(build_scene(default_hand(), build_object(arctic_object(folder))))
+    assert scene.model.npair > 0
+    collider = HandObjectCollider(scene, 0.002)
+    far = np.array([2.0, 2.0, 2.0])  # the object far from the hand: only its parts touch each other
+    touch = collider.touch_at(far, np.array([1.0, 0.0, 0.0, 0.0]))
+    assert collider.data.ncon > 0  # the parts' pair collided
+    assert touch.links.size == 0 and touch.depth == 0.0
+    assert collider.depth_links(far, np.array([1.0, 0.0, 0.0, 0.0])) == (0.0, 0)

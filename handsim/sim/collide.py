@@ -81,8 +81,9 @@ class HandObjectCollider:
         self.touch = touch
         self.link_index = np.full(model.nbody, -1)
         self.link_index[layout.link_bodies] = np.arange(layout.link_bodies.size)
-        # the link of each colliding hand geom, -1 for every other geom: only hand–object pairs collide here
-        # (contype and conaffinity above), so a contact's link is the larger of its two geoms'
+        # the link of each colliding hand geom, -1 for every other geom: contype and conaffinity above let
+        # only hand–object pairs collide, so a contact's link is the larger of its two geoms' (-1 for the
+        # contacts of an articulated object's explicit part–part pairs, which no filter stops: dropped)
         self._geom_link = np.where(is_hand, self.link_index[body_of], -1)
         self._bind(mujoco.MjData(model))
         self.queries = 0
@@ -126,11 +127,11 @@ class HandObjectCollider:
         self.queries += 1
         if d.ncon == 0:
             return _NO_LINKS, _NO_DISTANCES
-        contact = d.contact  # the ncon contacts, each of a hand geom and an object geom
+        contact = d.contact
         link = self._geom_link[contact.geom].max(axis=1)
         dist = contact.dist  # a view of MuJoCo's contacts, which the next query overwrites
-        keep = dist <= self.touch
-        if keep.all():  # the usual case: the object's margin is the touch distance
+        keep = (link >= 0) & (dist <= self.touch)
+        if keep.all():  # the usual case: hand–object contacts within the object's margin (the touch distance)
             return link, dist.copy()
         return link[keep], dist[keep]
 
