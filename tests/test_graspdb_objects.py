@@ -262,14 +262,20 @@ def test_objects_without_primitives_are_genuinely_concave(obj):
     assert _concavity_depth(obj) >= 3e-3
 
 
-def test_mesh_is_cached_read_only_and_deterministic():
+def test_mesh_is_cached_read_only_and_deterministic(monkeypatch, tmp_path):
+    # each call generates: the process cache is cleared and the disk cache (handsim.builders.mesh_cache)
+    # is an empty folder each time
+    monkeypatch.setenv("HANDSIM_CACHE_DIR", str(tmp_path / "first"))
+    clear_mesh_cache()
     obj = graspdb_object("mug")
     first = obj.mesh()
     assert obj.mesh() is first
     with pytest.raises(ValueError):
         first.vertices[0, 0] = 1.0
     clear_mesh_cache()
+    monkeypatch.setenv("HANDSIM_CACHE_DIR", str(tmp_path / "second"))
     second = obj.mesh()
+    clear_mesh_cache()  # later tests read the user's cache again
     assert second is not first
     np.testing.assert_array_equal(second.vertices, first.vertices)
     np.testing.assert_array_equal(second.faces, first.faces)

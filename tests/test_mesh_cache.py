@@ -102,6 +102,15 @@ def test_a_cache_that_cannot_be_written_still_gives_the_mesh(
     assert "could not write mesh cache entry" in caplog.text
 
 
-def test_the_catalogue_mesh_from_the_cache_is_the_generated_one(mug) -> None:
+def test_the_catalogue_mesh_from_the_cache_is_the_generated_one(
+    mug, tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    monkeypatch.setenv("HANDSIM_CACHE_DIR", str(tmp_path))
     graspdb_objects.clear_mesh_cache()
-    _same(graspdb_objects.graspdb_object("mug").mesh(), mug)
+    try:
+        graspdb_objects.graspdb_object("mug").mesh()  # generated and written
+        graspdb_objects.clear_mesh_cache()
+        _same(graspdb_objects.graspdb_object("mug").mesh(), mug)  # read back
+        assert len(list(tmp_path.rglob("*.npz"))) == 1
+    finally:
+        graspdb_objects.clear_mesh_cache()

@@ -182,3 +182,22 @@ def test_the_contacts_of_an_articulated_objects_own_parts_are_not_the_hands(tmp_
     assert collider.data.ncon > 0  # the parts' pair collided
     assert touch.links.size == 0 and touch.depth == 0.0
     assert collider.depth_links(far, np.array([1.0, 0.0, 0.0, 0.0])) == (0.0, 0)
+
+
+@pytest.mark.parametrize("duplicate", ["deepcopy", "pickle"])
+def test_a_copied_collider_queries_its_own_data(duplicate):
+    import copy
+    import pickle
+
+    from handsim.builders import build_object, build_scene, default_hand
+    from handsim.builders.catalog import get
+    from handsim.sim.compiled import compile_scene
+
+    scene = compile_scene(build_scene(default_hand(), build_object(get("tennis_ball"))))
+    collider = HandObjectCollider(scene, 0.002)
+    twin = copy.deepcopy(collider) if duplicate == "deepcopy" else pickle.loads(pickle.dumps(collider))
+    pos, quat = np.array([0.3, 0.1, 0.2]), np.array([1.0, 0.0, 0.0, 0.0])
+    twin.touch_at(pos, quat)
+    a = twin.obj.free_qpos
+    np.testing.assert_array_equal(twin.data.qpos[a : a + 7], [*pos, *quat])
+    assert not np.shares_memory(twin.data.qpos, collider.data.qpos)

@@ -54,6 +54,11 @@ from handsim.builders.hull_cache import (
 from handsim.datatypes.mesh import FLATNESS_TOL, Mesh
 
 CONVEX_RTOL = 1e-3  # within 0.1 % of its hull's volume a mesh counts as convex (tessellation dents)
+"""Part of the convexity rule that decides which meshes are decomposed. The hull cache is read before the
+rule is applied (an entry exists only for a mesh the rule found concave), and its key does not hold the
+rule: a change of the rule (this tolerance, :func:`_hull_if_convex`) must bump
+:data:`~handsim.builders.hull_cache.CACHE_FORMAT_VERSION` and rebuild the bundled cache
+(``scripts/bundle_catalog_hulls.py``), or cached decompositions would outlive it."""
 
 
 def decompose(

@@ -7,8 +7,10 @@ in ``cache_dir/meshes/<key[:2]>/<key>.npz`` (``cache_dir``:
 :func:`~handsim.builders.hull_cache.default_cache_dir`) and reads it back on later calls.
 
 The key (:func:`mesh_key`) is the SHA-256 of the object's name, :data:`MESH_CACHE_FORMAT`, handsim's source
-fingerprint (:func:`handsim.version.source_fingerprint`: any edit of handsim gives new keys) and the NumPy,
-trimesh and SciPy versions that generate the mesh, so a stale entry is never read. Entries are written
+fingerprint (:func:`handsim.version.source_fingerprint`: any edit of handsim gives new keys), the NumPy,
+trimesh, SciPy and networkx versions that generate and repair the mesh, and the CPU features NumPy
+dispatches on, so a stale entry, or another machine's, is never read. Old entries are not deleted (about
+50 kB per object and version). Entries are written
 atomically and carry a checksum; an entry that fails it is regenerated (the generation is deterministic, so
 nothing is lost), replaced, and logged.
 """
@@ -19,6 +21,7 @@ import hashlib
 import importlib.metadata
 import io
 import logging
+import platform
 from collections.abc import Callable
 from functools import lru_cache
 from pathlib import Path
@@ -37,13 +40,21 @@ _log = logging.getLogger(__name__)
 
 @lru_cache(maxsize=1)
 def _generator_versions() -> str:
+    """The libraries that generate a mesh, and the CPU features NumPy's vectorised sin/cos dispatch on.
+
+    The features keep a cache folder shared by machines (a cluster's) from serving one machine's mesh to
+    another, whose own could differ in the last bits.
+    """
     versions = []
-    for package in ("numpy", "trimesh", "scipy"):
+    for package in ("numpy", "trimesh", "scipy", "networkx"):
         try:
             versions.append(f"{package} {importlib.metadata.version(package)}")
         except importlib.metadata.PackageNotFoundError:
             versions.append(f"{package} not installed")
-    return "/".join(versions)
+    features = getattr(getattr(np, "_core", None), "_multiarray_umath", None)
+    enabled = getattr(features, "__cpu_features__", None)
+    cpu = ",".join(sorted(k for k, v in enabled.items() if v)) if enabled else platform.machine()
+    return "/".join([*versions, f"cpu {cpu}"])
 
 
 def mesh_key(name: str) -> str:

@@ -102,6 +102,15 @@ class HandObjectCollider:
         self.data = data
         self._object_pos, self._object_quat = data.qpos[a : a + 3], data.qpos[a + 3 : a + 7]
 
+    def __getstate__(self) -> dict:
+        state = self.__dict__.copy()
+        del state["_object_pos"], state["_object_quat"]  # views into data: recreated from the copy's data
+        return state
+
+    def __setstate__(self, state: dict) -> None:
+        self.__dict__.update(state)
+        self._bind(self.data)
+
     def fork(self) -> HandObjectCollider:
         """A collider on the same model with a data of its own, at this one's posture (for another thread)."""
         forked = copy.copy(self)
