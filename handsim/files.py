@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import contextlib
 import os
+import threading
 from pathlib import Path
 
 
@@ -17,7 +18,8 @@ def write_atomic(path: str | Path, data: bytes) -> Path:
         OSError: The file cannot be written; its ``filename`` is ``path`` (not the temporary file's).
     """
     target = Path(path)
-    tmp = target.with_name(f".{target.name}.tmp{os.getpid()}")
+    # one temporary file per process and thread: writers of the same target never share one
+    tmp = target.with_name(f".{target.name}.tmp{os.getpid()}.{threading.get_ident()}")
     try:
         target.parent.mkdir(parents=True, exist_ok=True)
         with open(tmp, "wb") as f:

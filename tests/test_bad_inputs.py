@@ -249,6 +249,36 @@ def test_write_atomic_leaves_no_partial_file_when_interrupted(tmp_path, monkeypa
     assert list(tmp_path.iterdir()) == []
 
 
+def test_write_atomic_from_threads_at_once_leaves_one_whole_file(tmp_path):
+    # two threads of one process writing the same cache entry must not share a temporary file (they did:
+    # its name held only the process id, and every such race left a mixed or missing file)
+    import threading
+
+    from handsim import files
+
+    errors: list[OSError] = []
+    for trial in range(5):
+        target = tmp_path / f"entry{trial}.bin"
+        payloads = [bytes([i]) * (4 << 20) for i in range(8)]
+        barrier = threading.Barrier(len(payloads))
+
+        def write(payload: bytes, target=target, barrier=barrier) -> None:
+            barrier.wait()
+            try:
+                files.write_atomic(target, payload)
+            except OSError as exc:  # another writer's rename took the shared temporary file
+                errors.append(exc)
+
+        threads = [threading.Thread(target=write, args=(p,)) for p in payloads]
+        for t in threads:
+            t.start()
+        for t in threads:
+            t.join()
+        assert target.read_bytes() in payloads
+    assert errors == []
+    assert sorted(p.name for p in tmp_path.iterdir()) == [f"entry{i}.bin" for i in range(5)]
+
+
 def test_every_trial_failing_exits_1_with_the_errors_counted(capsys, tmp_path):
     data = tmp_path / "data"
     data.mkdir()
