@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 from handsim.builders import graspdb_objects, mesh_cache
-from handsim.builders.hull_cache import CorruptEntryError
+from handsim.builders.hull_cache import CorruptEntryError, array_checksum
 from handsim.builders.mesh_cache import entry_path, generated_mesh, mesh_key, read_entry, write_entry
 
 
@@ -85,7 +85,7 @@ def test_read_entry_rejects_damaged_entries(mug, tmp_path: Path, damage, message
     with np.load(path) as data:
         arrays = {k: np.asarray(data[k]) for k in data.files if k != "checksum"}
     damage(arrays)
-    arrays["checksum"] = np.array(mesh_cache.array_checksum(arrays))
+    arrays["checksum"] = np.array(array_checksum(arrays))
     np.savez(path, **arrays)
     with pytest.raises(CorruptEntryError, match=message):
         read_entry(path)

@@ -112,16 +112,54 @@ def array_checksum(arrays: dict[str, np.ndarray]) -> str:
     return h.hexdigest()
 
 
+def write_checked(path: Path, arrays: dict[str, np.ndarray], format_version: int) -> None:
+    """Write named arrays as an ``.npz`` entry with its format and checksum, atomically.
+
+    The layout :func:`read_checked` verifies, shared by the on-disk caches (hulls, generated meshes).
+
+    Raises:
+        OSError: It cannot be written (:func:`handsim.files.write_atomic`).
+    """
+    arrays = {**arrays, "format": np.array(format_version, dtype=np.int64)}
+    arrays["checksum"] = np.array(array_checksum(arrays))
+    buffer = io.BytesIO()
+    np.savez(buffer, **arrays)
+    write_atomic(path, buffer.getvalue())
+
+
+def read_checked(path: Path, required: tuple[str, ...], format_version: int) -> dict[str, np.ndarray]:
+    """The arrays of an entry :func:`write_checked` wrote, verified (without ``format`` and ``checksum``).
+
+    Raises:
+        CorruptEntryError: Unreadable, an array of ``required`` missing, another format, or a checksum
+            mismatch.
+    """
+    try:
+        with np.load(path, allow_pickle=False) as data:
+            arrays = {k: np.asarray(data[k]) for k in data.files}
+    except Exception as e:  # any failure to parse means the entry cannot be used
+        raise CorruptEntryError(f"unreadable: {type(e).__name__}: {e}") from e
+    missing = [k for k in (*required, "format", "checksum") if k not in arrays]
+    if missing:
+        raise CorruptEntryError(f"missing arrays {', '.join(missing)}")
+    try:
+        if arrays["format"].shape != () or int(arrays["format"]) != format_version:
+            raise ValueError(f"format {arrays['format']!r}, expected {format_version}")
+    except (ValueError, TypeError) as e:
+        raise CorruptEntryError(str(e)) from e
+    stored = str(arrays.pop("checksum"))
+    if array_checksum(arrays) != stored:
+        raise CorruptEntryError("checksum mismatch")
+    del arrays["format"]
+    return arrays
+
+
 def write_entry(path: Path, hulls: tuple[ConvexHull, ...], seconds: float, notes: tuple[str, ...]) -> None:
     """Write a cache entry atomically (:func:`handsim.files.write_atomic`)."""
     arrays = pack_hulls(hulls)
     arrays["coacd_seconds"] = np.array(seconds, dtype=np.float64)
     arrays["notes"] = np.array(notes, dtype=str) if notes else np.zeros(0, dtype="<U1")
-    arrays["format"] = np.array(CACHE_FORMAT_VERSION, dtype=np.int64)
-    arrays["checksum"] = np.array(array_checksum(arrays))
-    buffer = io.BytesIO()
-    np.savez(buffer, **arrays)
-    write_atomic(path, buffer.getvalue())
+    write_checked(path, arrays, CACHE_FORMAT_VERSION)
 
 
 def read_entry(path: Path) -> tuple[tuple[ConvexHull, ...], float, tuple[str, ...]]:
@@ -133,20 +171,8 @@ def read_entry(path: Path) -> tuple[tuple[ConvexHull, ...], float, tuple[str, ..
     Raises:
         CorruptEntryError: Unreadable, incomplete, checksum mismatch, bad shapes or indices.
     """
+    arrays = read_checked(path, (*HULL_ARRAYS, "coacd_seconds", "notes"), CACHE_FORMAT_VERSION)
     try:
-        with np.load(path, allow_pickle=False) as data:
-            arrays = {k: np.asarray(data[k]) for k in data.files}
-    except Exception as e:  # any failure to parse means the entry cannot be used
-        raise CorruptEntryError(f"unreadable: {type(e).__name__}: {e}") from e
-    missing = [k for k in (*HULL_ARRAYS, "coacd_seconds", "notes", "format", "checksum") if k not in arrays]
-    if missing:
-        raise CorruptEntryError(f"missing arrays {', '.join(missing)}")
-    try:
-        if arrays["format"].shape != () or int(arrays["format"]) != CACHE_FORMAT_VERSION:
-            raise ValueError(f"format {arrays['format']!r}, expected {CACHE_FORMAT_VERSION}")
-        stored = str(arrays.pop("checksum"))
-        if array_checksum(arrays) != stored:
-            raise ValueError("checksum mismatch")
         raw = unpack_hulls(arrays)
         seconds = float(arrays["coacd_seconds"])
         notes = tuple(str(n) for n in arrays["notes"].reshape(-1))

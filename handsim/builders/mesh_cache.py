@@ -19,7 +19,6 @@ from __future__ import annotations
 
 import hashlib
 import importlib.metadata
-import io
 import logging
 import platform
 from collections.abc import Callable
@@ -28,13 +27,12 @@ from pathlib import Path
 
 import numpy as np
 
-from handsim.builders.hull_cache import CorruptEntryError, array_checksum, default_cache_dir
+from handsim.builders.hull_cache import CorruptEntryError, default_cache_dir, read_checked, write_checked
 from handsim.datatypes.mesh import Mesh
-from handsim.files import write_atomic
 from handsim.version import source_fingerprint
 
 MESH_CACHE_FORMAT = 1  # bump when the entry layout changes
-_ARRAYS = ("vertices", "faces", "source", "watertight", "notes", "format")
+_ARRAYS = ("vertices", "faces", "source", "watertight", "notes")
 _log = logging.getLogger(__name__)
 
 
@@ -69,7 +67,7 @@ def entry_path(cache_dir: str | Path, key: str) -> Path:
 
 
 def write_entry(path: Path, mesh: Mesh) -> None:
-    """Write a mesh entry atomically (:func:`handsim.files.write_atomic`).
+    """Write a mesh entry atomically (:func:`~handsim.builders.hull_cache.write_checked`).
 
     Raises:
         OSError: It cannot be written.
@@ -80,12 +78,8 @@ def write_entry(path: Path, mesh: Mesh) -> None:
         "source": np.array(mesh.source),
         "watertight": np.array(bool(mesh.watertight)),
         "notes": np.array(mesh.notes, dtype=str) if mesh.notes else np.zeros(0, dtype="<U1"),
-        "format": np.array(MESH_CACHE_FORMAT, dtype=np.int64),
     }
-    arrays["checksum"] = np.array(array_checksum(arrays))
-    buffer = io.BytesIO()
-    np.savez(buffer, **arrays)
-    write_atomic(path, buffer.getvalue())
+    write_checked(path, arrays, MESH_CACHE_FORMAT)
 
 
 def read_entry(path: Path) -> Mesh:
@@ -95,19 +89,7 @@ def read_entry(path: Path) -> Mesh:
         CorruptEntryError: Unreadable, incomplete, of another format, checksum mismatch, or a mesh that is
             not triangles indexing its vertices.
     """
-    try:
-        with np.load(path, allow_pickle=False) as data:
-            arrays = {k: np.asarray(data[k]) for k in data.files}
-    except Exception as e:  # any failure to parse means the entry cannot be used
-        raise CorruptEntryError(f"unreadable: {type(e).__name__}: {e}") from e
-    missing = [k for k in (*_ARRAYS, "checksum") if k not in arrays]
-    if missing:
-        raise CorruptEntryError(f"missing arrays {', '.join(missing)}")
-    stored = str(arrays.pop("checksum"))
-    if array_checksum(arrays) != stored:
-        raise CorruptEntryError("checksum mismatch")
-    if arrays["format"].shape != () or int(arrays["format"]) != MESH_CACHE_FORMAT:
-        raise CorruptEntryError(f"format {arrays['format']!r}, expected {MESH_CACHE_FORMAT}")
+    arrays = read_checked(path, _ARRAYS, MESH_CACHE_FORMAT)
     vertices, faces = arrays["vertices"], arrays["faces"]
     if (
         vertices.dtype != np.float64
