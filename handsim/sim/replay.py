@@ -14,7 +14,7 @@ import numpy as np
 from handsim.datatypes.trajectory import Trajectory
 from handsim.sim.compiled import SimScene
 from handsim.sim.control import DEFAULT_CONTROL_RATE, ControlSchedule, control_schedule
-from handsim.sim.drive import ScheduleDriver, scenario_switches
+from handsim.sim.drive import ScenarioSwitches, ScheduleDriver, scenario_switches
 from handsim.sim.metrics import FrameMetrics, MetricSpec, frame_metrics
 from handsim.sim.plausibility import Flag, check_control_rate, is_valid, replay_flags
 from handsim.sim.robustness import HoldRobustness, hold_robustness
@@ -191,8 +191,8 @@ def replay(scene: SimScene, trajectory: Trajectory, config: ReplayConfig | None 
     config = config or ReplayConfig()
     spec = config.metrics
     schedule = control_schedule(scene, trajectory, config.control_rate)
-    driver = _driver_at_start(scene, schedule, spec.release_delay)
-    switches = driver.switches
+    switches = scenario_switches(scene, schedule, spec.release_delay)
+    driver = _driver_at_start(scene, schedule, switches)
     setup = scene.setup
     release = switches.release_frame
     qpos, sensors, warnings, diverged = run_schedule(driver)
@@ -320,10 +320,11 @@ def member_hold(scene: SimScene, schedule: ControlSchedule, spec: MetricSpec) ->
     Returns:
         The hold outcome, or None when the scene has no hold to judge (no release, window or object).
     """
-    driver = _driver_at_start(scene, schedule, spec.release_delay)
-    release = driver.switches.release_frame
+    switches = scenario_switches(scene, schedule, spec.release_delay)
+    release = switches.release_frame
     if not _judges_hold(scene, release):
         return None
+    driver = _driver_at_start(scene, schedule, switches)
     window_end = scene.setup.hold_window[1]
     last = int(np.searchsorted(schedule.times, window_end + 1e-9))  # frames up to the window's end
     qpos, sensors, _, _ = run_schedule(driver, frames=last)
@@ -331,9 +332,10 @@ def member_hold(scene: SimScene, schedule: ControlSchedule, spec: MetricSpec) ->
     return _hold(scene, schedule, frames, qpos, release, spec)
 
 
-def _driver_at_start(scene: SimScene, schedule: ControlSchedule, release_delay: float) -> ScheduleDriver:
+def _driver_at_start(
+    scene: SimScene, schedule: ControlSchedule, switches: ScenarioSwitches
+) -> ScheduleDriver:
     """A driver of the scene's scenario on a fresh stepper (a private model when contacts switch), reset."""
-    switches = scenario_switches(scene, schedule, release_delay)
     stepper = Stepper(scene, schedule.substeps, own_model=switches.contact_frame > 0)
     driver = ScheduleDriver(stepper, schedule, switches)
     driver.reset()
