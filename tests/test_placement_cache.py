@@ -8,15 +8,22 @@ corrupt entry.
 
 from __future__ import annotations
 
+import copy
 import dataclasses
+import pickle
 
 import numpy as np
 import pytest
+import trimesh
 
 import handsim.sim.placement as placement_module
 import handsim.sim.scenarios as scenarios
 from handsim.assets import ASSETS_DIR
+from handsim.builders import build_object, build_scene, default_hand
+from handsim.builders.arctic_objects import arctic_object
+from handsim.builders.catalog import get
 from handsim.sim.collide import HandObjectCollider
+from handsim.sim.compiled import compile_scene
 from handsim.sim.hand_pose import targets_qpos
 from handsim.sim.placement import _searched, place_object
 from handsim.sim.placement_cache import entry_path, placement_key, read_entry
@@ -162,12 +169,6 @@ def test_a_cache_that_cannot_be_written_gives_the_placement_with_a_note(monkeypa
 def test_the_contacts_of_an_articulated_objects_own_parts_are_not_the_hands(tmp_path):
     # An ARCTIC-style box whose lid sinks 1 mm into its base: their explicit contact pair (no contype filter
     # stops it) collides in the placement's collider too, and must count as no hand link and no depth.
-    import trimesh
-
-    from handsim.builders import build_object, build_scene, default_hand
-    from handsim.builders.arctic_objects import arctic_object
-    from handsim.sim.compiled import compile_scene
-
     folder = tmp_path / "box"
     folder.mkdir()
     for name, (low, high) in (("bottom", (-60.0, 0.0)), ("top", (-1.0, 10.0))):
@@ -186,13 +187,6 @@ def test_the_contacts_of_an_articulated_objects_own_parts_are_not_the_hands(tmp_
 
 @pytest.mark.parametrize("duplicate", ["deepcopy", "pickle"])
 def test_a_copied_collider_queries_its_own_data(duplicate):
-    import copy
-    import pickle
-
-    from handsim.builders import build_object, build_scene, default_hand
-    from handsim.builders.catalog import get
-    from handsim.sim.compiled import compile_scene
-
     scene = compile_scene(build_scene(default_hand(), build_object(get("tennis_ball"))))
     collider = HandObjectCollider(scene, 0.002)
     twin = copy.deepcopy(collider) if duplicate == "deepcopy" else pickle.loads(pickle.dumps(collider))
