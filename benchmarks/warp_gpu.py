@@ -56,9 +56,6 @@ WORLDS = (1, 64, 512, 2048, 8192)
 LONGEST_S = 60.0
 STABILITY_REPEATS = (1, 64, 512)
 """The stability batch (7 worlds) repeated K times in one GPU batch."""
-_IGNORED_OVERFLOW = (1 << 10) | (1 << 11)
-"""mujoco_warp's ITERATIONS and LS_ITERATIONS overflow bits: the solver's iteration caps, as on the CPU
-(not a lost contact or constraint)."""
 
 
 # --------------------------------------------------------------------------------------------- export
@@ -417,8 +414,12 @@ def _kernels() -> None:
 
 
 def _overflow(d) -> int:
-    """The overflow bits of any world, the solver's iteration caps left out."""
-    return int(np.bitwise_or.reduce(d.overflow.numpy())) & ~_IGNORED_OVERFLOW
+    """The overflow bits of any world, less the solver's iteration caps (ITERATIONS, LS_ITERATIONS): those
+    cap the solver as on the CPU; the others mean a contact or a constraint was dropped."""
+    import mujoco_warp as mjw
+
+    caps = int(mjw.OverflowType.ITERATIONS | mjw.OverflowType.LS_ITERATIONS)
+    return int(np.bitwise_or.reduce(d.overflow.numpy())) & ~caps
 
 
 def gpu_replays(gpu: _Gpu, worlds: tuple[int, ...], deadline: float, report) -> dict:
