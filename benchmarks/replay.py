@@ -67,6 +67,7 @@ from pathlib import Path
 import mujoco
 import numpy as np
 import trimesh
+from replay_inputs import ReplayInputs  # benchmarks/replay_inputs.py (scripts run from benchmarks/)
 
 from handsim.assets import TZIONAS_DIR
 from handsim.builders import build_hand, build_scene, default_hand
@@ -173,7 +174,8 @@ def arctic_case():
     return "ARCTIC-shaped: two MANO hands + box and lid", scene, trajectory
 
 
-def _driver(scene, schedule, own_model: bool) -> ScheduleDriver:
+def driver_at_start(scene, schedule, own_model: bool) -> ScheduleDriver:
+    """A driver of the replay's scenario, reset to frame 0 (on a private model when ``own_model``)."""
     switches = scenario_switches(scene, schedule, MetricSpec().release_delay)
     stepper = Stepper(scene, schedule.substeps, own_model=own_model or switches.contact_frame > 0)
     driver = ScheduleDriver(stepper, schedule, switches)
@@ -183,30 +185,15 @@ def _driver(scene, schedule, own_model: bool) -> ScheduleDriver:
 
 def raw_seconds(scene, schedule) -> float:
     """The same simulation with nothing but the inputs: controls, mocap root, contact switch, release."""
-    driver = _driver(scene, schedule, own_model=True)
-    model, data = driver.stepper.model, driver.stepper.data
-    ctrl, root, k = schedule.ctrl, schedule.root_poses, schedule.substeps
-    mocap = [h.mocap for h in scene.layout.hands if h.mocap >= 0]
-    contact, release = driver.switches.contact_frame, driver.switches.release_frame
-    supports = [o.support_eq for o in scene.layout.objects if o.support_eq >= 0]
-    geoms = [g for o in scene.layout.objects for g in o.collision_geoms]
-    contype, conaffinity = scene.model.geom_contype[geoms].copy(), scene.model.geom_conaffinity[geoms].copy()
+    driver = driver_at_start(scene, schedule, own_model=True)
+    inputs = ReplayInputs.from_driver(driver)
     start = CLOCK()
-    for i in range(1, schedule.frames):
-        if i - 1 == release:
-            data.eq_active[supports] = 0
-        if i - 1 == contact and contact > 0:
-            model.geom_contype[geoms], model.geom_conaffinity[geoms] = contype, conaffinity
-        if root is not None:
-            data.mocap_pos[mocap] = root[i, :, :3]
-            data.mocap_quat[mocap] = root[i, :, 3:]
-        data.ctrl[:] = ctrl[i]
-        mujoco.mj_step(model, data, nstep=k)
+    inputs.run(driver.stepper.model, driver.stepper.data)
     return CLOCK() - start
 
 
 def loop_seconds(scene, schedule) -> float:
-    driver = _driver(scene, schedule, own_model=False)
+    driver = driver_at_start(scene, schedule, own_model=False)
     start = CLOCK()
     run_schedule(driver)
     return CLOCK() - start

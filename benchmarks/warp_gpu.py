@@ -48,6 +48,7 @@ from pathlib import Path
 
 import mujoco
 import numpy as np
+from replay_inputs import ReplayInputs  # benchmarks/replay_inputs.py (scripts run from benchmarks/)
 
 CONTROL_RATE = 100.0
 """Control frames per second, as in ``benchmarks/replay.py``."""
@@ -64,57 +65,40 @@ STABILITY_REPEATS = (1, 64, 512)
 
 def export(folder: Path) -> None:
     """Write the scenes, inputs, CPU references and the glove stability batch into ``folder``."""
-    from benchmarks.replay import arctic_case, glove_case, tzionas_case
+    from replay import arctic_case, driver_at_start, glove_case, tzionas_case
+
     from handsim.sim.control import control_schedule
-    from handsim.sim.drive import ScheduleDriver, scenario_switches
     from handsim.sim.metrics import MetricSpec
     from handsim.sim.replay import run_schedule
     from handsim.sim.stability import DIRECTIONS, StabilitySpec, _frozen_model, stability_test
-    from handsim.sim.stepper import Stepper
 
     folder.mkdir(parents=True, exist_ok=True)
     index = {}
-    spec = MetricSpec()
     for key, build in (("glove", glove_case), ("tzionas", tzionas_case), ("arctic", arctic_case)):
         name, scene, trajectory = build()
         schedule = control_schedule(scene, trajectory, CONTROL_RATE)
-        switches = scenario_switches(scene, schedule, spec.release_delay)
-        stepper = Stepper(scene, schedule.substeps, own_model=True)
-        driver = ScheduleDriver(stepper, schedule, switches)
-        driver.reset()
-        model, data = stepper.model, stepper.data
+        driver = driver_at_start(scene, schedule, own_model=True)
+        switches, inputs = driver.switches, ReplayInputs.from_driver(driver)
+        model, data = driver.stepper.model, driver.stepper.data
         state_spec = mujoco.mjtState.mjSTATE_INTEGRATION
         start = np.empty(mujoco.mj_stateSize(model, state_spec))
         mujoco.mj_getState(model, data, start, state_spec)
-        targets = driver.targets
         qpos, _, warnings, diverged = run_schedule(driver)
         if diverged is not None:
             raise RuntimeError(f"{name}: the CPU replay diverged ({diverged.describe()})")
-        ncon, nefc = _contact_sizes(scene.model, start, driver)
+        ncon, nefc = _contact_sizes(scene.model, start, inputs)
         layout = scene.layout
         obj = layout.objects[0] if layout.objects else None
         arrays = {
             "start": start,
-            "ctrl": schedule.ctrl,
-            "mocap": targets.mocap,
-            "root_pos": np.zeros((schedule.frames, 0, 3)) if targets.root_pos is None else targets.root_pos,
-            "root_quat": np.zeros((schedule.frames, 0, 4))
-            if targets.root_quat is None
-            else targets.root_quat,
-            "supports": targets.supports,
-            "geoms": targets.geoms,
-            "contype": targets.contype,
-            "conaffinity": targets.conaffinity,
+            **inputs.arrays(),
             "reference_qpos": qpos,
             "dof_qpos": np.asarray(layout.dof_qpos),
         }
         info = {
             "name": name,
-            "frames": schedule.frames,
-            "substeps": schedule.substeps,
+            **inputs.info(),
             "timestep": float(model.opt.timestep),
-            "contact_frame": switches.contact_frame,
-            "release_frame": switches.release_frame,
             "max_ncon": ncon,
             "max_nefc": nefc,
             "cpu_warnings": len(warnings),
@@ -129,7 +113,7 @@ def export(folder: Path) -> None:
         if key == "glove" and scene.setup.hold_window is not None and switches.release_frame >= 0:
             window_end = int(np.searchsorted(schedule.times, scene.setup.hold_window[1] + 1e-9)) - 1
             info["window_end_frame"] = min(window_end, schedule.frames - 1)
-            info["slip_limit"] = spec.slip_limit
+            info["slip_limit"] = MetricSpec().slip_limit
             release = switches.release_frame
             stability_spec = StabilitySpec()
             result = stability_test(scene, qpos[release], schedule.ctrl[release], spec=stability_spec)
@@ -171,9 +155,8 @@ def export(folder: Path) -> None:
     (folder / "scenes.json").write_text(json.dumps(index, indent=1))
 
 
-def _contact_sizes(model: mujoco.MjModel, start: np.ndarray, driver) -> tuple[int, int]:
+def _contact_sizes(model: mujoco.MjModel, start: np.ndarray, inputs: ReplayInputs) -> tuple[int, int]:
     """Most contacts and constraints in any step of the CPU replay (to size the GPU's buffers)."""
-    inputs = _Inputs.from_driver(driver)
     model, data = copy.deepcopy(model), mujoco.MjData(model)
     _restore(model, data, start)
     ncon = nefc = 0
@@ -182,82 +165,8 @@ def _contact_sizes(model: mujoco.MjModel, start: np.ndarray, driver) -> tuple[in
         nonlocal ncon, nefc
         ncon, nefc = max(ncon, data.ncon), max(nefc, data.nefc)
 
-    inputs.run_cpu(model, data, after_step=watch)
+    inputs.run(model, data, after_step=watch)
     return ncon, nefc
-
-
-# ------------------------------------------------------------------------------------------ the inputs
-
-
-class _Inputs:
-    """A replay's inputs per frame (what ``benchmarks/replay.py``'s raw loop sets)."""
-
-    def __init__(self, arrays: dict, info: dict) -> None:
-        self.ctrl = np.asarray(arrays["ctrl"])
-        self.mocap = np.asarray(arrays["mocap"], dtype=np.int64)
-        self.root_pos, self.root_quat = np.asarray(arrays["root_pos"]), np.asarray(arrays["root_quat"])
-        self.supports = np.asarray(arrays["supports"], dtype=np.int64)
-        self.geoms = np.asarray(arrays["geoms"], dtype=np.int64)
-        self.contype, self.conaffinity = np.asarray(arrays["contype"]), np.asarray(arrays["conaffinity"])
-        self.frames, self.substeps = int(info["frames"]), int(info["substeps"])
-        self.contact, self.release = int(info["contact_frame"]), int(info["release_frame"])
-
-    @classmethod
-    def from_driver(cls, driver) -> _Inputs:
-        t = driver.targets
-        frames = driver.schedule.frames
-        arrays = {
-            "ctrl": driver.schedule.ctrl,
-            "mocap": t.mocap,
-            "root_pos": np.zeros((frames, 0, 3)) if t.root_pos is None else t.root_pos,
-            "root_quat": np.zeros((frames, 0, 4)) if t.root_quat is None else t.root_quat,
-            "supports": t.supports,
-            "geoms": t.geoms,
-            "contype": t.contype,
-            "conaffinity": t.conaffinity,
-        }
-        info = {
-            "frames": frames,
-            "substeps": driver.schedule.substeps,
-            "contact_frame": driver.switches.contact_frame,
-            "release_frame": driver.switches.release_frame,
-        }
-        return cls(arrays, info)
-
-    def contacts_off(self, model: mujoco.MjModel) -> mujoco.MjModel:
-        """A copy of ``model`` with the objects' collisions off (before the contact frame)."""
-        off = copy.deepcopy(model)
-        off.geom_contype[self.geoms] = 0
-        off.geom_conaffinity[self.geoms] = 0
-        return off
-
-    def run_cpu(self, model: mujoco.MjModel, data: mujoco.MjData, qpos_out=None, after_step=None) -> None:
-        """The replay on the CPU from ``data``'s state: ``model`` is switched in place (a private copy)."""
-        if self.contact > 0:
-            model.geom_contype[self.geoms] = 0
-            model.geom_conaffinity[self.geoms] = 0
-        if qpos_out is not None:
-            qpos_out[0] = data.qpos
-        for i in range(1, self.frames):
-            if i - 1 == self.release:
-                data.eq_active[self.supports] = 0
-            if i - 1 == self.contact and self.contact > 0:
-                model.geom_contype[self.geoms], model.geom_conaffinity[self.geoms] = (
-                    self.contype,
-                    self.conaffinity,
-                )
-            if self.root_pos.shape[1]:  # welded roots with a recorded pose
-                data.mocap_pos[self.mocap] = self.root_pos[i]
-                data.mocap_quat[self.mocap] = self.root_quat[i]
-            data.ctrl[:] = self.ctrl[i]
-            if after_step is None:
-                mujoco.mj_step(model, data, nstep=self.substeps)
-            else:
-                for _ in range(self.substeps):
-                    mujoco.mj_step(model, data)
-                    after_step()
-            if qpos_out is not None:
-                qpos_out[i] = data.qpos
 
 
 def _restore(model: mujoco.MjModel, data: mujoco.MjData, state: np.ndarray) -> None:
@@ -269,7 +178,7 @@ def _restore(model: mujoco.MjModel, data: mujoco.MjData, state: np.ndarray) -> N
 # ------------------------------------------------------------------------------------------ CPU side
 
 
-def cpu_rates(model: mujoco.MjModel, start: np.ndarray, inputs: _Inputs, threads: int) -> dict:
+def cpu_rates(model: mujoco.MjModel, start: np.ndarray, inputs: ReplayInputs, threads: int) -> dict:
     """One replay on one thread (best of 3), and one replay per thread on ``threads`` threads (wall)."""
     steps = (inputs.frames - 1) * inputs.substeps
     qpos = np.empty((inputs.frames, model.nq))
@@ -278,14 +187,14 @@ def cpu_rates(model: mujoco.MjModel, start: np.ndarray, inputs: _Inputs, threads
         m, d = copy.deepcopy(model), mujoco.MjData(model)
         _restore(m, d, start)
         t0 = time.perf_counter()
-        inputs.run_cpu(m, d, qpos_out=qpos)
+        inputs.run(m, d, qpos_out=qpos)
         best = min(best, time.perf_counter() - t0)
     worlds = [(copy.deepcopy(model), mujoco.MjData(model)) for _ in range(threads)]
     for m, d in worlds:
         _restore(m, d, start)
     with concurrent.futures.ThreadPoolExecutor(threads) as pool:
         t0 = time.perf_counter()
-        list(pool.map(lambda w: inputs.run_cpu(*w), worlds))
+        list(pool.map(lambda w: inputs.run(*w), worlds))
         wall = time.perf_counter() - t0
     return {
         "steps": steps,
@@ -302,7 +211,7 @@ def cpu_rates(model: mujoco.MjModel, start: np.ndarray, inputs: _Inputs, threads
 class _Gpu:
     """MuJoCo Warp replays of one scene: models (contacts off/on), frame inputs on the device."""
 
-    def __init__(self, model: mujoco.MjModel, start: np.ndarray, inputs: _Inputs, info: dict) -> None:
+    def __init__(self, model: mujoco.MjModel, start: np.ndarray, inputs: ReplayInputs, info: dict) -> None:
         import mujoco_warp as mjw
         import warp as wp
 
@@ -512,13 +421,13 @@ def fidelity(model: mujoco.MjModel, reference: np.ndarray, other: np.ndarray, ar
     return result
 
 
-def float32_start_run(model: mujoco.MjModel, start: np.ndarray, inputs: _Inputs) -> np.ndarray:
+def float32_start_run(model: mujoco.MjModel, start: np.ndarray, inputs: ReplayInputs) -> np.ndarray:
     """The CPU replay from the start state rounded to float32: the model's own sensitivity to a rounding
     of the size Warp makes, the yardstick for the GPU's differences from the CPU."""
     m, d = copy.deepcopy(model), mujoco.MjData(model)
     _restore(m, d, start.astype(np.float32).astype(np.float64))
     qpos = np.empty((inputs.frames, model.nq))
-    inputs.run_cpu(m, d, qpos_out=qpos)
+    inputs.run(m, d, qpos_out=qpos)
     return qpos
 
 
@@ -673,7 +582,7 @@ def run(
         info = index[key]
         arrays = dict(np.load(folder / f"{key}.npz"))
         model = mujoco.MjModel.from_binary_path(str(folder / f"{key}.mjb"))
-        inputs = _Inputs(arrays, info)
+        inputs = ReplayInputs.from_arrays(arrays, info)
         scene: dict = {"name": info["name"], "frames": info["frames"], "substeps": info["substeps"]}
         results["scenes"][key] = scene
 
