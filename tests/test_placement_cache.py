@@ -12,6 +12,7 @@ import copy
 import dataclasses
 import pickle
 
+import mujoco
 import numpy as np
 import pytest
 import trimesh
@@ -182,7 +183,25 @@ def test_the_contacts_of_an_articulated_objects_own_parts_are_not_the_hands(tmp_
     touch = collider.touch_at(far, np.array([1.0, 0.0, 0.0, 0.0]))
     assert collider.data.ncon > 0  # the parts' pair collided
     assert touch.links.size == 0 and touch.depth == 0.0
-    assert collider.depth_links(far, np.array([1.0, 0.0, 0.0, 0.0])) == (0.0, 0)
+    assert collider.depth_links(far[None], np.array([1.0, 0.0, 0.0, 0.0])) == ([0.0], [0])
+
+
+def test_the_batched_queries_are_touch_at_bit_for_bit():
+    # depth_links reduces many queries' contacts at once; touch_at, one query at a time, is the reference
+    scene = compile_scene(build_scene(default_hand(), build_object(get("mug"))))
+    collider = HandObjectCollider(scene, 0.002)
+    collider.set_hand(scene.model.qpos0)
+    mujoco.mj_kinematics(collider.model, collider.data)
+    palm = collider.data.xpos[scene.layout.link_bodies[0]]
+    quat = np.array([0.5, 0.5, -0.5, 0.5])
+    positions = palm + np.stack(np.meshgrid(*[np.linspace(-0.08, 0.08, 9)] * 3), axis=-1).reshape(-1, 3)
+    depths, links = collider.depth_links(positions, quat)
+    expected = [collider.touch_at(p, quat) for p in positions]
+    assert depths == [t.depth for t in expected]
+    assert links == [t.links.size for t in expected]
+    assert all(type(d) is float for d in depths)
+    assert sum(d > 0 for d in depths) > 50 and sum(n > 1 for n in links) > 50  # deep poses, several links
+    assert collider.depth_links(positions[:0], quat) == ([], [])
 
 
 @pytest.mark.parametrize("duplicate", ["deepcopy", "pickle"])

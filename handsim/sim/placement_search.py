@@ -32,6 +32,8 @@ from handsim.sim.placement_types import Candidate, PlacementSpec
 
 MIN_THREAD_QUERIES = 64
 """Collision queries per thread below which :meth:`PlacementSearch._fits` stays on one thread."""
+QUERY_CHUNK = 256
+"""Most poses per :meth:`HandObjectCollider.depth_links` call (the unit dealt out to threads)."""
 SCREEN_MARGIN = 0.002
 """A pose whose inscribed balls overlap the hand's by more than the penetration tolerance plus this is
 settled as infeasible without a collision query, m. MuJoCo's capsule–mesh depths (native CCD) came out at
@@ -100,9 +102,8 @@ class PlacementSearch:
         if not self.screen or not poses:
             return verdicts
         array = np.asarray(poses)
-        starts = [0, *(np.flatnonzero((array[1:, 3:] != array[:-1, 3:]).any(axis=1)) + 1), len(poses)]
         deep = self.spec.penetration + SCREEN_MARGIN
-        for a, b in itertools.pairwise(starts):
+        for a, b in _orientation_runs(array):
             verdicts[a:b] = self.collider.screen(array[a:b, :3], array[a, 3:], deep)
         return verdicts
 
@@ -131,16 +132,30 @@ class PlacementSearch:
     def _depths(self, poses: list[np.ndarray]) -> list[tuple[float, int]]:
         """:meth:`HandObjectCollider.depth_links` of each pose, in order, the poses spread over threads.
 
-        Each thread queries its own copy of the collider's data (the hand at the same posture); the
-        answers are those of one collider querying them all (:mod:`handsim.sim.parallel`).
+        The poses go to it in runs of one orientation of at most
+        :data:`QUERY_CHUNK`; each thread queries its own copy of the collider's data (the hand at the same
+        posture); the answers are those of one collider querying them all (:mod:`handsim.sim.parallel`).
         """
-        threads = min(sim_threads(), len(poses) // MIN_THREAD_QUERIES)
+        if not poses:
+            return []
+        array = np.asarray(poses)
+        spans = [
+            (start, min(start + QUERY_CHUNK, b))
+            for a, b in _orientation_runs(array)
+            for start in range(a, b, QUERY_CHUNK)
+        ]
+
+        def query(collider: HandObjectCollider, span: tuple[int, int]) -> tuple[list[float], list[int]]:
+            return collider.depth_links(array[span[0] : span[1], :3], array[span[0], 3:])
+
+        threads = min(sim_threads(), len(poses) // MIN_THREAD_QUERIES, len(spans))
         if threads <= 1:
-            return [self.collider.depth_links(p[:3], p[3:]) for p in poses]
-        colliders = [self.collider, *(self.collider.fork() for _ in range(threads - 1))]
-        answers = map_on_workers(lambda collider, p: collider.depth_links(p[:3], p[3:]), poses, colliders)
-        self.collider.queries += sum(c.queries for c in colliders[1:])
-        return answers
+            parts = [query(self.collider, span) for span in spans]
+        else:
+            colliders = [self.collider, *(self.collider.fork() for _ in range(threads - 1))]
+            parts = map_on_workers(query, spans, colliders)
+            self.collider.queries += sum(c.queries for c in colliders[1:])
+        return [answer for depths, links in parts for answer in zip(depths, links, strict=True)]
 
     def _ranked(self, fitting: list[tuple[np.ndarray, int]]) -> list[tuple[tuple, np.ndarray]]:
         """Fitting poses ranked by what the recorded closing does to them (best first).
@@ -246,3 +261,9 @@ class PlacementSearch:
             if depth > self.spec.penetration:
                 return replace(candidate, contact_frame=f + 1, depth_before_contact=depth)
         return replace(candidate, contact_frame=opened, depth_before_contact=0.0)
+
+
+def _orientation_runs(poses: np.ndarray) -> list[tuple[int, int]]:
+    """(start, stop) of each run of consecutive poses (N, 7) with the same orientation."""
+    starts = [0, *(np.flatnonzero((poses[1:, 3:] != poses[:-1, 3:]).any(axis=1)) + 1), len(poses)]
+    return list(itertools.pairwise(starts))
