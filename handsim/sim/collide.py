@@ -277,13 +277,14 @@ class HandObjectCollider:
         cull2 = np.where(reach_k > 0, (reach_k + np.sqrt(len2_k) / 2 + 1e-6) ** 2, -1.0)
         clear = np.zeros(len(positions), dtype=bool)
         overlap = np.full(len(positions), -np.inf)
+        centres2, mid2 = (centres * centres).sum(axis=1), (mid_k * mid_k).sum(axis=1)
         for first in range(0, len(positions), _CHUNK):
             x = np.asarray(positions[first : first + _CHUNK], dtype=float)
             x2 = (x * x).sum(axis=1)[:, None]
-            d2 = x2 - 2.0 * (x @ centres.T) + (centres * centres).sum(axis=1)[None]
-            clear[first : first + _CHUNK] = (d2 > reach2[None]).all(axis=1)
+            apart = _squared_distances(x, x2, centres, centres2) > reach2
+            clear[first : first + _CHUNK] = apart.all(axis=1)
             if rad_k.size:
-                near = x2 - 2.0 * (x @ mid_k.T) + (mid_k * mid_k).sum(axis=1)[None] < cull2[None]
+                near = _squared_distances(x, x2, mid_k, mid2) < cull2
                 n, k = np.nonzero(near)
                 rel = x[n] - start_k[k]
                 t = np.clip((rel * dir_k[k]).sum(axis=1) / len2_k[k], 0.0, 1.0)
@@ -291,6 +292,18 @@ class HandObjectCollider:
                 chunk = overlap[first : first + _CHUNK]
                 np.maximum.at(chunk, n, depth)
         return clear, overlap
+
+
+def _squared_distances(x: np.ndarray, x2: np.ndarray, y: np.ndarray, y2: np.ndarray) -> np.ndarray:
+    """``x2 − 2 x·yᵀ + y2`` (N, M) for points ``x`` (N, 3), ``y`` (M, 3) and their squared norms (N, 1), (M,).
+
+    In place on the one (N, M) product (no temporaries of that size), bit for bit the expression.
+    """
+    d2 = x @ y.T
+    d2 *= -2.0
+    d2 += x2
+    d2 += y2
+    return d2
 
 
 def _core(model: mujoco.MjModel, geom: int) -> tuple[np.ndarray, np.ndarray, float]:

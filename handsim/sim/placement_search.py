@@ -87,56 +87,68 @@ class PlacementSearch:
         centres, radii = collider.hand_spheres()
         return reach.min(axis=0), reach.max(axis=0), centres, radii
 
-    def _consider(self, pose: np.ndarray, depth: float) -> None:
-        if self.least is None or depth < self.least[0]:
-            self.least = (depth, pose)
-        if depth <= self.spec.penetration:
-            self.feasible_poses += 1
-            distance = float(np.linalg.norm(pose[:3] - self.centre))
-            if self.nearest is None or distance < self.nearest[0]:
-                self.nearest = (distance, pose)
+    def _consider(self, poses: np.ndarray, depths: np.ndarray) -> None:
+        """Count the poses (N, 7) with their depths (N,) into the least deep and the nearest feasible pose.
 
-    def _verdicts(self, poses: list[np.ndarray]) -> np.ndarray:
+        As if they were taken one by one in order, each replacing the one kept only when strictly less
+        deep (nearer): the first of the least deep (nearest) wins. The distance that decides the nearest is
+        ``np.linalg.norm`` of each pose, computed for the few poses within rounding of the least.
+        """
+        if not len(depths):
+            return
+        first = int(np.argmin(depths))  # the first of the least deep
+        if self.least is None or depths[first] < self.least[0]:
+            self.least = (float(depths[first]), poses[first].copy())
+        feasible = np.flatnonzero(depths <= self.spec.penetration)
+        self.feasible_poses += feasible.size
+        if not feasible.size:
+            return
+        offsets = poses[feasible, :3] - self.centre
+        rough = np.sqrt((offsets * offsets).sum(axis=1))  # within a few ulp of np.linalg.norm's
+        close = feasible[rough <= rough.min() * (1.0 + 1e-9) + 1e-300]
+        exact = [float(np.linalg.norm(poses[i, :3] - self.centre)) for i in close]
+        best = int(np.argmin(exact))  # the first of the nearest
+        if self.nearest is None or exact[best] < self.nearest[0]:
+            self.nearest = (exact[best], poses[close[best]].copy())
+
+    def _verdicts(self, poses: np.ndarray) -> np.ndarray:
         """:meth:`HandObjectCollider.screen` of each pose (runs of one orientation screened together)."""
         verdicts = np.zeros(len(poses), dtype=np.int8)
-        if not self.screen or not poses:
+        if not self.screen or not len(poses):
             return verdicts
-        array = np.asarray(poses)
         deep = self.spec.penetration + SCREEN_MARGIN
-        for a, b in _orientation_runs(array):
-            verdicts[a:b] = self.collider.screen(array[a:b, :3], array[a, 3:], deep)
+        for a, b in _orientation_runs(poses):
+            verdicts[a:b] = self.collider.screen(poses[a:b, :3], poses[a, 3:], deep)
         return verdicts
 
-    def _fits(self, frame: int, poses: list[np.ndarray]) -> list[tuple[np.ndarray, int]]:
-        """The poses that fit (within the tolerance) and touch the hand at ``frame``, with their links."""
+    def _fits(self, frame: int, poses: np.ndarray) -> list[tuple[np.ndarray, int]]:
+        """The poses (N, 7) that fit (within the tolerance) and touch the hand at ``frame``, with their links.
+
+        A pose the bounds settle as clear fits and touches nothing (depth 0); one settled as deep is left
+        out; the others are collision queries.
+        """
         self.collider.set_hand(targets_qpos(self.scene, self.trajectory, frame))
         verdicts = self._verdicts(poses)
-        unsettled = [p for p, v in zip(poses, verdicts, strict=True) if v not in (CLEAR, DEEP)]
-        queried = iter(self._depths(unsettled))
-        fitting = []
-        for pose, verdict in zip(poses, verdicts, strict=True):
-            if verdict == CLEAR:  # no link within the touch distance: fits, touches nothing
-                self.screened += 1
-                self._consider(pose, 0.0)
-                continue
-            if verdict == DEEP:
-                self.screened += 1
-                self.pruned_deep = True
-                continue
-            depth, links = next(queried)
-            self._consider(pose, depth)
-            if depth <= self.spec.penetration and links:
-                fitting.append((pose, links))
-        return fitting
+        clear, deep = verdicts == CLEAR, verdicts == DEEP
+        asked = np.flatnonzero(~clear & ~deep)
+        depths, links = np.zeros(len(poses)), np.zeros(len(poses), dtype=np.int64)
+        if asked.size:
+            depths[asked], links[asked] = zip(*self._depths(poses[asked]), strict=True)
+        self.screened += int(clear.sum() + deep.sum())
+        self.pruned_deep = self.pruned_deep or bool(deep.any())
+        kept = np.flatnonzero(~deep)
+        self._consider(poses[kept], depths[kept])
+        fitting = np.flatnonzero(~deep & (depths <= self.spec.penetration) & (links > 0))
+        return [(poses[i].copy(), int(links[i])) for i in fitting]
 
-    def _depths(self, poses: list[np.ndarray]) -> list[tuple[float, int]]:
+    def _depths(self, poses: np.ndarray) -> list[tuple[float, int]]:
         """:meth:`HandObjectCollider.depth_links` of each pose, in order, the poses spread over threads.
 
         The poses go to it in runs of one orientation of at most
         :data:`QUERY_CHUNK`; each thread queries its own copy of the collider's data (the hand at the same
         posture); the answers are those of one collider querying them all (:mod:`handsim.sim.parallel`).
         """
-        if not poses:
+        if not len(poses):
             return []
         array = np.asarray(poses)
         spans = [
@@ -182,7 +194,7 @@ class PlacementSearch:
         spec, collider = self.spec, self.collider
         collider.set_hand(targets_qpos(self.scene, self.trajectory, frame))
         lo, hi, centres, radii = self._reach()
-        coarse, steps = [], {}
+        coarse, steps = [np.zeros((0, 7))], {}
         for quat in self.quats:
             extent = self.points @ quat_to_matrix(quat).T
             # the object's box holds a point the closing converges on, and it lies within the hand's reach
@@ -193,14 +205,14 @@ class PlacementSearch:
             gap = np.linalg.norm(grid[:, None, :] - centres[None], axis=-1) - radii - self.radius
             grid = grid[(gap <= spec.touch).any(axis=1)]  # can touch some link at all
             steps[tuple(quat)] = step
-            coarse.extend(np.concatenate([pos, quat]) for pos in grid)
-        seeds = self._diverse(self._ranked(self._fits(frame, coarse)), steps)
+            coarse.append(_with_orientation(grid, quat))
+        seeds = self._diverse(self._ranked(self._fits(frame, np.concatenate(coarse))), steps)
         refined = []
         for key, pose in seeds:
             span = steps[tuple(pose[3:])]
             while span > spec.fine_step + 1e-12:  # halve the spacing around the best pose until fine
                 span /= 2
-                around = [np.concatenate([p, pose[3:]]) for p in grid_around(pose[:3], 2 * span, span)]
+                around = _with_orientation(grid_around(pose[:3], 2 * span, span), pose[3:])
                 best = self._ranked(self._fits(frame, around))
                 if best and best[0][0] > key:
                     key, pose = best[0]
@@ -267,3 +279,8 @@ def _orientation_runs(poses: np.ndarray) -> list[tuple[int, int]]:
     """(start, stop) of each run of consecutive poses (N, 7) with the same orientation."""
     starts = [0, *(np.flatnonzero((poses[1:, 3:] != poses[:-1, 3:]).any(axis=1)) + 1), len(poses)]
     return list(itertools.pairwise(starts))
+
+
+def _with_orientation(positions: np.ndarray, quat: np.ndarray) -> np.ndarray:
+    """Poses (N, 7): ``positions`` (N, 3) each with orientation ``quat``."""
+    return np.hstack([positions, np.broadcast_to(quat, (len(positions), 4))])
