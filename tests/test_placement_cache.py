@@ -186,21 +186,42 @@ def test_the_contacts_of_an_articulated_objects_own_parts_are_not_the_hands(tmp_
     assert collider.depth_links(far[None], np.array([1.0, 0.0, 0.0, 0.0])) == ([0.0], [0])
 
 
-def test_the_batched_queries_are_touch_at_bit_for_bit():
-    # depth_links reduces many queries' contacts at once; touch_at, one query at a time, is the reference
+def test_the_batched_queries_are_mujocos_contacts_pose_by_pose():
+    # distances reduces many queries' contacts at once; the reference reads MuJoCo's contacts one pose at a
+    # time, each contact's link from its hand geom's body
     scene = compile_scene(build_scene(default_hand(), build_object(get("mug"))))
     collider = HandObjectCollider(scene, 0.002)
     collider.set_hand(scene.model.qpos0)
-    mujoco.mj_kinematics(collider.model, collider.data)
-    palm = collider.data.xpos[scene.layout.link_bodies[0]]
+    model, data = collider.model, mujoco.MjData(collider.model)
+    data.qpos[:] = collider.data.qpos
+    mujoco.mj_kinematics(model, data)
+    link_of = {int(body): i for i, body in enumerate(scene.layout.link_bodies)}
+    palm = data.xpos[scene.layout.link_bodies[0]].copy()
     quat = np.array([0.5, 0.5, -0.5, 0.5])
     positions = palm + np.stack(np.meshgrid(*[np.linspace(-0.08, 0.08, 9)] * 3), axis=-1).reshape(-1, 3)
+    expected = np.full((len(positions), len(link_of)), np.inf)
+    a = collider.obj.free_qpos
+    for row, pos in zip(expected, positions, strict=True):
+        data.qpos[a : a + 7] = [*pos, *quat]
+        mujoco.mj_kinematics(model, data)
+        mujoco.mj_collision(model, data)
+        for c in data.contact:
+            bodies = [int(model.geom_bodyid[g]) for g in c.geom]
+            link = next((link_of[b] for b in bodies if b in link_of), None)
+            if link is not None and c.dist <= 0.002:
+                row[link] = min(row[link], c.dist)
+    distances = collider.distances(positions, quat)
+    np.testing.assert_array_equal(distances, expected)
     depths, links = collider.depth_links(positions, quat)
-    expected = [collider.touch_at(p, quat) for p in positions]
-    assert depths == [t.depth for t in expected]
-    assert links == [t.links.size for t in expected]
+    assert depths == [max(0.0, -float(r.min())) for r in expected]
+    assert links == [int(np.isfinite(r).sum()) for r in expected]
     assert all(type(d) is float for d in depths)
     assert sum(d > 0 for d in depths) > 50 and sum(n > 1 for n in links) > 50  # deep poses, several links
+    touch = collider.touch_at(positions[40], quat)  # 8 links within the touch distance
+    assert touch.links.size > 1
+    np.testing.assert_array_equal(touch.distance, expected[40])
+    assert touch.depth == depths[40]
+    assert touch.links.tolist() == np.flatnonzero(np.isfinite(expected[40])).tolist()
     assert collider.depth_links(positions[:0], quat) == ([], [])
 
 

@@ -28,7 +28,6 @@ from handsim.datatypes.rotations import quat_to_matrix
 from handsim.sim.compiled import SimScene
 
 _HAND_BIT, _OBJECT_BIT = 2, 2
-_NO_LINKS, _NO_DISTANCES = np.zeros(0, dtype=np.int64), np.zeros(0)
 _NO_CORE = (np.zeros(3), np.zeros(3), 0.0)
 _BALL_TYPES = frozenset({int(mujoco.mjtGeom.mjGEOM_SPHERE), int(mujoco.mjtGeom.mjGEOM_MESH)})
 """Object geom types whose inscribed ball bounds a query's depth (:meth:`HandObjectCollider.bounds`)."""
@@ -126,42 +125,32 @@ class HandObjectCollider:
         self.data.qpos[:] = qpos
         self.data.qpos[a : a + 7] = pose
 
-    def _contacts(self, pos: np.ndarray, quat: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """Link index and distance of each hand–object contact within the touch distance at a pose."""
-        d, model = self.data, self.model
-        self._object_pos[:] = pos
-        self._object_quat[:] = quat
-        mujoco.mj_kinematics(model, d)
-        mujoco.mj_collision(model, d)
-        self.queries += 1
-        if d.ncon == 0:
-            return _NO_LINKS, _NO_DISTANCES
-        contact = d.contact
-        link = self._geom_link[contact.geom].max(axis=1)
-        dist = contact.dist  # a view of MuJoCo's contacts, which the next query overwrites
-        keep = (link >= 0) & (dist <= self.touch)
-        if keep.all():  # the usual case: hand–object contacts within the object's margin (the touch distance)
-            return link, dist.copy()
-        return link[keep], dist[keep]
-
     def touch_at(self, pos: np.ndarray, quat: np.ndarray) -> Touch:
         """The links touching the object at pose (``pos``, ``quat``) and the deepest penetration."""
-        link, dist = self._contacts(pos, quat)
-        distance = np.full(self.layout.link_bodies.size, np.inf)
-        if not link.size:
-            return Touch(np.zeros(0, dtype=np.int64), 0.0, distance)
-        np.minimum.at(distance, link, dist)
-        return Touch(np.flatnonzero(np.isfinite(distance)), float(max(0.0, -dist.min())), distance)
+        distance = self.distances(np.asarray(pos, dtype=float)[None], quat)[0]
+        links = np.flatnonzero(np.isfinite(distance))
+        return Touch(links, float(max(0.0, -distance.min())) if links.size else 0.0, distance)
 
     def depth_links(self, positions: np.ndarray, quat: np.ndarray) -> tuple[list[float], list[int]]:
         """:meth:`touch_at`'s ``depth`` and number of ``links`` at each of ``positions`` (N, 3), one ``quat``.
 
-        The same numbers as one :meth:`touch_at` per position, bit for bit, with less Python per query (the
-        placement search's hot loop): the loop only runs MuJoCo and keeps each query's raw contacts; they
-        are filtered and reduced for all the queries at once afterwards.
-
         Returns:
             Per position, the depth (m) and the number of links within the touch distance.
+        """
+        distance = self.distances(positions, quat)
+        least = distance.min(axis=1, initial=np.inf)
+        depth = np.where(-least > 0.0, -least, 0.0)  # max(0, −least) as Python's max gives it (never −0.0)
+        return depth.tolist(), np.isfinite(distance).sum(axis=1).tolist()
+
+    def distances(self, positions: np.ndarray, quat: np.ndarray) -> np.ndarray:
+        """Each hand link's least signed distance to the object at each of ``positions`` (N, 3), one ``quat``.
+
+        One MuJoCo collision query per position; the loop only runs MuJoCo and keeps each query's raw
+        contacts, which are filtered and reduced for all the queries at once afterwards (the placement
+        search's hot loop: little Python per query).
+
+        Returns:
+            (N, links) distances, m: negative for a penetration, +inf beyond the touch distance.
         """
         model, data = self.model, self.data
         self._object_quat[:] = quat
@@ -177,20 +166,14 @@ class HandObjectCollider:
                 found.append(data.ncon)
                 geoms.append(contact.geom.copy())
                 dists.append(contact.dist.copy())
-        count = len(positions)
-        self.queries += count
-        if not owners:
-            return [0.0] * count, [0] * count
-        owner, dist = np.repeat(owners, found), np.concatenate(dists)
-        link = self._geom_link[np.concatenate(geoms)].max(axis=1)
-        keep = (link >= 0) & (dist <= self.touch)
-        owner, link, dist = owner[keep], link[keep], dist[keep]
-        least = np.full(count, np.inf)
-        np.minimum.at(least, owner, dist)
-        depth = np.where(-least > 0.0, -least, 0.0)  # max(0, −least) as Python's max gives it (never −0.0)
-        pairs = np.unique(owner * len(self.link_index) + link)  # distinct (query, link)
-        links = np.bincount(pairs // len(self.link_index), minlength=count)
-        return depth.tolist(), links.tolist()
+        self.queries += len(positions)
+        distance = np.full((len(positions), self.layout.link_bodies.size), np.inf)
+        if owners:
+            owner, dist = np.repeat(owners, found), np.concatenate(dists)
+            link = self._geom_link[np.concatenate(geoms)].max(axis=1)
+            keep = (link >= 0) & (dist <= self.touch)
+            np.minimum.at(distance, (owner[keep], link[keep]), dist[keep])
+        return distance
 
     def hand_spheres(self) -> tuple[np.ndarray, np.ndarray]:
         """Centres (G, 3) and bounding radii (G,) of the hand's colliding geoms at the current posture.

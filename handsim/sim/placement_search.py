@@ -178,11 +178,16 @@ class PlacementSearch:
         fits, and closeness to the fingertips' centre.
         """
         self.collider.set_hand(targets_qpos(self.scene, self.trajectory, self.grasp.closed))
-        ranked = []
-        for pose, links in fitting:
-            touch = self.collider.touch_at(pose[:3], pose[3:])
-            pressing = {self.groups[i] for i in np.flatnonzero(touch.distance < -self.spec.penetration)}
-            pressing |= {"palm" for i in touch.links if self.groups[i] == "palm"}
+        ranked: list[tuple[tuple, np.ndarray]] = []
+        if not fitting:
+            return ranked
+        poses = np.array([pose for pose, _ in fitting])
+        distances = np.concatenate(
+            [self.collider.distances(poses[a:b, :3], poses[a, 3:]) for a, b in _orientation_runs(poses)]
+        )
+        for (pose, links), distance in zip(fitting, distances, strict=True):
+            pressing = {self.groups[i] for i in np.flatnonzero(distance < -self.spec.penetration)}
+            pressing |= {"palm" for i in np.flatnonzero(np.isfinite(distance)) if self.groups[i] == "palm"}
             opposed = bool(pressing & {"thumb", "palm"}) and bool(pressing & _FINGERS)
             key = (opposed, len(pressing), links, -float(np.linalg.norm(pose[:3] - self.centre)))
             ranked.append((key, pose))
