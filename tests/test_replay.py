@@ -10,6 +10,7 @@ from functools import cache
 import numpy as np
 import pytest
 
+import handsim.sim.replay as replay_module
 from handsim.assets import ASSETS_DIR, TZIONAS_DIR
 from handsim.builders import build_hand, build_scene, default_hand
 from handsim.builders.catalog import get, get_graspdb
@@ -23,7 +24,7 @@ from handsim.io.tzionas_sequence import read_tzionas_sequence
 from handsim.sim.compiled import compile_scene
 from handsim.sim.control import control_schedule
 from handsim.sim.drive import ScenarioSwitches, ScheduleDriver
-from handsim.sim.replay import ReplayConfig, member_hold, replay
+from handsim.sim.replay import ReplayConfig, member_verdict, replay
 from handsim.sim.robustness import ensemble_scenes
 from handsim.sim.scenarios import glove_scene, recorded_scene
 from handsim.sim.stepper import Stepper
@@ -265,31 +266,47 @@ def test_glove_replay_switches_contacts_on_its_own_model_copy_and_leaves_the_sce
     assert result.frames.penetration[: contact + 1].max() == 0.0  # the sensors follow the contact switch
 
 
-def _member_holds_match_their_whole_replays(scene, trajectory) -> int:
-    """Every ensemble member's hold from its replay up to the window's end equals its whole replay's."""
+def _member_holds_match_their_whole_replays(scene, trajectory, monkeypatch) -> int:
+    """Every ensemble member's verdict equals its whole replay's; a lost member stops soon after the loss."""
     config = ReplayConfig(ensemble=False)
     schedule = control_schedule(scene, trajectory, config.control_rate)
     members = ensemble_scenes(scene)
+    simulated = []  # rows each member's run returned
+    whole_run = replay_module.run_schedule
+
+    def recorded(*args, **kwargs):
+        result = whole_run(*args, **kwargs)
+        simulated.append(result[0].shape[0])
+        return result
+
     lost = 0
     for label, variant in members:
         whole = replay(variant, trajectory, config).hold
-        assert member_hold(variant, schedule, config.metrics) == whole, label
-        lost += whole.held is False
+        with monkeypatch.context() as patch:
+            patch.setattr(replay_module, "run_schedule", recorded)
+            assert member_verdict(variant, schedule, config.metrics) == (whole.held, whole.reason), label
+        window_end = int(np.searchsorted(schedule.times, whole.window[1] + 1e-9))
+        if whole.held is False:  # stopped at the first look after the loss (looks 0.1 s, 0.2 s … in)
+            lost += 1
+            looked = schedule.times[simulated[-1] - 1] - whole.released_at
+            assert simulated[-1] < window_end and looked < 2 * max(whole.lost_at - whole.released_at, 0.1)
+        else:  # simulated to the window's end and no further
+            assert simulated[-1] == window_end
     assert members
     return lost
 
 
 @pytest.mark.slow
-def test_an_ensemble_member_judged_up_to_the_window_end_is_its_whole_replay_bitwise():
+def test_an_ensemble_member_judged_up_to_the_window_end_is_its_whole_replay_bitwise(monkeypatch):
     loaded = load_trial(ASSETS_DIR / "demo" / "tennis_ball.grasp.json")
-    _member_holds_match_their_whole_replays(loaded.scene, loaded.trajectory)
+    _member_holds_match_their_whole_replays(loaded.scene, loaded.trajectory, monkeypatch)
 
 
 @pytest.mark.slow
-def test_ensemble_members_lost_and_held_are_judged_as_by_their_whole_replays(graspdb_dir):
+def test_ensemble_members_lost_and_held_are_judged_as_by_their_whole_replays(graspdb_dir, monkeypatch):
     # the mug on the default hand: 6 of 13 members held (tests/test_verdicts.py), so both outcomes occur
     loaded = load_trial(graspdb_dir / "04_ex01-rad-045-grasp-su03.txt")
-    assert _member_holds_match_their_whole_replays(loaded.scene, loaded.trajectory) > 0
+    assert _member_holds_match_their_whole_replays(loaded.scene, loaded.trajectory, monkeypatch) > 0
 
 
 @pytest.mark.slow

@@ -107,6 +107,24 @@ class MetricSpec:
 
 
 @dataclass(frozen=True)
+class HoldTracks:
+    """What the hold verdict reads of a replay's frames (:func:`handsim.sim.summary.hold_outcome`).
+
+    :class:`FrameMetrics` carries the same three fields; these alone are cheap enough to compute on the
+    frames of a run that is still going.
+
+    Attributes:
+        times: Trajectory time of each frame, s (N,).
+        object_in_hand: Each object's origin in the (first) hand root's frame, m (N, objects, 3).
+        hand_contact: Whether any hand link touches each object (N, objects).
+    """
+
+    times: np.ndarray
+    object_in_hand: np.ndarray
+    hand_contact: np.ndarray
+
+
+@dataclass(frozen=True)
 class FrameMetrics:
     """Per-frame metrics (N frames).
 
@@ -175,13 +193,20 @@ def _penetration(scene: SimScene, sensors: np.ndarray) -> np.ndarray:
     return np.where(found > 0, np.maximum(-dist, 0.0), 0.0).max(axis=2)
 
 
+def _contact_counts(scene: SimScene, sensors: np.ndarray) -> np.ndarray:
+    """Contacts per hand link × object part in each frame (N, links, parts), int32."""
+    adr = scene.layout.contact_adr
+    if adr.size == 0:
+        return np.zeros((sensors.shape[0], *adr.shape), np.int32)
+    return sensors[:, adr].astype(np.int32)  # every slot repeats the total count
+
+
 def _contacts(scene: SimScene, sensors: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     adr = scene.layout.contact_adr
     n = sensors.shape[0]
+    found = _contact_counts(scene, sensors)
     if adr.size == 0:
-        empty = np.zeros((n, *adr.shape))
-        return empty.astype(np.int32), empty, np.zeros(n, np.int32)
-    found = sensors[:, adr].astype(np.int32)  # every slot repeats the total count
+        return found, np.zeros(found.shape), np.zeros(n, np.int32)
     normal = np.zeros(found.shape)
     frame, link, part = np.nonzero(found)  # contacts are sparse: read the slots of touching pairs only
     if frame.size:
@@ -236,6 +261,38 @@ def _owner(members: list[np.ndarray], count: int) -> np.ndarray:
     return owner
 
 
+def _part_object(layout) -> np.ndarray:
+    """The object of each object part, in the layout's part order."""
+    if not layout.objects:
+        return np.zeros(0, np.int64)
+    return np.concatenate([np.full(len(o.part_bodies), i) for i, o in enumerate(layout.objects)])
+
+
+def hold_tracks(
+    scene: SimScene, schedule: ControlSchedule, sensors: np.ndarray, count: np.ndarray | None = None
+) -> HoldTracks:
+    """The hold verdict's tracks of the frames recorded so far (``sensors``: their first n rows).
+
+    Args:
+        scene: The replayed scene.
+        schedule: Its control schedule.
+        sensors: Sensor data at each frame time (n, nsensordata).
+        count: The frames' contact counts when already read (:class:`FrameMetrics`'s ``contact_count``).
+    """
+    layout = scene.layout
+    n, nobj = sensors.shape[0], len(layout.objects)
+    count = _contact_counts(scene, sensors) if count is None else count
+    hand_root = _poses(sensors, *layout.root_pose_adr)
+    part_object = _part_object(layout)
+    in_hand = np.empty((n, nobj, 3))
+    touching = np.zeros((n, nobj), dtype=bool)
+    for i in range(nobj):
+        pose = _poses(sensors, *layout.object_pose_adr[i])
+        in_hand[:, i] = compose(inverse(hand_root), pose)[:, :3]
+        touching[:, i] = count[:, :, part_object == i].sum(axis=(1, 2)) > 0
+    return HoldTracks(schedule.times[:n], in_hand, touching)
+
+
 def frame_metrics(
     scene: SimScene,
     schedule: ControlSchedule,
@@ -274,21 +331,12 @@ def frame_metrics(
     pos_err = np.full((n, nobj), np.nan)
     rot_err = np.full((n, nobj), np.nan)
     art_err = np.full((n, nobj), np.nan)
-    in_hand = np.empty((n, nobj, 3))
-    hand_root = _poses(sensors, *layout.root_pose_adr)
-    part_object = (
-        np.concatenate([np.full(len(o.part_bodies), i) for i, o in enumerate(layout.objects)])
-        if nobj
-        else np.zeros(0, np.int64)
-    )
-    touching = np.zeros((n, nobj), dtype=bool)
+    tracks = hold_tracks(scene, schedule, sensors, count)
     for i, obj in enumerate(layout.objects):
-        pose = _poses(sensors, *layout.object_pose_adr[i])
-        in_hand[:, i] = compose(inverse(hand_root), pose)[:, :3]
-        touching[:, i] = count[:, :, part_object == i].sum(axis=(1, 2)) > 0
         track = schedule.objects.get(i)
         if track is None:
             continue
+        pose = _poses(sensors, *layout.object_pose_adr[i])
         pos_err[:, i] = np.linalg.norm(pose[:, :3] - track.pose[:n, :3], axis=1)
         rot_err[:, i] = quat_angle(pose[:, 3:], track.pose[:n, 3:])
         if track.articulation is not None and obj.hinge_qpos >= 0:
@@ -314,9 +362,9 @@ def frame_metrics(
         object_position_error=pos_err,
         object_rotation_error=rot_err,
         articulation_error=art_err,
-        object_in_hand=in_hand,
-        hand_contact=touching,
-        part_object=part_object,
+        object_in_hand=tracks.object_in_hand,
+        hand_contact=tracks.hand_contact,
+        part_object=_part_object(layout),
         **hand_only,
         hand_names=tuple(h.name for h in layout.hands),
         hand_penetration=hand_penetration,

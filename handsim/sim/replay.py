@@ -7,6 +7,7 @@ The gymnasium environments drive the same :class:`~handsim.sim.drive.ScheduleDri
 
 from __future__ import annotations
 
+from collections.abc import Callable, Sequence
 from dataclasses import asdict, dataclass, field
 
 import numpy as np
@@ -15,12 +16,19 @@ from handsim.datatypes.trajectory import Trajectory
 from handsim.sim.compiled import SimScene
 from handsim.sim.control import DEFAULT_CONTROL_RATE, ControlSchedule, control_schedule
 from handsim.sim.drive import ScenarioSwitches, ScheduleDriver, scenario_switches
-from handsim.sim.metrics import FrameMetrics, MetricSpec, frame_metrics
+from handsim.sim.metrics import FrameMetrics, HoldTracks, MetricSpec, frame_metrics, hold_tracks
 from handsim.sim.plausibility import Flag, check_control_rate, is_valid, replay_flags
 from handsim.sim.robustness import HoldRobustness, hold_robustness
 from handsim.sim.stability import StabilityResult, stability_test
 from handsim.sim.stepper import Stepper, WarningEvent
 from handsim.sim.summary import HoldOutcome, hand_only_summary, hold_outcome, not_judged, summarize
+
+MEMBER_FIRST_LOOK = 0.1
+"""Seconds after the release at which a robustness-ensemble member's run is first looked at for a loss
+(then at doubling intervals: 0.2 s, 0.4 s …), so that a member that loses its object stops simulating soon
+after (:func:`member_verdict`). Not physics: only how often a run is looked at; the verdicts are the same
+at any value. 0.1 s is the contact gap that loses an object (:class:`~handsim.sim.metrics.MetricSpec`);
+members lost in the shared recordings lost it 0.04–0.10 s after the release."""
 
 
 @dataclass(frozen=True)
@@ -134,7 +142,10 @@ class ReplayResult:
 
 
 def run_schedule(
-    driver: ScheduleDriver, frames: int | None = None
+    driver: ScheduleDriver,
+    frames: int | None = None,
+    until: Callable[[np.ndarray, np.ndarray], bool] | None = None,
+    checks: Sequence[int] = (),
 ) -> tuple[np.ndarray, np.ndarray, list[WarningEvent], WarningEvent | None]:
     """Step through the frames of the driver's schedule from its current state (frame 0).
 
@@ -145,10 +156,13 @@ def run_schedule(
         driver: The driver, at frame 0.
         frames: Simulate only the first ``frames`` frames (at least 1; the simulation is causal, so these
             rows are bitwise those of the whole run); None: every frame of the schedule.
+        until: Asked with the qpos and sensor rows so far once the row of each frame in ``checks`` is
+            recorded; True stops the run there (its rows are still those of the whole run).
+        checks: The frames (ascending) at which ``until`` is asked.
 
     Returns:
-        qpos and sensordata at each frame time (rows up to the divergence when there is one), the
-        warnings, and the divergence.
+        qpos and sensordata at each frame time (rows up to the divergence when there is one, or up to where
+        ``until`` stopped it), the warnings, and the divergence.
     """
     model, data = driver.stepper.model, driver.stepper.data
     schedule = driver.schedule
@@ -159,6 +173,8 @@ def run_schedule(
     ctrl = schedule.ctrl
     warnings: list[WarningEvent] = []
     advance = driver.advance
+    pending = iter([*(int(c) for c in checks if 0 < c < n), n]) if until is not None else iter([n])
+    check = next(pending)
     for k in range(n - 1):
         events = advance(ctrl[k + 1])
         if events:
@@ -168,6 +184,10 @@ def run_schedule(
                 return qpos[: k + 1], sensors[: k + 1], warnings, stop
         qpos[k + 1] = data.qpos
         sensors[k + 1] = data.sensordata
+        if k + 1 == check:  # until is not None: only then are there checks before n
+            if until(qpos[: k + 2], sensors[: k + 2]):  # type: ignore[misc]
+                return qpos[: k + 2], sensors[: k + 2], warnings, None
+            check = next(pending)
     return qpos, sensors, warnings, None
 
 
@@ -215,7 +235,7 @@ def replay(scene: SimScene, trajectory: Trajectory, config: ReplayConfig | None 
             drop_mm=hold.drop * 1000.0,
         )
         if config.ensemble and hold.judged:
-            robustness = hold_robustness(scene, hold, lambda variant: member_hold(variant, schedule, spec))
+            robustness = hold_robustness(scene, hold, lambda variant: member_verdict(variant, schedule, spec))
             release_stability = _release_stability(scene, schedule, qpos, release, spec)
         summary.update(_closure(setup.placement))
         summary.update(
@@ -286,7 +306,12 @@ def _closure(placement: dict) -> dict:
 
 
 def _hold(
-    scene: SimScene, schedule: ControlSchedule, frames: FrameMetrics, qpos: np.ndarray, release: int, spec
+    scene: SimScene,
+    schedule: ControlSchedule,
+    frames: FrameMetrics | HoldTracks,
+    qpos: np.ndarray,
+    release: int,
+    spec: MetricSpec,
 ) -> HoldOutcome:
     """The hold outcome of a glove replay, or not judged when the placement was infeasible."""
     placement = scene.setup.placement
@@ -303,13 +328,18 @@ def _hold(
     return hold_outcome(frames, qpos[:, obj.free_qpos + 2], released, window, spec)
 
 
-def member_hold(scene: SimScene, schedule: ControlSchedule, spec: MetricSpec) -> HoldOutcome | None:
-    """The hold outcome of a robustness-ensemble member: its replay up to the hold window's end only.
+def member_verdict(
+    scene: SimScene, schedule: ControlSchedule, spec: MetricSpec
+) -> tuple[bool | None, str | None] | None:
+    """Whether a robustness-ensemble member held its object, and why not: simulated until that is decided.
 
     A member's verdict (held, and why not) reads its frames up to the hold window's end and no later
     (:func:`~handsim.sim.summary.hold_outcome`), and the simulation is causal: so the frames after the
-    window, which the member's :func:`replay` would also simulate, are not simulated. The outcome is
-    bitwise the one of ``replay(scene, trajectory).hold`` (pinned in ``tests/test_replay.py``).
+    window, which the member's :func:`replay` would also simulate, are not simulated. Nor are those after
+    the object is lost: the run is looked at :data:`MEMBER_FIRST_LOOK` after the release and then at
+    doubling intervals, and a loss found in the frames so far is the loss of the whole run (the verdict
+    takes the first one). Held and reason are bitwise those of ``replay(scene, trajectory).hold`` (pinned
+    in ``tests/test_replay.py``).
 
     Args:
         scene: The member's scene (:func:`handsim.sim.robustness.ensemble_scenes`).
@@ -318,18 +348,30 @@ def member_hold(scene: SimScene, schedule: ControlSchedule, spec: MetricSpec) ->
         spec: The replay's metric parameters.
 
     Returns:
-        The hold outcome, or None when the scene has no hold to judge (no release, window or object).
+        ``(held, reason)`` as :class:`~handsim.sim.summary.HoldOutcome` gives them, or None when the scene
+        has no hold to judge (no release, window or object).
     """
     switches = scenario_switches(scene, schedule, spec.release_delay)
     release = switches.release_frame
     if not _judges_hold(scene, release):
         return None
     driver = _driver_at_start(scene, schedule, switches)
+    times = schedule.times
     window_end = scene.setup.hold_window[1]
-    last = int(np.searchsorted(schedule.times, window_end + 1e-9))  # frames up to the window's end
-    qpos, sensors, _, _ = run_schedule(driver, frames=last)
-    frames = frame_metrics(scene, schedule, qpos, sensors, scratch=driver.stepper.data)  # the run is over
-    return _hold(scene, schedule, frames, qpos, release, spec)
+    last = int(np.searchsorted(times, window_end + 1e-9))  # frames up to the window's end
+    looks, after = [], MEMBER_FIRST_LOOK
+    while times[release] + after < window_end:
+        looks.append(int(np.searchsorted(times, times[release] + after - 1e-9)))
+        after *= 2.0
+
+    def verdict(qpos: np.ndarray, sensors: np.ndarray) -> HoldOutcome:
+        return _hold(scene, schedule, hold_tracks(scene, schedule, sensors), qpos, release, spec)
+
+    qpos, sensors, _, _ = run_schedule(
+        driver, frames=last, until=lambda q, s: verdict(q, s).held is False, checks=looks
+    )
+    outcome = verdict(qpos, sensors)
+    return outcome.held, outcome.reason
 
 
 def _driver_at_start(

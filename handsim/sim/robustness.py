@@ -76,14 +76,17 @@ def ensemble_scenes(scene: SimScene) -> list[tuple[str, SimScene]]:
 
 
 def hold_robustness(
-    scene: SimScene, winner: HoldOutcome, judge: Callable[[SimScene], HoldOutcome | None]
+    scene: SimScene,
+    winner: HoldOutcome,
+    judge: Callable[[SimScene], tuple[bool | None, str | None] | None],
 ) -> HoldRobustness:
     """Judge the hold of every ensemble member and count.
 
     Args:
         scene: The glove scene (its winner already replayed).
         winner: The winner's hold outcome.
-        judge: Replays a member's scene and returns its hold outcome (None when it has none); called for
+        judge: Replays a member's scene and returns whether it held and why not (None when it has no hold
+            to judge; :func:`handsim.sim.replay.member_verdict`); called for
             the members on :func:`~handsim.sim.parallel.sim_threads` threads, so it must keep its state
             (``MjData``) to itself.
 
@@ -95,8 +98,8 @@ def hold_robustness(
     # independent replays, each on its own data: on threads (handsim.sim.parallel), results in order
     outcomes = map_runs(judge, [variant for _, variant in variants])
     for (label, _), outcome in zip(variants, outcomes, strict=True):
-        held = None if outcome is None else outcome.held
-        members.append(EnsembleMember(label, held, None if outcome is None else outcome.reason))
+        held, reason = (None, None) if outcome is None else outcome
+        members.append(EnsembleMember(label, held, reason))
     judged = [m for m in members if m.held is not None]
     held = sum(bool(m.held) for m in judged)
     return HoldRobustness(

@@ -8,7 +8,7 @@ import numpy as np
 
 from handsim.sim.curves import DEG, MM
 from handsim.sim.curves import slip as slip_curve
-from handsim.sim.metrics import FrameMetrics, MetricSpec
+from handsim.sim.metrics import FrameMetrics, HoldTracks, MetricSpec
 
 NO_OBJECT = "not judged: no object (a hand-only sequence: nothing to touch, hold or drift)"
 """Why a replay without objects judges no hand–object contact, hold or drift."""
@@ -57,7 +57,7 @@ def not_judged(release_time: float, window: tuple[float, float], reason: str) ->
 
 
 def hold_outcome(
-    frames: FrameMetrics,
+    frames: FrameMetrics | HoldTracks,
     object_z: np.ndarray,
     release_time: float,
     window: tuple[float, float],
@@ -73,7 +73,8 @@ def hold_outcome(
     the object having been lost.
 
     Args:
-        frames: Per-frame metrics (the run may have stopped early).
+        frames: Per-frame metrics, or just their hold tracks (the run may have stopped early, or still be
+            going: a loss found in its first frames is the loss of the whole run).
         object_z: World height of the object's origin per frame, m.
         release_time: When the support was switched off, s.
         window: The hold window (trajectory times), s.
