@@ -31,7 +31,7 @@ from handsim.sim.placement_poses import (
 from handsim.sim.placement_types import Candidate, PlacementSpec
 
 MIN_THREAD_QUERIES = 64
-"""Collision queries per thread below which :meth:`PlacementSearch._fits` stays on one thread."""
+"""Collision queries per thread below which :meth:`PlacementSearch._depths` stays on one thread."""
 QUERY_CHUNK = 256
 """Most poses per :meth:`HandObjectCollider.depth_links` call (the unit dealt out to threads)."""
 SCREEN_MARGIN = 0.002

@@ -158,7 +158,8 @@ def run_schedule(
             rows are bitwise those of the whole run); None: every frame of the schedule.
         until: Asked with the qpos and sensor rows so far once the row of each frame in ``checks`` is
             recorded; True stops the run there (its rows are still those of the whole run).
-        checks: The frames (ascending) at which ``until`` is asked.
+        checks: The frames at which ``until`` is asked (in any order; frame 0, the start, and frames past
+            the run's last are not asked).
 
     Returns:
         qpos and sensordata at each frame time (rows up to the divergence when there is one, or up to where
@@ -173,7 +174,7 @@ def run_schedule(
     ctrl = schedule.ctrl
     warnings: list[WarningEvent] = []
     advance = driver.advance
-    pending = iter([*(int(c) for c in checks if 0 < c < n), n]) if until is not None else iter([n])
+    pending = iter([*sorted({int(c) for c in checks if 0 < c < n}), n] if until is not None else [n])
     check = next(pending)
     for k in range(n - 1):
         events = advance(ctrl[k + 1])
