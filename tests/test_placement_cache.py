@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import copy
 import dataclasses
+import itertools
 import pickle
 
 import mujoco
@@ -17,6 +18,7 @@ import numpy as np
 import pytest
 import trimesh
 
+import handsim.sim.collide as collide
 import handsim.sim.placement as placement_module
 import handsim.sim.scenarios as scenarios
 from handsim.assets import ASSETS_DIR
@@ -223,6 +225,20 @@ def test_the_batched_queries_are_mujocos_contacts_pose_by_pose():
     assert touch.depth == depths[40]
     assert touch.links.tolist() == np.flatnonzero(np.isfinite(expected[40])).tolist()
     assert collider.depth_links(positions[:0], quat) == ([], [])
+
+
+def test_a_meshs_inscribed_ball_is_solved_once_per_process_and_never_shared():
+    box = np.array(list(itertools.product([-0.01, 0.03], [0.0, 0.02], [0.0, 0.04])))  # 4 × 2 × 4 cm
+    centre, radius = collide._inscribed_ball(box.tobytes(), box.shape)
+    assert radius == pytest.approx(0.01 - 1e-6, abs=1e-9) and centre[1] == pytest.approx(0.01, abs=1e-9)
+    scene = compile_scene(build_scene(default_hand(), build_object(get("mug"))))
+    mesh = int(np.flatnonzero(scene.model.geom_type == mujoco.mjtGeom.mjGEOM_MESH)[-1])
+    first = collide._core(scene.model, mesh)
+    hits = collide._inscribed_ball.cache_info().hits
+    first[0][:] = np.nan  # a caller changing its centre changes nobody else's
+    again = collide._core(scene.model, mesh)
+    assert collide._inscribed_ball.cache_info().hits == hits + 1
+    assert np.isfinite(again[0]).all() and again[2] > 0
 
 
 @pytest.mark.parametrize("duplicate", ["deepcopy", "pickle"])

@@ -18,6 +18,7 @@ depth, :meth:`HandObjectCollider.bounds` says why).
 from __future__ import annotations
 
 import copy
+import functools
 from dataclasses import dataclass
 
 import mujoco
@@ -310,18 +311,24 @@ def _core(model: mujoco.MjModel, geom: int) -> tuple[np.ndarray, np.ndarray, flo
         points = model.mesh_vert[
             model.mesh_vertadr[mesh] : model.mesh_vertadr[mesh] + model.mesh_vertnum[mesh]
         ]
-        centre, radius = _inscribed_ball(np.asarray(points, dtype=float))
-        return centre, zero, radius
+        vertices = np.ascontiguousarray(points, dtype=float)
+        centre, radius = _inscribed_ball(vertices.tobytes(), vertices.shape)
+        return centre.copy(), zero, radius
     return zero, zero, 0.0
 
 
-def _inscribed_ball(points: np.ndarray) -> tuple[np.ndarray, float]:
-    """The largest ball inside the convex hull of ``points`` (its Chebyshev centre), shrunk by 1 µm.
+@functools.lru_cache(maxsize=1024)
+def _inscribed_ball(vertices: bytes, shape: tuple[int, ...]) -> tuple[np.ndarray, float]:
+    """The largest ball inside the convex hull of the points (its Chebyshev centre), shrunk by 1 µm.
 
     MuJoCo collides a mesh geom as its vertices' convex hull. Radius 0 when the hull is flat or degenerate.
+    The points come as the bytes of a float64 array of ``shape``, so that a process building many
+    colliders of the same hand and object (a dataset run's worker: one per trial) solves each mesh's
+    linear programme once (~2 ms each; the mug's 16 pieces and the palm). The centre is shared: copy it.
     """
     from scipy.optimize import linprog  # lazy: SciPy's optimisers (60 ms), only where a hull needs one
 
+    points = np.frombuffer(vertices, dtype=float).reshape(shape)
     try:
         hull = ConvexHull(points)
     except (QhullError, ValueError):
