@@ -236,6 +236,42 @@ def test_render_states_without_multisampling_renders_the_same_scene_and_leaves_t
     assert 0 < differs.mean() < 0.2
 
 
+def test_render_states_without_shadows_makes_no_shadow_map_and_renders_the_same_pixels(monkeypatch):
+    import mujoco
+    import numpy as np
+
+    import handsim.viz.render as render
+    from handsim.builders import build_object, build_scene, default_hand
+    from handsim.builders.catalog import get
+    from handsim.sim.compiled import compile_scene
+
+    scene = compile_scene(build_scene(default_hand(), build_object(get("tennis_ball"))))
+    size = int(scene.model.vis.quality.shadowsize)
+    states = np.tile(scene.model.qpos0, (2, 1))
+    made = []  # the shadow map size each renderer's context was made with
+    real = render.offscreen_renderer
+
+    def recorded(model, width, height):
+        made.append(int(model.vis.quality.shadowsize))
+        return real(model, width, height)
+
+    monkeypatch.setattr(render, "offscreen_renderer", recorded)
+    fast = list(render.render_states(scene, states, camera="track", width=160, height=120, shadows=False))
+    assert made == [0] and scene.model.vis.quality.shadowsize == size > 0  # the model left alone
+    # the reference: a context with the model's shadow map, shadows switched off in the scene
+    reference = real(scene.model, 160, 120)
+    reference.scene.flags[mujoco.mjtRndFlag.mjRND_SHADOW] = False
+    data = mujoco.MjData(scene.model)
+    try:
+        for state, image in zip(states, fast, strict=True):
+            data.qpos[:] = state
+            mujoco.mj_forward(scene.model, data)
+            reference.update_scene(data, camera=render._camera(scene, "track"))
+            np.testing.assert_array_equal(reference.render(), image)
+    finally:
+        reference.close()
+
+
 def test_a_diverging_replay_prints_the_divergence_and_exits_3(capsys, monkeypatch):
     from dataclasses import replace
 
