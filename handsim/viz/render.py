@@ -107,9 +107,7 @@ def _camera(scene: SimScene, camera: str) -> str | mujoco.MjvCamera:
     return camera
 
 
-def _renderer(
-    scene: SimScene, width: int, height: int, multisample: bool, shadows: bool
-) -> mujoco.Renderer:
+def _renderer(scene: SimScene, width: int, height: int, multisample: bool, shadows: bool) -> mujoco.Renderer:
     """The offscreen renderer: without ``multisample`` no multisampled buffer, without ``shadows`` no shadows.
 
     MuJoCo reads ``vis.quality.offsamples`` and ``vis.quality.shadowsize`` when it makes the context: they
