@@ -142,3 +142,27 @@ def test_the_ray_workers_gl_setting_leaves_this_process_environment_alone(monkey
     monkeypatch.delenv("MUJOCO_GL")
     monkeypatch.setenv("DISPLAY", ":0")
     assert _gl_env() == {}
+
+
+def test_a_ray_task_sets_the_drivers_choices_in_its_worker_before_the_trial(monkeypatch):
+    from handsim.runner.ray_backend import _ray_trial
+
+    for name in ("MUJOCO_GL", "OMP_NUM_THREADS", "HANDSIM_THREADS"):
+        monkeypatch.delenv(name, raising=False)
+    monkeypatch.setattr("signal.signal", lambda *args: None)  # the worker's Ctrl-C setting: not in a test
+
+    def run(entry, config, frames):
+        return (
+            entry,
+            config,
+            frames,
+            {k: os.environ.get(k) for k in ("MUJOCO_GL", "OMP_NUM_THREADS", "HANDSIM_THREADS")},
+        )
+
+    env = {"OMP_NUM_THREADS": "1", "MUJOCO_GL": "osmesa"}
+    assert _ray_trial(run, "entry", "config", 4, env) == (
+        "entry",
+        "config",
+        4,
+        {"MUJOCO_GL": "osmesa", "OMP_NUM_THREADS": "1", "HANDSIM_THREADS": "1"},
+    )

@@ -49,16 +49,16 @@ def ray_outcomes(
     ray = import_ray()
     started = not ray.is_initialized()
     if started:
-        env = {"env_vars": {"OMP_NUM_THREADS": "1", **_gl_env()}}
         # "local": a new Ray of our own even where a cluster runs on this machine (ray.init() would join it)
         options = (
             {"address": address}
             if address
             else {"address": "local", "num_cpus": workers, "include_dashboard": False}
         )
-        ray.init(runtime_env=env, log_to_driver=False, logging_level=logging.WARNING, **options)
+        ray.init(log_to_driver=False, logging_level=logging.WARNING, **options)
     task = ray.remote(num_cpus=1, max_retries=0)(_ray_trial)
-    pending = {task.remote(run, entry, config, frames): entry for entry in todo}
+    env = {"OMP_NUM_THREADS": "1", **_gl_env()}  # set by each task (_ray_trial), not a runtime_env
+    pending = {task.remote(run, entry, config, frames, env): entry for entry in todo}
     try:
         while pending:
             done, _ = ray.wait(list(pending), num_returns=1)
@@ -84,7 +84,19 @@ def import_ray() -> ModuleType:
     return ray
 
 
-def _ray_trial(run: TrialFunction, entry: TrialEntry, config: ReplayConfig, frames: int) -> TrialOutcome:
+def _ray_trial(
+    run: TrialFunction, entry: TrialEntry, config: ReplayConfig, frames: int, env: dict[str, str]
+) -> TrialOutcome:
+    """One trial in a Ray worker, with the driver's choices for the worker's environment set first.
+
+    The variables come with the task rather than as a Ray ``runtime_env``: a runtime environment of its
+    own makes Ray start new worker processes for the run (0.8 s before the first task on the 2-core
+    machine), where without one the cluster's already started workers take the tasks at once (0.14 s).
+    Set here, after MuJoCo may have been imported, ``MUJOCO_GL`` still decides each renderer's backend
+    (:func:`handsim.viz.headless.offscreen_renderer` reads it when it renders), and ``OMP_NUM_THREADS``
+    (which Ray already sets to a task's CPUs) reaches the CoACD processes a trial starts.
+    """
+    os.environ.update(env)
     prepare_worker_process()
     return run(entry, config, frames)
 
