@@ -147,8 +147,9 @@ def test_the_ray_workers_gl_setting_leaves_this_process_environment_alone(monkey
 def test_a_ray_task_sets_the_drivers_choices_in_its_worker_before_the_trial(monkeypatch):
     from handsim.runner.ray_backend import _ray_trial
 
-    for name in ("MUJOCO_GL", "OMP_NUM_THREADS", "HANDSIM_THREADS"):
-        monkeypatch.delenv(name, raising=False)
+    for name in ("MUJOCO_GL", "OMP_NUM_THREADS", "HANDSIM_THREADS"):  # unset now, and after the test
+        monkeypatch.setenv(name, "")  # recorded, so that what the task sets is undone (delenv of an unset
+        monkeypatch.delenv(name)  # name records nothing: MUJOCO_GL=osmesa would outlive this test)
     monkeypatch.setattr("signal.signal", lambda *args: None)  # the worker's Ctrl-C setting: not in a test
 
     def run(entry, config, frames):
