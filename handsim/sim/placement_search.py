@@ -144,21 +144,20 @@ class PlacementSearch:
     def _depths(self, poses: np.ndarray) -> list[tuple[float, int]]:
         """:meth:`HandObjectCollider.depth_links` of each pose, in order, the poses spread over threads.
 
-        The poses go to it in runs of one orientation of at most
-        :data:`QUERY_CHUNK`; each thread queries its own copy of the collider's data (the hand at the same
-        posture); the answers are those of one collider querying them all (:mod:`handsim.sim.parallel`).
+        The poses (N, 7) go to it in runs of one orientation of at most :data:`QUERY_CHUNK`; each thread
+        queries its own copy of the collider's data (the hand at the same posture); the answers are those
+        of one collider querying them all (:mod:`handsim.sim.parallel`).
         """
         if not len(poses):
             return []
-        array = np.asarray(poses)
         spans = [
             (start, min(start + QUERY_CHUNK, b))
-            for a, b in _orientation_runs(array)
+            for a, b in _orientation_runs(poses)
             for start in range(a, b, QUERY_CHUNK)
         ]
 
         def query(collider: HandObjectCollider, span: tuple[int, int]) -> tuple[list[float], list[int]]:
-            return collider.depth_links(array[span[0] : span[1], :3], array[span[0], 3:])
+            return collider.depth_links(poses[span[0] : span[1], :3], poses[span[0], 3:])
 
         threads = min(sim_threads(), len(poses) // MIN_THREAD_QUERIES, len(spans))
         if threads <= 1:

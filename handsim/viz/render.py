@@ -115,14 +115,14 @@ def _renderer(scene: SimScene, width: int, height: int, multisample: bool, shado
     50–60 ms with Mesa's software EGL (the mug scene), and renders the same pixels when no shadow is cast.
     """
     quality = scene.model.vis.quality
-    wanted = {
-        "offsamples": int(quality.offsamples) if multisample else 0,
-        "shadowsize": int(quality.shadowsize) if shadows else 0,
-    }
-    kept = {name: int(getattr(quality, name)) for name in wanted}
-    if wanted == kept:
-        return offscreen_renderer(scene.model, width, height)
-    with _QUALITY_LOCK:
+    with _QUALITY_LOCK:  # read under the lock too: another thread's renderer may have them at 0 just now
+        kept = {name: int(getattr(quality, name)) for name in ("offsamples", "shadowsize")}
+        wanted = {
+            "offsamples": kept["offsamples"] if multisample else 0,
+            "shadowsize": kept["shadowsize"] if shadows else 0,
+        }
+        if wanted == kept:
+            return offscreen_renderer(scene.model, width, height)
         try:
             for name, value in wanted.items():
                 setattr(quality, name, value)
