@@ -6,7 +6,14 @@ import threading
 
 import pytest
 
-from handsim.sim.parallel import THREADS_ENV, available_cores, map_on_workers, map_runs, sim_threads
+from handsim.sim.parallel import (
+    THREADS_ENV,
+    available_cores,
+    map_on_workers,
+    map_runs,
+    map_until,
+    sim_threads,
+)
 
 
 def test_results_come_back_in_the_order_of_the_items() -> None:
@@ -67,3 +74,67 @@ def test_workers_take_every_nth_item_and_results_come_back_in_order() -> None:
     results = map_on_workers(run, list(range(8)), ["a", "b", "c"])
     assert results == [("abc"[i % 3], i * 10) for i in range(8)]
     assert all(len(names) == 1 for names in seen.values())  # a worker's state stays on one thread
+
+
+def _loop(run, items, enough):
+    results = []
+    for item in items:
+        results.append(run(item))
+        if enough(results):
+            break
+    return results
+
+
+@pytest.mark.parametrize("threads", [1, 2, 4])
+@pytest.mark.parametrize("stop_after", [1, 3, 7, 100])
+def test_map_until_gives_the_loops_results(threads: int, stop_after: int) -> None:
+    def enough(results: list[int]) -> bool:
+        return sum(r % 3 == 0 for r in results) >= stop_after
+
+    items = list(range(1, 40))
+    expected = _loop(lambda x: x * 7 % 11, items, enough)
+    assert map_until(lambda x: x * 7 % 11, items, enough, threads) == expected
+
+
+def test_map_until_draws_at_most_threads_ahead_and_runs_them_at_once() -> None:
+    drawn = []
+    barrier = threading.Barrier(3, timeout=10)  # three runs must be in flight at once to pass it
+
+    def items():
+        for i in range(10):
+            drawn.append(i)
+            yield i
+
+    def run(x: int) -> tuple[int, int]:
+        if x < 3:
+            barrier.wait()
+        return x, sim_threads()
+
+    results = map_until(run, items(), lambda r: len(r) == 4, threads=3)
+    assert results == [(0, 1), (1, 1), (2, 1), (3, 1)]  # each run on one thread: the threads are in use
+    assert drawn == list(range(6))  # up to the one looked at last (3), and two more beside it
+
+
+def test_map_until_raises_errors_in_turn_and_drops_those_past_the_stop() -> None:
+    def run(x: int) -> int:
+        if x in (2, 5):
+            raise ValueError(f"run {x}")
+        return x
+
+    with pytest.raises(ValueError, match="run 2"):
+        map_until(run, range(8), lambda r: False, threads=3)
+    assert map_until(run, range(8), lambda r: r == [0, 1], threads=3) == [
+        0,
+        1,
+    ]  # run 2 ran, its error dropped
+
+
+def test_map_until_raises_an_error_drawing_an_item_only_when_its_turn_comes() -> None:
+    def items():
+        yield 0
+        yield 1
+        raise KeyError("no third item")
+
+    assert map_until(lambda x: x, items(), lambda r: len(r) == 2, threads=4) == [0, 1]
+    with pytest.raises(KeyError, match="no third item"):
+        map_until(lambda x: x, items(), lambda r: False, threads=4)

@@ -50,24 +50,48 @@ def test_when_no_feasible_pose_touches_the_hand_the_one_nearest_the_fingertips_i
     ) in loaded.scene.setup.notes
 
 
-def test_the_search_on_threads_places_as_on_one_thread(graspdb_dir, monkeypatch):
+@pytest.mark.parametrize(
+    ("recording", "grip_tests", "threads"),
+    [
+        ("01_ex01-rad-002-grasp-su01.txt", 15, "2"),  # every ranked candidate tested
+        ("r_01_11_ex03-rad-004-grasp-su04.txt", 3, "3"),  # stops after 3: two more drawn ahead, dropped
+    ],
+)
+def test_the_search_on_threads_places_as_on_one_thread(
+    graspdb_dir, monkeypatch, recording, grip_tests, threads
+):
     """Fit-frame queries and grip tests spread over threads (handsim.sim.parallel): the same placement,
-    bit for bit, as one thread (the trial whose search runs 15 grip tests and ~12 000 poses)."""
+    bit for bit, as one thread — the number of poses tried included, when the grip tests stop before the
+    candidates drawn ahead of them (``map_until``) are needed."""
     import pickle
 
+    import handsim.sim.placement as placement
     import handsim.sim.scenarios as scenarios
 
-    placed = []
-    original = scenarios.place_object
+    placed, drawn = [], []
+    original, original_until = scenarios.place_object, placement.map_until
 
     def uncached(*args, **kwargs):
         placed.append(original(*args, **kwargs, use_cache=False))
         return placed[-1]
 
+    def counted(run, items, enough, threads=None):
+        def counting():
+            for item in items:
+                drawn[-1] += 1
+                yield item
+
+        drawn.append(0)
+        return original_until(run, counting(), enough, threads)
+
     monkeypatch.setattr(scenarios, "place_object", uncached)
-    for threads in ("1", "2"):
-        monkeypatch.setenv("HANDSIM_THREADS", threads)
-        load_trial(graspdb_dir / "01_ex01-rad-002-grasp-su01.txt")
+    monkeypatch.setattr(placement, "map_until", counted)
+    for count in ("1", threads):
+        monkeypatch.setenv("HANDSIM_THREADS", count)
+        load_trial(graspdb_dir / recording)
     alone, threaded = placed
-    assert threaded.grip_tests == alone.grip_tests == 15
-    assert pickle.dumps(threaded) == pickle.dumps(alone)
+    assert threaded.grip_tests == alone.grip_tests == grip_tests
+    assert drawn[0] == grip_tests  # one thread draws no candidate it does not test
+    if recording.startswith("r_"):
+        assert drawn[1] > grip_tests  # the threads drew candidates that were never needed…
+    assert pickle.dumps(threaded) == pickle.dumps(alone)  # …and they left no trace

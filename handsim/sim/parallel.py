@@ -4,8 +4,9 @@ MuJoCo's ``mj_step`` and ``mj_collision`` release the GIL, so runs on separate `
 read-only ``MjModel``) use every core without copying the model or spawning processes.
 
 Used where one result needs several runs that do not depend on each other: the stability test's seven
-gravity runs (:func:`handsim.sim.stability.stability_test`, hence every grip test of the glove placement
-search and the replay's test at the release), the replays of the robustness ensemble's members
+gravity runs (:func:`handsim.sim.stability.stability_test`, hence the replay's test at the release), the
+glove placement's grip tests, taken in rank order until enough hold, the next ones running ahead
+(:func:`map_until`), the replays of the robustness ensemble's members
 (:func:`handsim.sim.robustness.hold_robustness`) and the placement search's fit-frame collision queries
 (:class:`handsim.sim.placement_search.PlacementSearch`). Each run computes exactly what it computes alone,
 in the same order of floating-point operations, so results are bit-for-bit those of running them one
@@ -19,8 +20,10 @@ core: :func:`handsim.runner.worker.prepare_worker_process`).
 from __future__ import annotations
 
 import os
-from collections.abc import Callable, Sequence
-from concurrent.futures import ThreadPoolExecutor
+import threading
+from collections import deque
+from collections.abc import Callable, Iterable, Iterator, Sequence
+from concurrent.futures import Future, ThreadPoolExecutor
 from typing import TypeVar
 
 THREADS_ENV = "HANDSIM_THREADS"
@@ -44,6 +47,8 @@ def sim_threads() -> int:
     Raises:
         ValueError: ``$HANDSIM_THREADS`` is set but not a positive integer.
     """
+    if getattr(_INNER, "serial", False):
+        return 1
     value = os.environ.get(THREADS_ENV, "").strip()
     if not value:
         return available_cores()
@@ -74,6 +79,79 @@ def map_runs(run: Callable[[T], R], items: Sequence[T], threads: int | None = No
     with ThreadPoolExecutor(max_workers=count, thread_name_prefix="handsim-sim") as pool:
         futures = [pool.submit(run, item) for item in items]
     return [future.result() for future in futures]
+
+
+def map_until(
+    run: Callable[[T], R],
+    items: Iterable[T],
+    enough: Callable[[list[R]], bool],
+    threads: int | None = None,
+) -> list[R]:
+    """``run`` over ``items`` in order until ``enough(results)``; later items run ahead on threads.
+
+    The results are those of the loop ``for item in items: results.append(run(item)); if
+    enough(results): break``, in the same order: each run is independent, so running it early changes
+    nothing but the wall time. While the first unfinished item runs, up to ``threads - 1`` later ones run
+    beside it; those past the stop are waited for and their results (or errors) dropped. Each run sees
+    :func:`sim_threads` as 1: the threads are taken by the runs themselves, so nested runs (a grip test's
+    stability directions) run one after the other inside each.
+
+    Args:
+        run: One independent run (see :func:`map_runs`).
+        items: Its inputs, drawn lazily in the calling thread, at most ``threads - 1`` beyond the one whose
+            result is awaited: a draw may have side effects (items past the stop were drawn too). An error
+            drawing one is raised when its turn comes, as in the loop.
+        enough: Asked with the results so far, after each one in order; True stops.
+        threads: Runs at once; None: :func:`sim_threads`. With 1, the plain loop (no thread started).
+
+    Returns:
+        The results up to and including the one after which ``enough`` said True (all of them if it never
+        did). An exception of a run is raised when its turn comes, as in the loop.
+    """
+    count = sim_threads() if threads is None else max(1, int(threads))
+    results: list[R] = []
+    source: Iterator[T] | None = iter(items)
+    if count <= 1:
+        for item in source:
+            results.append(run(item))
+            if enough(results):
+                break
+        return results
+    with ThreadPoolExecutor(max_workers=count, thread_name_prefix="handsim-sim") as pool:
+        pending: deque[Future[R] | BaseException] = deque()  # a draw's error waits for its turn
+        try:
+            while True:
+                while source is not None and len(pending) < count:
+                    try:
+                        item = next(source)
+                    except StopIteration:
+                        source = None
+                    except Exception as error:  # raised when its turn comes, as the loop would
+                        pending.append(error)
+                        source = None
+                    else:
+                        pending.append(pool.submit(_serial_inside, run, item))
+                if not pending:
+                    break
+                head = pending.popleft()
+                if isinstance(head, BaseException):
+                    raise head
+                results.append(head.result())
+                if enough(results):
+                    break
+        finally:  # past the stop (or an error): runs not started are dropped, running ones waited for
+            for future in pending:
+                if isinstance(future, Future):
+                    future.cancel()
+    return results
+
+
+_INNER = threading.local()
+
+
+def _serial_inside(run: Callable[[T], R], item: T) -> R:
+    _INNER.serial = True
+    return run(item)
 
 
 def map_on_workers(run: Callable[[W, T], R], items: Sequence[T], workers: Sequence[W]) -> list[R]:

@@ -32,8 +32,10 @@ Speed: the poses of one orientation are first screened together by cheap bounds
 (:meth:`HandObjectCollider.screen`): a pose that touches nothing, or that is surely deeper than the
 tolerance plus :data:`~handsim.sim.placement_search.SCREEN_MARGIN`, is settled without a collision query;
 the result is the same as querying every pose (an infeasible search is rerun without the bounds, so that
-its least penetration is MuJoCo's). :func:`place_object` keeps each result in the placement cache
-(:mod:`handsim.sim.placement_cache`).
+its least penetration is MuJoCo's). On several threads (:mod:`handsim.sim.parallel`) the next candidates'
+grip tests run while the current one's does (:func:`~handsim.sim.parallel.map_until`): the candidates and
+the count of poses tried are those of testing them one after the other. :func:`place_object` keeps each
+result in the placement cache (:mod:`handsim.sim.placement_cache`).
 
 The search's parameters and results (:class:`PlacementSpec`, :class:`Candidate`, :class:`Placement`) are in
 :mod:`handsim.sim.placement_types`; this module runs the search, the grip tests and the cache.
@@ -42,6 +44,7 @@ The search's parameters and results (:class:`PlacementSpec`, :class:`Candidate`,
 from __future__ import annotations
 
 import pickle
+from collections.abc import Iterator
 from dataclasses import replace
 from pathlib import Path
 
@@ -53,6 +56,7 @@ from handsim.sim.compiled import SimScene
 from handsim.sim.grasp_frame import GraspFrame, closing_frames
 from handsim.sim.grip import GripBench, GripResult
 from handsim.sim.hand_pose import targets_qpos
+from handsim.sim.parallel import map_until
 from handsim.sim.placement_cache import CorruptEntryError, entry_path, placement_key, read_entry, write_entry
 from handsim.sim.placement_poses import perturbed_poses
 from handsim.sim.placement_search import PlacementSearch
@@ -160,11 +164,22 @@ def _place(
         grip = bench.grip(candidate.pose, float(times[candidate.contact_frame]), spec.grip)
         return replace(candidate, grip=grip)
 
-    tested = []
-    for _, _, pose in ranked:  # in rank order, until enough grips resist every direction
-        tested.append(gripped(search.with_contact(search.candidate(pose))))
-        if sum(c.grip.directions_held == len(DIRECTIONS) for c in tested) > spec.alternatives:
-            break
+    drawn = []  # the collider's query count after each candidate drawn
+
+    def candidates() -> Iterator[Candidate]:
+        for _, _, pose in ranked:
+            candidate = search.with_contact(search.candidate(pose))
+            drawn.append(search.collider.queries)
+            yield candidate
+
+    def enough(grips: list[Candidate]) -> bool:
+        return sum(c.grip.directions_held == len(DIRECTIONS) for c in grips) > spec.alternatives
+
+    # in rank order, until enough grips resist every direction; the next candidates' grip tests run on the
+    # other threads meanwhile (each is independent: the same result as testing them one after the other)
+    tested = map_until(gripped, candidates(), enough)
+    if tested:  # the candidates drawn past the stop leave no trace in the count of poses tried
+        search.collider.queries = drawn[len(tested) - 1]
     tested.sort(key=Candidate.score, reverse=True)
     queries = search.collider.queries + search.screened
     if tested:
