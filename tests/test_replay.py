@@ -135,6 +135,36 @@ def test_a_diverging_replay_is_reported_as_diverged_at_the_step_it_happened():
     assert "QACC" in result.diverged.message
 
 
+def test_a_warning_message_goes_to_the_run_of_its_own_thread():
+    """MuJoCo's warning hook is process-wide; runs on threads (the stability directions, grip tests and
+    ensemble members) must each get their own messages. A warning another thread left unread (a bad
+    ``qpos`` at DOF 5) is not attached to this thread's event (a bad ``qpos`` at DOF 3)."""
+    import threading
+
+    import mujoco
+
+    scene, _ = _tzionas()
+
+    def diverge(dof: int) -> tuple:
+        stepper = Stepper(scene, 1)
+        stepper.reset()
+        stepper.data.qpos[dof] = np.nan
+        return stepper.step()
+
+    def leave_one_unread() -> None:
+        Stepper(scene, 1)  # installs the hook
+        data = mujoco.MjData(scene.model)
+        data.qpos[5] = np.nan
+        mujoco.mj_step(scene.model, data)  # a warning whose message no stepper reads
+
+    other = threading.Thread(target=leave_one_unread)
+    other.start()
+    other.join()
+    (event,) = diverge(3)
+    assert event.name == "mjWARN_BADQPOS" and event.info == 3
+    assert "DOF 3" in event.message and "DOF 5" not in event.message
+
+
 def test_non_finite_targets_are_refused_before_stepping():
     scene, trajectory = _tzionas()
     targets = trajectory.targets.copy()

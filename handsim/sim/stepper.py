@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import collections
 import copy
+import threading
 from dataclasses import dataclass
 
 import mujoco
@@ -23,12 +24,24 @@ DIVERGENCE_WARNINGS = frozenset({"mjWARN_BADQPOS", "mjWARN_BADQVEL", "mjWARN_BAD
 """Warnings after which the state is no longer the simulation of the inputs (MuJoCo reset it, or replaced
 a NaN control by zero)."""
 _RESETTING = frozenset({"mjWARN_BADQPOS", "mjWARN_BADQVEL", "mjWARN_BADQACC"})
-_MESSAGES: collections.deque[str] = collections.deque(maxlen=64)
+_THREAD = threading.local()
+
+
+def _messages() -> collections.deque[str]:
+    """This thread's MuJoCo warning messages not yet attached to an event.
+
+    MuJoCo calls its warning hook in the thread whose call raised the warning, so runs on threads
+    (:mod:`handsim.sim.parallel`) each get their own messages, never another run's.
+    """
+    messages = getattr(_THREAD, "messages", None)
+    if messages is None:
+        messages = _THREAD.messages = collections.deque(maxlen=64)
+    return messages
 
 
 def _record_warning(message: str) -> None:
     """MuJoCo's warning hook: only record (printing would clutter; raising inside a hook aborts)."""
-    _MESSAGES.append(message.strip())
+    _messages().append(message.strip())
 
 
 def capture_mujoco_warnings() -> None:
@@ -126,8 +139,9 @@ class Stepper:
         return self._new_warnings()
 
     def _new_warnings(self) -> tuple[WarningEvent, ...]:
-        message = " | ".join(_MESSAGES)
-        _MESSAGES.clear()
+        messages = _messages()
+        message = " | ".join(messages)
+        messages.clear()
         events = warning_events(
             self._counts,
             self._seen,
