@@ -64,16 +64,42 @@ def test_a_bad_thread_setting_is_a_clear_error(monkeypatch, value: str) -> None:
         sim_threads()
 
 
-def test_workers_take_every_nth_item_and_results_come_back_in_order() -> None:
+def test_workers_take_the_next_item_when_free_and_results_come_back_in_order() -> None:
     seen: dict[str, set[str]] = {"a": set(), "b": set(), "c": set()}
+    done: dict[str, list[int]] = {"a": [], "b": [], "c": []}
+    rest = threading.Event()
+    lock = threading.Lock()
 
-    def run(worker: str, item: int) -> tuple[str, int]:
+    def run(worker: str, item: int) -> int:
         seen[worker].add(threading.current_thread().name)
-        return worker, item * 10
+        if item == 0:  # a long run: it ends only once the other workers have taken every other item
+            assert rest.wait(timeout=10)
+        with lock:
+            done[worker].append(item)
+            if sum(map(len, done.values())) == 7 and 0 not in done[worker]:
+                rest.set()
+        return item * 10
 
     results = map_on_workers(run, list(range(8)), ["a", "b", "c"])
-    assert results == [("abc"[i % 3], i * 10) for i in range(8)]
-    assert all(len(names) == 1 for names in seen.values())  # a worker's state stays on one thread
+    assert results == [i * 10 for i in range(8)]
+    assert all(len(names) <= 1 for names in seen.values())  # a worker's state stays on one thread
+    assert sorted(i for items in done.values() for i in items) == list(range(8))  # each item once
+    slow = next(w for w, items in done.items() if 0 in items)
+    assert done[slow] == [0]  # the worker busy with the long run took nothing else
+
+
+def test_workers_raise_the_first_error_in_order_after_every_item_ran() -> None:
+    ran = []
+
+    def run(worker: str, item: int) -> int:
+        ran.append(item)
+        if item in (2, 5):
+            raise ValueError(f"item {item}")
+        return item
+
+    with pytest.raises(ValueError, match="item 2"):
+        map_on_workers(run, list(range(7)), ["a", "b"])
+    assert sorted(ran) == list(range(7))
 
 
 def _loop(run, items, enough):

@@ -157,9 +157,10 @@ def _serial_inside(run: Callable[[T], R], item: T) -> R:
 def map_on_workers(run: Callable[[W, T], R], items: Sequence[T], workers: Sequence[W]) -> list[R]:
     """``[run(worker, item) …]`` with one thread per worker, each item on one worker; results in order.
 
-    For runs that need state of their own (an ``MjData``) but not a fresh one per item: worker ``k`` takes
-    items ``k``, ``k + n``, ``k + 2n`` … (``n`` workers; dealt out so that long and short runs mix) one
-    after the other.
+    For runs that need state of their own (an ``MjData``) but not a fresh one per item: each worker takes
+    the next item not yet taken as soon as it is free (runs of different lengths keep every thread busy),
+    one after the other on its own thread. Which worker runs an item does not change its result: a worker's
+    state is reset by each run.
 
     Args:
         run: ``run(worker, item)``; a worker's state is used by one thread only.
@@ -167,11 +168,26 @@ def map_on_workers(run: Callable[[W, T], R], items: Sequence[T], workers: Sequen
         workers: The per-thread states, e.g. ``[first, *(first.fork() for _ in range(n - 1))]``.
 
     Returns:
-        The results, in the order of ``items`` (errors as :func:`map_runs`).
+        The results, in the order of ``items``. An exception of a run is raised here (the first in order),
+        after every item has run.
     """
-    n = len(workers)
-    parts = map_runs(lambda k: [run(workers[k], item) for item in items[k::n]], range(n), n)
     results: list[R] = [None] * len(items)  # type: ignore[list-item]
-    for k, part in enumerate(parts):
-        results[k::n] = part
+    errors: dict[int, Exception] = {}
+    taken = iter(range(len(items)))
+    lock = threading.Lock()
+
+    def work(worker: W) -> None:
+        while True:
+            with lock:
+                index = next(taken, None)
+            if index is None:
+                return
+            try:
+                results[index] = run(worker, items[index])
+            except Exception as error:  # raised below, in item order, once every item has run
+                errors[index] = error
+
+    map_runs(work, list(workers), len(workers))
+    if errors:
+        raise errors[min(errors)]
     return results
