@@ -135,21 +135,17 @@ def test_a_diverging_replay_is_reported_as_diverged_at_the_step_it_happened():
     assert "QACC" in result.diverged.message
 
 
-def test_a_warning_message_goes_to_the_run_of_its_own_thread():
-    """MuJoCo's warning hook is process-wide; runs on threads (the stability directions, grip tests and
-    ensemble members) must each get their own messages. A warning another thread left unread (a bad
-    ``qpos`` at DOF 5) is not attached to this thread's event (a bad ``qpos`` at DOF 3)."""
+@pytest.mark.parametrize("where", ["another thread", "this thread, before the run"])
+def test_a_warning_message_goes_to_its_own_run(where: str):
+    """MuJoCo's warning hook is process-wide; a run's events carry its own messages only. A warning left
+    unread (a bad ``qpos`` at DOF 5) by another thread (the stability directions, grip tests and ensemble
+    members run on threads) or by earlier work in this one (a collision query, a forward pass) is not
+    attached to this run's event (a bad ``qpos`` at DOF 3): on one thread and on several alike."""
     import threading
 
     import mujoco
 
     scene, _ = _tzionas()
-
-    def diverge(dof: int) -> tuple:
-        stepper = Stepper(scene, 1)
-        stepper.reset()
-        stepper.data.qpos[dof] = np.nan
-        return stepper.step()
 
     def leave_one_unread() -> None:
         Stepper(scene, 1)  # installs the hook
@@ -157,10 +153,16 @@ def test_a_warning_message_goes_to_the_run_of_its_own_thread():
         data.qpos[5] = np.nan
         mujoco.mj_step(scene.model, data)  # a warning whose message no stepper reads
 
-    other = threading.Thread(target=leave_one_unread)
-    other.start()
-    other.join()
-    (event,) = diverge(3)
+    if where == "another thread":
+        other = threading.Thread(target=leave_one_unread)
+        other.start()
+        other.join()
+    stepper = Stepper(scene, 1)
+    if where != "another thread":
+        leave_one_unread()
+    stepper.reset()
+    stepper.data.qpos[3] = np.nan
+    (event,) = stepper.step()
     assert event.name == "mjWARN_BADQPOS" and event.info == 3
     assert "DOF 3" in event.message and "DOF 5" not in event.message
 

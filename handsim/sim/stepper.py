@@ -31,7 +31,9 @@ def _messages() -> collections.deque[str]:
     """This thread's MuJoCo warning messages not yet attached to an event.
 
     MuJoCo calls its warning hook in the thread whose call raised the warning, so runs on threads
-    (:mod:`handsim.sim.parallel`) each get their own messages, never another run's.
+    (:mod:`handsim.sim.parallel`) each get their own messages, never another run's; a stepper's creation
+    and reset clear them, so a message left unread by earlier work in the thread (a collision query, a
+    forward pass) is not attached to its events either, on one thread or several alike.
     """
     messages = getattr(_THREAD, "messages", None)
     if messages is None:
@@ -103,6 +105,7 @@ class Stepper:
         self._seen = np.zeros_like(self._counts)
         self._seen_bytes = self._seen.tobytes()  # comparing bytes is the cheapest check per frame
         capture_mujoco_warnings()
+        _messages().clear()  # messages of earlier calls in this thread are not this run's
 
     def __getstate__(self) -> dict:
         state = self.__dict__.copy()
@@ -114,8 +117,9 @@ class Stepper:
         self._counts = self.data.warning.number
 
     def reset(self) -> None:
-        """Back to the model's reference state (``qpos0``), frame 0, warnings cleared."""
+        """Back to the model's reference state (``qpos0``), frame 0, warnings (and their messages) cleared."""
         mujoco.mj_resetData(self.model, self.data)
+        _messages().clear()
         self._counts = self.data.warning.number
         self._seen[:] = 0
         self._seen_bytes = self._seen.tobytes()
