@@ -100,6 +100,10 @@ def test_workers_raise_the_first_error_in_order_after_every_item_ran() -> None:
     with pytest.raises(ValueError, match="item 2"):
         map_on_workers(run, list(range(7)), ["a", "b"])
     assert sorted(ran) == list(range(7))
+    ran.clear()
+    with pytest.raises(ValueError, match="item 2"):  # one worker: in the caller, stopping there
+        map_on_workers(run, list(range(7)), ["a"])
+    assert ran == [0, 1, 2]
 
 
 def _loop(run, items, enough):

@@ -169,8 +169,10 @@ def map_on_workers(run: Callable[[W, T], R], items: Sequence[T], workers: Sequen
 
     Returns:
         The results, in the order of ``items``. An exception of a run is raised here (the first in order),
-        after every item has run.
+        after every item has run (with one worker: at once, as the loop would).
     """
+    if len(workers) == 1:  # in the caller, stopping at an error as the loop would
+        return [run(workers[0], item) for item in items]
     results: list[R] = [None] * len(items)  # type: ignore[list-item]
     errors: dict[int, Exception] = {}
     taken = iter(range(len(items)))
