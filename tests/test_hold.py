@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from handsim.sim.metrics import FrameMetrics, MetricSpec
-from handsim.sim.summary import hold_outcome
+from handsim.sim.summary import hold_outcome, window_long_enough
 
 SPEC = MetricSpec()  # slip 2 cm, contact gap 0.1 s, windows of at least 0.3 s
 DT = 0.01
@@ -76,11 +76,12 @@ def test_a_window_shorter_than_the_minimum_is_not_judged(release, window, length
         f"not judged: the hold window after release lasts {length} s, less than the 0.3 s"
     )
     assert hold.time_held == 0.0 and hold.lost_at is None
+    assert not window_long_enough(release, window, SPEC)  # known before the run (the replay's ensemble)
 
 
 def test_a_window_of_exactly_the_minimum_is_judged():
     hold = hold_outcome(_frames(101), np.zeros(101), 0.5, (0.2, 0.8), SPEC)
-    assert hold.held is True
+    assert hold.held is True and window_long_enough(0.5, (0.2, 0.8), SPEC)
 
 
 def test_a_run_that_stopped_before_the_release_is_not_judged():

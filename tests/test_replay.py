@@ -375,11 +375,44 @@ def test_ensemble_members_lost_and_held_are_judged_as_by_their_whole_replays(gra
 @pytest.mark.slow
 def test_the_ensemble_on_threads_judges_as_on_one_thread(graspdb_dir, monkeypatch):
     loaded = load_trial(graspdb_dir / "04_ex01-rad-045-grasp-su03.txt")
-    robustness = {}
+    results, ahead = {}, []
+    members_ahead = replay_module._members_ahead
+
+    def watched(*args):
+        ahead.append(members_ahead(*args))
+        return ahead[-1]
+
+    monkeypatch.setattr(replay_module, "_members_ahead", watched)
     for threads in ("1", "2"):
         monkeypatch.setenv("HANDSIM_THREADS", threads)
-        robustness[threads] = replay(loaded.scene, loaded.trajectory).robustness
-    assert robustness["1"] == robustness["2"] and 0 < robustness["1"].held < robustness["1"].judged
+        results[threads] = replay(loaded.scene, loaded.trajectory)
+    assert ahead[0] is None and ahead[1] is not None  # on threads, the members ran beside the winner
+    one, two = results["1"], results["2"]
+    assert one.robustness == two.robustness and 0 < one.robustness.held < one.robustness.judged
+    assert one.release_stability == two.release_stability and one.summary == two.summary
+
+
+def test_members_judged_ahead_of_a_run_that_diverges_are_dropped_and_waited_for(monkeypatch):
+    """The members start beside the winner's run when its hold will be judged; if the run then diverges
+    before the release, the hold is not judged, and the members' answers are dropped once they are in."""
+    loaded = load_trial(ASSETS_DIR / "demo" / "tennis_ball.grasp.json")
+    whole_run, members_ahead, ahead = replay_module.run_schedule, replay_module._members_ahead, []
+
+    def diverging(driver, *args, **kwargs):
+        qpos, sensors, _, _ = whole_run(driver, frames=5)
+        event = replay_module.WarningEvent("mjWARN_BADQACC", 19, 3, 1, 0, diverged=True)
+        return qpos[:4], sensors[:4], [event], event
+
+    def watched(*args):
+        ahead.append(members_ahead(*args))
+        return ahead[-1]
+
+    monkeypatch.setenv("HANDSIM_THREADS", "2")
+    monkeypatch.setattr(replay_module, "run_schedule", diverging)
+    monkeypatch.setattr(replay_module, "_members_ahead", watched)
+    result = replay(loaded.scene, loaded.trajectory)
+    assert result.diverged is not None and not result.hold.judged and result.robustness is None
+    assert ahead[0] is not None and ahead[0].done()  # they ran, and the replay waited for them
 
 
 def test_the_model_hash_is_the_compiled_models_same_spec_same_hash_any_change_another():

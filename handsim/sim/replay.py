@@ -8,6 +8,7 @@ The gymnasium environments drive the same :class:`~handsim.sim.drive.ScheduleDri
 from __future__ import annotations
 
 from collections.abc import Callable, Sequence
+from concurrent.futures import Future, ThreadPoolExecutor
 from dataclasses import asdict, dataclass, field
 
 import numpy as np
@@ -17,11 +18,19 @@ from handsim.sim.compiled import SimScene
 from handsim.sim.control import DEFAULT_CONTROL_RATE, ControlSchedule, control_schedule
 from handsim.sim.drive import ScenarioSwitches, ScheduleDriver, scenario_switches
 from handsim.sim.metrics import FrameMetrics, HoldTracks, MetricSpec, frame_metrics, hold_tracks
+from handsim.sim.parallel import sim_threads
 from handsim.sim.plausibility import Flag, check_control_rate, is_valid, replay_flags
-from handsim.sim.robustness import HoldRobustness, hold_robustness
+from handsim.sim.robustness import HoldRobustness, Outcome, hold_robustness, member_outcomes
 from handsim.sim.stability import StabilityResult, stability_test
 from handsim.sim.stepper import Stepper, WarningEvent
-from handsim.sim.summary import HoldOutcome, hand_only_summary, hold_outcome, not_judged, summarize
+from handsim.sim.summary import (
+    HoldOutcome,
+    hand_only_summary,
+    hold_outcome,
+    not_judged,
+    summarize,
+    window_long_enough,
+)
 
 MEMBER_FIRST_LOOK = 0.1
 """Seconds after the release at which a robustness-ensemble member's run is first looked at for a loss
@@ -216,35 +225,43 @@ def replay(scene: SimScene, trajectory: Trajectory, config: ReplayConfig | None 
     driver = _driver_at_start(scene, schedule, switches)
     setup = scene.setup
     release = switches.release_frame
-    qpos, sensors, warnings, diverged = run_schedule(driver)
-    frames = frame_metrics(scene, schedule, qpos, sensors, scratch=driver.stepper.data)  # the run is over
-    summary = summarize(frames, spec)
-    if not scene.layout.objects:
-        summary.update(hand_only_summary(frames, scene.layout.link_names))
-    summary["diverged"] = diverged is not None
-    summary["warnings"] = len(warnings)
-    flags = replay_flags(scene, trajectory, schedule, switches, frames)
-    summary["valid"] = is_valid(flags)
-    hold = robustness = release_stability = None
-    if _judges_hold(scene, release):
-        hold = _hold(scene, schedule, frames, qpos, release, spec)
-        summary.update(
-            held=hold.held,
-            hold_reason=hold.reason,
-            time_held_s=hold.time_held,
-            max_slip_mm=hold.max_slip * 1000.0,
-            drop_mm=hold.drop * 1000.0,
-        )
-        if config.ensemble and hold.judged:
-            robustness = hold_robustness(scene, hold, lambda variant: member_verdict(variant, schedule, spec))
-            release_stability = _release_stability(scene, schedule, qpos, release, spec)
-        summary.update(_closure(setup.placement))
-        summary.update(
-            hold_robustness=None if robustness is None else robustness.fraction,
-            release_directions_held=None
-            if release_stability is None
-            else sum(d.success for d in release_stability.directions),
-        )
+    ahead = _members_ahead(scene, schedule, release, config)
+    try:
+        qpos, sensors, warnings, diverged = run_schedule(driver)
+        frames = frame_metrics(scene, schedule, qpos, sensors, scratch=driver.stepper.data)  # the run is over
+        summary = summarize(frames, spec)
+        if not scene.layout.objects:
+            summary.update(hand_only_summary(frames, scene.layout.link_names))
+        summary["diverged"] = diverged is not None
+        summary["warnings"] = len(warnings)
+        flags = replay_flags(scene, trajectory, schedule, switches, frames)
+        summary["valid"] = is_valid(flags)
+        hold = robustness = release_stability = None
+        if _judges_hold(scene, release):
+            hold = _hold(scene, schedule, frames, qpos, release, spec)
+            summary.update(
+                held=hold.held,
+                hold_reason=hold.reason,
+                time_held_s=hold.time_held,
+                max_slip_mm=hold.max_slip * 1000.0,
+                drop_mm=hold.drop * 1000.0,
+            )
+            if config.ensemble and hold.judged:
+                release_stability = _release_stability(scene, schedule, qpos, release, spec)
+                outcomes = None if ahead is None else ahead.result()
+                robustness = hold_robustness(
+                    scene, hold, lambda variant: member_verdict(variant, schedule, spec), outcomes
+                )
+                ahead = None
+            summary.update(_closure(setup.placement))
+            summary.update(
+                hold_robustness=None if robustness is None else robustness.fraction,
+                release_directions_held=None
+                if release_stability is None
+                else sum(d.success for d in release_stability.directions),
+            )
+    finally:
+        _drop(ahead)  # judged ahead but not needed (the run diverged first), or an error: wait for it
     stability = _stability(scene, schedule, qpos, config)
     if stability is not None:
         displacement = stability.simulation_displacement
@@ -286,6 +303,39 @@ def replay(scene: SimScene, trajectory: Trajectory, config: ReplayConfig | None 
         notes=notes,
         flags=flags,
     )
+
+
+def _members_ahead(
+    scene: SimScene, schedule: ControlSchedule, release: int, config: ReplayConfig
+) -> Future[list[tuple[str, Outcome]]] | None:
+    """The robustness ensemble's members judged beside the winner's run, when threads are to spare.
+
+    The members do not depend on the winner's run, only on whether its hold is judged; that is known before
+    the run (a feasible placement, a window long enough after the release) unless the run diverges first,
+    and then the members' answers are dropped (:func:`_drop`). With one thread (a dataset run's workers)
+    nothing runs ahead: the members are judged after the run, as the results are the same either way.
+    """
+    setup, spec = scene.setup, config.metrics
+    if (
+        not config.ensemble
+        or sim_threads() <= 1
+        or not setup.placement.get("ensemble")
+        or setup.placement.get("feasible", True) is False
+        or not _judges_hold(scene, release)
+        or not window_long_enough(float(schedule.times[release]), setup.hold_window, spec)
+    ):
+        return None
+    pool = ThreadPoolExecutor(max_workers=1, thread_name_prefix="handsim-sim")
+    try:
+        return pool.submit(member_outcomes, scene, lambda variant: member_verdict(variant, schedule, spec))
+    finally:
+        pool.shutdown(wait=False)  # its one thread ends with the task
+
+
+def _drop(ahead: Future | None) -> None:
+    """Wait for members judged ahead whose answers are not needed (nothing runs on after the replay)."""
+    if ahead is not None:
+        ahead.exception()  # waits; an error of an answer nobody asked for is not the replay's
 
 
 def _closure(placement: dict) -> dict:

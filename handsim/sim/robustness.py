@@ -75,10 +75,27 @@ def ensemble_scenes(scene: SimScene) -> list[tuple[str, SimScene]]:
     return members
 
 
+Outcome = tuple[bool | None, str | None] | None
+"""A member's judge's answer: ``(held, reason)``, or None when it has no hold to judge."""
+
+
+def member_outcomes(scene: SimScene, judge: Callable[[SimScene], Outcome]) -> list[tuple[str, Outcome]]:
+    """Each ensemble member's label and its judge's answer, in the setup's order.
+
+    The members are independent replays, each on its own data: they run on
+    :func:`~handsim.sim.parallel.sim_threads` threads, so ``judge`` must keep its state (``MjData``) to
+    itself. They do not depend on the winner's replay, so they may be judged before or beside it.
+    """
+    variants = ensemble_scenes(scene)
+    outcomes = map_runs(judge, [variant for _, variant in variants])
+    return [(label, outcome) for (label, _), outcome in zip(variants, outcomes, strict=True)]
+
+
 def hold_robustness(
     scene: SimScene,
     winner: HoldOutcome,
-    judge: Callable[[SimScene], tuple[bool | None, str | None] | None],
+    judge: Callable[[SimScene], Outcome],
+    outcomes: list[tuple[str, Outcome]] | None = None,
 ) -> HoldRobustness:
     """Judge the hold of every ensemble member and count.
 
@@ -86,18 +103,14 @@ def hold_robustness(
         scene: The glove scene (its winner already replayed).
         winner: The winner's hold outcome.
         judge: Replays a member's scene and returns whether it held and why not (None when it has no hold
-            to judge; :func:`handsim.sim.replay.member_verdict`); called for
-            the members on :func:`~handsim.sim.parallel.sim_threads` threads, so it must keep its state
-            (``MjData``) to itself.
+            to judge; :func:`handsim.sim.replay.member_verdict`); see :func:`member_outcomes`.
+        outcomes: The members' answers when already judged (:func:`member_outcomes`); None: judged here.
 
     Returns:
         The robustness (``fraction`` None when no member was judged).
     """
     members = [EnsembleMember("placement", winner.held, winner.reason)]
-    variants = ensemble_scenes(scene)
-    # independent replays, each on its own data: on threads (handsim.sim.parallel), results in order
-    outcomes = map_runs(judge, [variant for _, variant in variants])
-    for (label, _), outcome in zip(variants, outcomes, strict=True):
+    for label, outcome in member_outcomes(scene, judge) if outcomes is None else outcomes:
         held, reason = (None, None) if outcome is None else outcome
         members.append(EnsembleMember(label, held, reason))
     judged = [m for m in members if m.held is not None]

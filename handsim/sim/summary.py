@@ -56,6 +56,14 @@ def not_judged(release_time: float, window: tuple[float, float], reason: str) ->
     )
 
 
+def window_long_enough(release_time: float, window: tuple[float, float], spec: MetricSpec) -> bool:
+    """Whether the hold window lasts ``spec.min_hold_window`` after the release: else not judged.
+
+    :func:`hold_outcome`'s first test, known before the run.
+    """
+    return not window[1] - max(release_time, window[0]) < spec.min_hold_window - 1e-9
+
+
 def hold_outcome(
     frames: FrameMetrics | HoldTracks,
     object_z: np.ndarray,
@@ -83,8 +91,8 @@ def hold_outcome(
     """
     t = frames.times
     start = max(release_time, window[0])
-    length = window[1] - start
-    if length < spec.min_hold_window - 1e-9:
+    if not window_long_enough(release_time, window, spec):
+        length = window[1] - start
         return not_judged(
             release_time,
             window,
