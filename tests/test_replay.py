@@ -415,6 +415,33 @@ def test_members_judged_ahead_of_a_run_that_diverges_are_dropped_and_waited_for(
     assert ahead[0] is not None and ahead[0].done()  # they ran, and the replay waited for them
 
 
+@pytest.mark.parametrize("threads", ["1", "2"])
+def test_a_members_error_comes_first_with_the_members_ahead_or_not(monkeypatch, threads):
+    """Whether the members ran ahead or not, an error of theirs is raised before one of the release test
+    (the order of the one-thread replay: members, then the release test)."""
+    loaded = load_trial(ASSETS_DIR / "demo" / "tennis_ball.grasp.json")
+
+    def member_fails(*args, **kwargs):
+        raise KeyError("member")
+
+    def release_fails(*args, **kwargs):
+        raise IndexError("release")
+
+    monkeypatch.setenv("HANDSIM_THREADS", threads)
+    monkeypatch.setattr(replay_module, "member_verdict", member_fails)
+    monkeypatch.setattr(replay_module, "_release_stability", release_fails)
+    with pytest.raises(KeyError, match="member"):
+        replay(loaded.scene, loaded.trajectory)
+
+
+def test_a_replay_without_a_hold_does_not_ask_for_threads(monkeypatch):
+    """The thread setting is read where runs go on threads, not by every replay (a bad one is an error
+    there: tests/test_parallel.py)."""
+    monkeypatch.setenv("HANDSIM_THREADS", "none")
+    scene, trajectory = _tzionas()
+    assert replay(scene, trajectory).hold is None
+
+
 def test_the_model_hash_is_the_compiled_models_same_spec_same_hash_any_change_another():
     from handsim.sim.compiled import model_digest
 

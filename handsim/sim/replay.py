@@ -247,12 +247,21 @@ def replay(scene: SimScene, trajectory: Trajectory, config: ReplayConfig | None 
                 drop_mm=hold.drop * 1000.0,
             )
             if config.ensemble and hold.judged:
-                release_stability = _release_stability(scene, schedule, qpos, release, spec)
-                outcomes = None if ahead is None else ahead.result()
-                robustness = hold_robustness(
-                    scene, hold, lambda variant: member_verdict(variant, schedule, spec), outcomes
-                )
-                ahead = None
+
+                def judge(variant: SimScene) -> tuple[bool | None, str | None] | None:
+                    return member_verdict(variant, schedule, spec)
+
+                if ahead is None:
+                    robustness = hold_robustness(scene, hold, judge)
+                    release_stability = _release_stability(scene, schedule, qpos, release, spec)
+                else:  # the release test while the members finish; their error first, as without threads
+                    try:
+                        release_stability = _release_stability(scene, schedule, qpos, release, spec)
+                    except Exception:
+                        ahead.result()
+                        raise
+                    robustness = hold_robustness(scene, hold, judge, ahead.result())
+                    ahead = None
             summary.update(_closure(setup.placement))
             summary.update(
                 hold_robustness=None if robustness is None else robustness.fraction,
@@ -318,11 +327,11 @@ def _members_ahead(
     setup, spec = scene.setup, config.metrics
     if (
         not config.ensemble
-        or sim_threads() <= 1
         or not setup.placement.get("ensemble")
         or setup.placement.get("feasible", True) is False
         or not _judges_hold(scene, release)
         or not window_long_enough(float(schedule.times[release]), setup.hold_window, spec)
+        or sim_threads() <= 1  # last: asked only where the members will run (a bad setting raises there)
     ):
         return None
     pool = ThreadPoolExecutor(max_workers=1, thread_name_prefix="handsim-sim")
