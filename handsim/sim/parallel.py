@@ -28,6 +28,7 @@ from typing import TypeVar
 
 THREADS_ENV = "HANDSIM_THREADS"
 """Environment variable: threads for independent simulation runs (a positive integer)."""
+_INNER = threading.local()  # .serial: this thread runs one of map_until's runs (sim_threads() is 1 there)
 
 T = TypeVar("T")
 R = TypeVar("R")
@@ -144,9 +145,6 @@ def map_until(
                 if isinstance(future, Future):
                     future.cancel()
     return results
-
-
-_INNER = threading.local()
 
 
 def _serial_inside(run: Callable[[T], R], item: T) -> R:

@@ -225,7 +225,11 @@ def replay(scene: SimScene, trajectory: Trajectory, config: ReplayConfig | None 
     driver = _driver_at_start(scene, schedule, switches)
     setup = scene.setup
     release = switches.release_frame
-    ahead = _members_ahead(scene, schedule, release, config)
+
+    def judge(variant: SimScene) -> Outcome:  # an ensemble member's verdict
+        return member_verdict(variant, schedule, spec)
+
+    ahead = _members_ahead(scene, schedule, release, config, judge)
     try:
         qpos, sensors, warnings, diverged = run_schedule(driver)
         frames = frame_metrics(scene, schedule, qpos, sensors, scratch=driver.stepper.data)  # the run is over
@@ -247,10 +251,6 @@ def replay(scene: SimScene, trajectory: Trajectory, config: ReplayConfig | None 
                 drop_mm=hold.drop * 1000.0,
             )
             if config.ensemble and hold.judged:
-
-                def judge(variant: SimScene) -> tuple[bool | None, str | None] | None:
-                    return member_verdict(variant, schedule, spec)
-
                 if ahead is None:
                     robustness = hold_robustness(scene, hold, judge)
                     release_stability = _release_stability(scene, schedule, qpos, release, spec)
@@ -315,7 +315,11 @@ def replay(scene: SimScene, trajectory: Trajectory, config: ReplayConfig | None 
 
 
 def _members_ahead(
-    scene: SimScene, schedule: ControlSchedule, release: int, config: ReplayConfig
+    scene: SimScene,
+    schedule: ControlSchedule,
+    release: int,
+    config: ReplayConfig,
+    judge: Callable[[SimScene], Outcome],
 ) -> Future[list[tuple[str, Outcome]]] | None:
     """The robustness ensemble's members judged beside the winner's run, when threads are to spare.
 
@@ -336,7 +340,7 @@ def _members_ahead(
         return None
     pool = ThreadPoolExecutor(max_workers=1, thread_name_prefix="handsim-sim")
     try:
-        return pool.submit(member_outcomes, scene, lambda variant: member_verdict(variant, schedule, spec))
+        return pool.submit(member_outcomes, scene, judge)
     finally:
         pool.shutdown(wait=False)  # its one thread ends with the task
 
@@ -388,9 +392,7 @@ def _hold(
     return hold_outcome(frames, qpos[:, obj.free_qpos + 2], released, window, spec)
 
 
-def member_verdict(
-    scene: SimScene, schedule: ControlSchedule, spec: MetricSpec
-) -> tuple[bool | None, str | None] | None:
+def member_verdict(scene: SimScene, schedule: ControlSchedule, spec: MetricSpec) -> Outcome:
     """Whether a robustness-ensemble member held its object, and why not: simulated until that is decided.
 
     A member's verdict (held, and why not) reads its frames up to the hold window's end and no later
