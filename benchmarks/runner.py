@@ -51,7 +51,7 @@ from pathlib import Path
 
 from handsim.assets import TZIONAS_DIR
 from handsim.runner.records import load_records
-from handsim.sim.parallel import THREADS_ENV
+from handsim.thread_setting import THREADS_ENV
 from handsim.trials import discover
 
 SHARED = Path(__file__).resolve().parents[1].parent / "shared" / "data" / "graspdb14"

@@ -235,3 +235,33 @@ def test_build_hand_mass_and_scene_object_mass_are_separate_options(capsys):
     out = capsys.readouterr().out
     assert "mass       200.0 g" in out  # the object
     assert "mass       0.600 kg" in out  # the scene: hand 0.4 + cube 0.2
+
+
+@pytest.mark.parametrize(
+    "command",
+    [
+        ["replay", "{tzionas}/Models/20"],
+        ["report", "{tzionas}", "-o", "{out}"],
+        ["demo", "-o", "{out}"],
+        ["export", "minari", "{out}", "--dataset-id", "handsim/test-v0"],
+    ],
+)
+def test_a_bad_thread_setting_is_a_usage_error_before_any_work(command, monkeypatch, capsys, tmp_path):
+    from handsim.assets import TZIONAS_DIR
+
+    monkeypatch.setenv("HANDSIM_THREADS", "0")
+    out = tmp_path / "out"
+    args = [a.format(tzionas=TZIONAS_DIR, out=out) for a in command]
+    with pytest.raises(SystemExit) as exited:
+        main(args)
+    assert exited.value.code == 2
+    name = " ".join(args[:2]) if args[0] == "export" else args[0]
+    first = capsys.readouterr().err.splitlines()[0]
+    assert first == f"handsim {name}: error: $HANDSIM_THREADS must be a positive integer (threads), got '0'"
+    assert not out.exists()
+
+
+def test_a_command_that_does_not_simulate_ignores_the_thread_setting(monkeypatch, capsys):
+    monkeypatch.setenv("HANDSIM_THREADS", "many")
+    assert main(["catalog"]) == 0
+    assert "tennis_ball" in capsys.readouterr().out

@@ -71,6 +71,15 @@ def test_help_of_every_command_imports_no_heavy_module():
         assert (code, heavy) == (0, []), args
 
 
+def test_a_bad_thread_setting_is_refused_before_importing_the_simulation(tmp_path: Path):
+    from handsim.assets import TZIONAS_DIR
+
+    [(_, code, heavy)] = _imports_of(
+        ["replay", str(TZIONAS_DIR / "Models" / "20")], env={"HANDSIM_THREADS": "0"}
+    )
+    assert (code, heavy) == (2, [])
+
+
 def test_catalog_imports_no_heavy_module():
     [(_, code, heavy)] = _imports_of(["catalog"])
     assert (code, heavy) == (0, [])

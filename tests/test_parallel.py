@@ -6,14 +6,8 @@ import threading
 
 import pytest
 
-from handsim.sim.parallel import (
-    THREADS_ENV,
-    available_cores,
-    map_on_workers,
-    map_runs,
-    map_until,
-    sim_threads,
-)
+from handsim.sim.parallel import available_cores, map_on_workers, map_runs, map_until, sim_threads
+from handsim.thread_setting import THREADS_ENV, threads_setting
 
 
 def test_results_come_back_in_the_order_of_the_items() -> None:
@@ -60,8 +54,18 @@ def test_thread_setting_from_the_environment(monkeypatch) -> None:
 @pytest.mark.parametrize("value", ["0", "-2", "two", "1.5"])
 def test_a_bad_thread_setting_is_a_clear_error(monkeypatch, value: str) -> None:
     monkeypatch.setenv(THREADS_ENV, value)
-    with pytest.raises(ValueError, match=rf"\$HANDSIM_THREADS must be a positive integer .*{value!r}"):
-        sim_threads()
+    for read in (sim_threads, threads_setting):
+        with pytest.raises(ValueError, match=rf"\$HANDSIM_THREADS must be a positive integer .*{value!r}"):
+            read()
+
+
+@pytest.mark.parametrize(("value", "expected"), [(None, None), ("", None), (" 3 ", 3), ("1", 1)])
+def test_the_thread_setting_as_read(monkeypatch, value: str | None, expected: int | None) -> None:
+    if value is None:
+        monkeypatch.delenv(THREADS_ENV, raising=False)
+    else:
+        monkeypatch.setenv(THREADS_ENV, value)
+    assert threads_setting() == expected
 
 
 def test_workers_take_the_next_item_when_free_and_results_come_back_in_order() -> None:

@@ -2,9 +2,10 @@
 
 Every command exits 0 on success, 1 on a handsim error (with a one-line message naming the file, line
 and field at fault) or an operating-system error reading or writing a file (one line: the file and the
-system's reason), 2 on a usage error (bad arguments are refused before any work starts; the first line of
-stderr is ``handsim COMMAND: error: …``), and 130 when interrupted (Ctrl-C or SIGTERM: one line; files
-are written atomically, so none is left half-written). One module per command group registers its parsers.
+system's reason), 2 on a usage error (bad arguments, and a bad ``$HANDSIM_THREADS`` for the commands that
+simulate, are refused before any work starts; the first line of stderr is ``handsim COMMAND: error: …``),
+and 130 when interrupted (Ctrl-C or SIGTERM: one line; files are written atomically, so none is left
+half-written). One module per command group registers its parsers.
 """
 
 from __future__ import annotations
@@ -19,6 +20,7 @@ from collections.abc import Sequence
 from handsim.cli import build, catalog, demo, export, replay, report, trajectory
 from handsim.cli._common import EXIT_INTERRUPTED, Parser, range_problem
 from handsim.errors import HandsimError
+from handsim.thread_setting import threads_setting
 from handsim.version import __version__
 
 DESCRIPTION = """\
@@ -53,7 +55,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         if getattr(args, "func", None) is None:
             parser.print_help()
             return 2
-        problem = range_problem(args)
+        problem = range_problem(args) or _environment_problem(args)
         if problem is not None:
             args.command_parser.error(problem)  # the problem first, then the usage, on stderr: exit 2
         return args.func(args)
@@ -72,6 +74,21 @@ def main(argv: Sequence[str] | None = None) -> int:
     finally:
         if main_thread:
             signal.signal(signal.SIGTERM, previous)
+
+
+def _environment_problem(args: argparse.Namespace) -> str | None:
+    """What is wrong with the environment a simulating command reads (``$HANDSIM_THREADS``), or None.
+
+    Checked before any work starts, like the arguments: a bad value would otherwise surface as a traceback
+    once the trial has loaded (or, in a dataset run, not at all: its workers use one thread each).
+    """
+    if not getattr(args, "simulates", False):
+        return None
+    try:
+        threads_setting()
+    except ValueError as exc:
+        return str(exc)
+    return None
 
 
 def _terminate(signum: int, frame: object) -> None:

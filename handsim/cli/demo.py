@@ -127,4 +127,4 @@ def register(commands: Commands) -> None:
     demo.add_argument(
         "--frames", type=non_negative_int, default=4, metavar="N", help="frames rendered per trial (0: none)"
     )
-    demo.set_defaults(func=_run)
+    demo.set_defaults(func=_run, simulates=True, command_parser=demo)

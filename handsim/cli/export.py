@@ -102,4 +102,4 @@ def register(commands: Commands) -> None:
     minari.add_argument(
         "--code-permalink", metavar="URL", help="link to the code that made the data (left out if not given)"
     )
-    minari.set_defaults(func=_run_minari)
+    minari.set_defaults(func=_run_minari, simulates=True, command_parser=minari)

@@ -452,4 +452,4 @@ def register(commands: Commands) -> None:
     replay.add_argument(
         "-v", "--verbose", action="store_true", help="also print the recording reader's notes"
     )
-    replay.set_defaults(func=_replay)
+    replay.set_defaults(func=_replay, simulates=True, command_parser=replay)

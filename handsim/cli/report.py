@@ -216,4 +216,4 @@ def register(commands: Commands) -> None:
         "--render-only", nargs="?", const="", metavar="OUT",
         help="render the report of OUT (or -o OUT) from its records, without simulating",
     )  # fmt: skip
-    report.set_defaults(func=_report)
+    report.set_defaults(func=_report, simulates=True, command_parser=report)

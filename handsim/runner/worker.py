@@ -30,8 +30,8 @@ from handsim.runner.portable import portable_traceback
 from handsim.runner.records import SCHEMA, json_ready
 from handsim.runner.renders import FRAMES_DIR, key_frames, render_pngs, safe_id
 from handsim.runner.trial_record import curves, input_hashes, trajectory_quality, versions
-from handsim.sim.parallel import THREADS_ENV
 from handsim.sim.replay import ReplayConfig, replay
+from handsim.thread_setting import THREADS_ENV
 from handsim.trials import TrialEntry, load_trial
 from handsim.viz.headless import prefer_headless_gl
 

@@ -26,8 +26,8 @@ from collections.abc import Callable, Iterable, Iterator, Sequence
 from concurrent.futures import Future, ThreadPoolExecutor
 from typing import TypeVar
 
-THREADS_ENV = "HANDSIM_THREADS"
-"""Environment variable: threads for independent simulation runs (a positive integer)."""
+from handsim.thread_setting import threads_setting
+
 _INNER = threading.local()  # .serial: this thread runs one of map_until's runs (sim_threads() is 1 there)
 
 T = TypeVar("T")
@@ -50,16 +50,8 @@ def sim_threads() -> int:
     """
     if getattr(_INNER, "serial", False):
         return 1
-    value = os.environ.get(THREADS_ENV, "").strip()
-    if not value:
-        return available_cores()
-    try:
-        threads = int(value)
-    except ValueError:
-        threads = 0
-    if threads < 1:
-        raise ValueError(f"${THREADS_ENV} must be a positive integer (threads), got {value!r}")
-    return threads
+    threads = threads_setting()
+    return available_cores() if threads is None else threads
 
 
 def map_runs(run: Callable[[T], R], items: Sequence[T], threads: int | None = None) -> list[R]:
