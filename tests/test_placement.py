@@ -95,3 +95,45 @@ def test_the_search_on_threads_places_as_on_one_thread(
     if recording.startswith("r_"):
         assert drawn[1] > grip_tests  # the threads drew candidates that were never needed…
     assert pickle.dumps(threaded) == pickle.dumps(alone)  # …and they left no trace
+
+
+@pytest.mark.parametrize("threads", ["1", "2"])
+def test_grip_tests_that_cannot_match_an_earlier_grip_stop_and_leave_the_placement_unchanged(
+    graspdb_dir, monkeypatch, threads
+):
+    """A grip test stops once its grip can no longer resist as many directions as an earlier candidate's:
+    such a candidate is neither the winner nor an alternative, nor does it resist all six. The placement is
+    the one of whole tests, bit for bit (the ball's first candidate resists all six, the 14 after it fewer:
+    with one thread each of those stops at its first failed direction, or skips ObMan's run)."""
+    import pickle
+
+    import handsim.sim.scenarios as scenarios
+    from handsim.sim.grip import GripBench
+
+    placed, stopped = [], []
+    original, original_grip = scenarios.place_object, GripBench.grip
+
+    def uncached(*args, **kwargs):
+        placed.append(original(*args, **kwargs, use_cache=False))
+        return placed[-1]
+
+    def whole(self, *args, needed=0, **kwargs):
+        return original_grip(self, *args, **kwargs)
+
+    def watched(self, *args, **kwargs):
+        result = original_grip(self, *args, **kwargs)
+        runs = (*result.stability.directions, result.stability.obman)
+        stopped.append(any(d.failure.startswith("not run") for d in runs))
+        return result
+
+    monkeypatch.setattr(scenarios, "place_object", uncached)
+    monkeypatch.setenv("HANDSIM_THREADS", threads)
+    monkeypatch.setattr(GripBench, "grip", whole)
+    load_trial(graspdb_dir / "01_ex01-rad-002-grasp-su01.txt")
+    monkeypatch.setattr(GripBench, "grip", watched)
+    load_trial(graspdb_dir / "01_ex01-rad-002-grasp-su01.txt")
+    unstopped, pruned = placed
+    assert pruned.grip_tests == unstopped.grip_tests == len(stopped) == 15
+    assert pickle.dumps(pruned) == pickle.dumps(unstopped)
+    if threads == "1":
+        assert stopped == [False] + [True] * 14

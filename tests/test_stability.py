@@ -286,3 +286,31 @@ def test_directions_on_threads_give_the_results_of_one_thread(case, request, mon
     alone = stability_test(*args, stop_at_failure=True).to_dict()
     monkeypatch.setenv("HANDSIM_THREADS", "4")
     assert stability_test(*args, stop_at_failure=True).to_dict() == alone
+
+
+@pytest.mark.parametrize("needed", [2, 3, 6])
+def test_a_test_that_cannot_reach_the_directions_needed_stops_there(open_hand, needed) -> None:
+    """The open hand holds at most one direction: the test ends once fewer than ``needed`` could still
+    succeed; the runs made are those of the whole test, bit for bit, and the others (ObMan's too) say they
+    were not run."""
+    whole = stability_test(*open_hand, stop_at_failure=True)
+    cut = stability_test(*open_hand, stop_at_failure=True, needed=needed)
+    runs, failed = 0, 0
+    for d in whole.directions:  # the rule, on the whole test's outcomes
+        if len(DIRECTIONS) - failed < needed:
+            break
+        runs, failed = runs + 1, failed + (not d.success)
+    assert runs == 1 if needed == len(DIRECTIONS) else runs >= 1  # six needed: the first failure ends it
+    assert [d.to_dict() for d in cut.directions[:runs]] == [d.to_dict() for d in whole.directions[:runs]]
+    for skipped in (*cut.directions[runs:], cut.obman):
+        assert not skipped.success and skipped.displacement is None and skipped.simulated_time == 0.0
+        assert skipped.failure == f"not run: fewer than {needed} directions could still be resisted"
+    assert cut.simulation_displacement is None and not cut.success
+    assert [d.direction for d in cut.directions] == list(DIRECTIONS)
+
+
+def test_a_grip_that_can_still_reach_the_directions_needed_runs_the_whole_test(grasp) -> None:
+    assert (
+        stability_test(*grasp, stop_at_failure=True, needed=6).to_dict()
+        == stability_test(*grasp, stop_at_failure=True).to_dict()
+    )

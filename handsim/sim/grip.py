@@ -116,7 +116,12 @@ class GripBench:
         ]
 
     def grip(
-        self, pose: npt.ArrayLike, contact_time: float, spec: StabilitySpec, object_index: int = 0
+        self,
+        pose: npt.ArrayLike,
+        contact_time: float,
+        spec: StabilitySpec,
+        object_index: int = 0,
+        needed: int = 0,
     ) -> GripResult:
         """Replay with the object at ``pose`` and contacts from ``contact_time`` up to the release; test it.
 
@@ -125,6 +130,9 @@ class GripBench:
             contact_time: Trajectory time from which hand–object contacts act, s.
             spec: The stability test's parameters.
             object_index: Which object (layout order).
+            needed: Stop the stability test once fewer than this many directions can still be resisted
+                (:func:`~handsim.sim.stability.stability_test`): the result's ``directions_held`` is then
+                below ``needed``, and its other numbers are those of the directions run. 0: the whole test.
         """
         scene, schedule = self.scene, self.schedule
         model = object_pose_variant(scene, pose, object_index)
@@ -155,6 +163,7 @@ class GripBench:
             spec=spec,
             object_index=object_index,
             stop_at_failure=True,
+            needed=needed,
         )
         held = sum(d.success for d in stability.directions)
         moved = [

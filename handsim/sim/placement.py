@@ -23,6 +23,9 @@ The search (:func:`place_object`):
    the grasp stability test (gravity along ±x ±y ±z, after DexGraspNet; :mod:`handsim.sim.grip`) counts the
    directions the grip resists. The winner resists the most directions; ties go to the later fit (less
    over-closure assumed), then to the smaller mean displacement, then to more links and less penetration.
+   A grip test ends (its directions in order) once its grip can no longer resist as many directions as an
+   earlier candidate's: such a candidate can be neither the winner nor an alternative, nor does it resist
+   all six, so the placement is the one of whole tests.
 
 Every pose within the tolerance is a candidate: when none touches the hand, the feasible pose nearest the
 fingertips' centre is kept (with a note); only when no pose of any level is within the tolerance is the
@@ -160,17 +163,25 @@ def _place(
     times = np.asarray(trajectory.times, dtype=float)
     bench = GripBench(scene, trajectory, control_rate, float(times[grasp.closed]) + release_delay)
 
-    def gripped(candidate: Candidate) -> Candidate:
-        grip = bench.grip(candidate.pose, float(times[candidate.contact_frame]), spec.grip)
+    # Directions held by each ranked candidate's finished grip test (-1: not finished). A candidate whose
+    # grip can no longer resist as many directions as an earlier one's is neither the winner nor an
+    # alternative, nor does it count towards the stop (it does not resist all six): its test ends there.
+    held = [-1] * len(ranked)
+
+    def gripped(ranked_candidate: tuple[int, Candidate]) -> Candidate:
+        rank, candidate = ranked_candidate
+        needed = max(held[:rank], default=0)  # of those finished: on threads, earlier ones may still run
+        grip = bench.grip(candidate.pose, float(times[candidate.contact_frame]), spec.grip, needed=needed)
+        held[rank] = grip.directions_held
         return replace(candidate, grip=grip)
 
     drawn = []  # the collider's query count after each candidate drawn
 
-    def candidates() -> Iterator[Candidate]:
-        for _, _, pose in ranked:
+    def candidates() -> Iterator[tuple[int, Candidate]]:
+        for rank, (_, _, pose) in enumerate(ranked):
             candidate = search.with_contact(search.candidate(pose))
             drawn.append(search.collider.queries)
-            yield candidate
+            yield rank, candidate
 
     def enough(grips: list[Candidate]) -> bool:
         return sum(c.grip.directions_held == len(DIRECTIONS) for c in grips) > spec.alternatives
@@ -194,7 +205,8 @@ def _place(
         )
         feasible = True
     elif search.nearest is not None:
-        best = gripped(search.with_contact(search.candidate(search.nearest[1])))
+        nearest = search.with_contact(search.candidate(search.nearest[1]))
+        best = replace(nearest, grip=bench.grip(nearest.pose, float(times[nearest.contact_frame]), spec.grip))
         note = (
             f"no object pose within {spec.penetration * 1000:g} mm of penetration touches the hand on the "
             f"closing ramp: placed nearest the fingertips' centre without penetration ({queries} poses tried)"

@@ -212,6 +212,7 @@ def stability_test(
     mocap_pos: npt.ArrayLike | None = None,
     mocap_quat: npt.ArrayLike | None = None,
     stop_at_failure: bool = False,
+    needed: int = 0,
 ) -> StabilityResult:
     """Test whether the hand holds an object against gravity along ±x ±y ±z, and ObMan's displacement.
 
@@ -231,6 +232,10 @@ def stability_test(
             (checked every :data:`CHECK_STEPS` steps): the direction fails as it would at the end, its
             displacement and rotation are those at the stop, and ``simulated_time`` says how long it ran.
             For searches that only need the outcome; off for a full test.
+        needed: End the whole test as soon as fewer than this many directions can still be resisted (the
+            directions are then run one after the other, in order): the directions not run and the ObMan
+            run are failures that say "not run", with no displacement. For a search that only needs a grip
+            that could match the best one found so far; 0: every run is made.
 
     Returns:
         The per-direction results, the overall success, the ObMan simulation displacement and the spec.
@@ -263,9 +268,13 @@ def stability_test(
     obman_steps = max(1, round(spec.obman_duration / frozen.opt.timestep))
     jobs = [(label, spec.gravity * np.asarray(unit), steps) for label, unit in DIRECTIONS.items()]
     jobs.append(("obman", spec.gravity * obman_dir, obman_steps))
-    # The runs are independent (each starts from the same state): on threads, each on its own MjData.
-    runs = [run, *(run.fork() for _ in range(min(sim_threads(), len(jobs)) - 1))]
-    results = map_on_workers(lambda worker, job: worker.direction(*job, spec, stop_at_failure), jobs, runs)
+    if needed > 0:
+        results = _until_out_of_reach(run, jobs, spec, stop_at_failure, needed)
+    else:  # the runs are independent (each starts from the same state): on threads, each on its own MjData
+        runs = [run, *(run.fork() for _ in range(min(sim_threads(), len(jobs)) - 1))]
+        results = map_on_workers(
+            lambda worker, job: worker.direction(*job, spec, stop_at_failure), jobs, runs
+        )
     directions, obman = tuple(results[:-1]), results[-1]
     return StabilityResult(
         directions=directions,
@@ -278,6 +287,42 @@ def stability_test(
         spec=spec.to_dict(),
         model_sha256=scene.model_sha256,
     )
+
+
+def _until_out_of_reach(
+    run: _Run,
+    jobs: list[tuple[str, np.ndarray, int]],
+    spec: StabilitySpec,
+    stop_at_failure: bool,
+    needed: int,
+) -> list[DirectionResult]:
+    """The runs of ``jobs`` (the directions, then ObMan's) in order, until ``needed`` are out of reach.
+
+    Each run made is the one :meth:`_Run.direction` makes alone; once fewer than ``needed`` directions can
+    still succeed, the rest are reported as failures that were not run.
+    """
+    results: list[DirectionResult] = []
+    directions = len(jobs) - 1
+    for label, gravity, steps in jobs:
+        failed = sum(not r.success for r in results[:directions])
+        if directions - failed < needed:
+            results.append(
+                DirectionResult(
+                    direction=label,
+                    gravity=tuple(float(x) for x in gravity),
+                    success=False,
+                    displacement=None,
+                    rotation_deg=None,
+                    in_contact_at_end=False,
+                    links_in_contact=(),
+                    simulated_time=0.0,
+                    failure=f"not run: fewer than {needed} directions could still be resisted",
+                    warnings=(),
+                )
+            )
+        else:
+            results.append(run.direction(label, gravity, steps, spec, stop_at_failure))
+    return results
 
 
 def _array(value: npt.ArrayLike, shape: tuple[int, ...], what: str) -> np.ndarray:
