@@ -314,3 +314,18 @@ def test_a_grip_that_can_still_reach_the_directions_needed_runs_the_whole_test(g
         stability_test(*grasp, stop_at_failure=True, needed=6).to_dict()
         == stability_test(*grasp, stop_at_failure=True).to_dict()
     )
+
+
+def test_the_directions_needed_may_rise_while_the_test_runs(open_hand) -> None:
+    """A function gives the count before each run (a search's best so far, raised by other threads)."""
+    asked = []
+
+    def needed() -> int:
+        asked.append(len(asked))
+        return 0 if len(asked) <= 2 else 6
+
+    whole = stability_test(*open_hand, stop_at_failure=True)
+    cut = stability_test(*open_hand, stop_at_failure=True, needed=needed)
+    assert [d.to_dict() for d in cut.directions[:2]] == [d.to_dict() for d in whole.directions[:2]]
+    assert all(d.failure.startswith("not run: fewer than 6") for d in (*cut.directions[2:], cut.obman))
+    assert len(asked) == len(DIRECTIONS) + 1  # asked before every run, ObMan's included

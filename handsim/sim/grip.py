@@ -15,6 +15,7 @@ from its state at that frame.
 from __future__ import annotations
 
 import copy
+from collections.abc import Callable
 from dataclasses import dataclass, replace
 
 import mujoco
@@ -121,7 +122,7 @@ class GripBench:
         contact_time: float,
         spec: StabilitySpec,
         object_index: int = 0,
-        needed: int = 0,
+        needed: int | Callable[[], int] = 0,
     ) -> GripResult:
         """Replay with the object at ``pose`` and contacts from ``contact_time`` up to the release; test it.
 
@@ -131,8 +132,9 @@ class GripBench:
             spec: The stability test's parameters.
             object_index: Which object (layout order).
             needed: Stop the stability test once fewer than this many directions can still be resisted
-                (:func:`~handsim.sim.stability.stability_test`): the result's ``directions_held`` is then
-                below ``needed``, and its other numbers are those of the directions run. 0: the whole test.
+                (:func:`~handsim.sim.stability.stability_test`; a function is asked before each direction):
+                the result's ``directions_held`` is then below it, and its other numbers are those of the
+                directions run. 0: the whole test.
         """
         scene, schedule = self.scene, self.schedule
         model = object_pose_variant(scene, pose, object_index)

@@ -170,7 +170,10 @@ def _place(
 
     def gripped(ranked_candidate: tuple[int, Candidate]) -> Candidate:
         rank, candidate = ranked_candidate
-        needed = max(held[:rank], default=0)  # of those finished: on threads, earlier ones may still run
+
+        def needed() -> int:  # asked before each direction: on threads, earlier tests may finish meanwhile
+            return max(held[:rank], default=0)
+
         grip = bench.grip(candidate.pose, float(times[candidate.contact_frame]), spec.grip, needed=needed)
         held[rank] = grip.directions_held
         return replace(candidate, grip=grip)

@@ -22,7 +22,7 @@ from __future__ import annotations
 
 import copy
 import math
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 from dataclasses import asdict, dataclass, field, replace
 from types import MappingProxyType
 
@@ -212,7 +212,7 @@ def stability_test(
     mocap_pos: npt.ArrayLike | None = None,
     mocap_quat: npt.ArrayLike | None = None,
     stop_at_failure: bool = False,
-    needed: int = 0,
+    needed: int | Callable[[], int] = 0,
 ) -> StabilityResult:
     """Test whether the hand holds an object against gravity along ±x ±y ±z, and ObMan's displacement.
 
@@ -234,8 +234,9 @@ def stability_test(
             For searches that only need the outcome; off for a full test.
         needed: End the whole test as soon as fewer than this many directions can still be resisted (the
             directions are then run one after the other, in order): the directions not run and the ObMan
-            run are failures that say "not run", with no displacement. For a search that only needs a grip
-            that could match the best one found so far; 0: every run is made.
+            run are failures that say "not run", with no displacement. A function is asked before each run
+            (a search's best so far, which other threads may raise meanwhile). For a search that only needs
+            a grip that could match the best one found so far; 0: every run is made.
 
     Returns:
         The per-direction results, the overall success, the ObMan simulation displacement and the spec.
@@ -268,8 +269,9 @@ def stability_test(
     obman_steps = max(1, round(spec.obman_duration / frozen.opt.timestep))
     jobs = [(label, spec.gravity * np.asarray(unit), steps) for label, unit in DIRECTIONS.items()]
     jobs.append(("obman", spec.gravity * obman_dir, obman_steps))
-    if needed > 0:
-        results = _until_out_of_reach(run, jobs, spec, stop_at_failure, needed)
+    if callable(needed) or needed > 0:
+        bound = needed if callable(needed) else lambda: needed
+        results = _until_out_of_reach(run, jobs, spec, stop_at_failure, bound)
     else:  # the runs are independent (each starts from the same state): on threads, each on its own MjData
         runs = [run, *(run.fork() for _ in range(min(sim_threads(), len(jobs)) - 1))]
         results = map_on_workers(
@@ -294,18 +296,18 @@ def _until_out_of_reach(
     jobs: list[tuple[str, np.ndarray, int]],
     spec: StabilitySpec,
     stop_at_failure: bool,
-    needed: int,
+    needed: Callable[[], int],
 ) -> list[DirectionResult]:
-    """The runs of ``jobs`` (the directions, then ObMan's) in order, until ``needed`` are out of reach.
+    """The runs of ``jobs`` (the directions, then ObMan's) in order, until ``needed()`` are out of reach.
 
-    Each run made is the one :meth:`_Run.direction` makes alone; once fewer than ``needed`` directions can
-    still succeed, the rest are reported as failures that were not run.
+    Each run made is the one :meth:`_Run.direction` makes alone; once fewer directions than ``needed()``
+    (asked before each run) can still succeed, the rest are reported as failures that were not run.
     """
     results: list[DirectionResult] = []
     directions = len(jobs) - 1
     for label, gravity, steps in jobs:
         failed = sum(not r.success for r in results[:directions])
-        if directions - failed < needed:
+        if directions - failed < (count := needed()):
             results.append(
                 DirectionResult(
                     direction=label,
@@ -316,7 +318,7 @@ def _until_out_of_reach(
                     in_contact_at_end=False,
                     links_in_contact=(),
                     simulated_time=0.0,
-                    failure=f"not run: fewer than {needed} directions could still be resisted",
+                    failure=f"not run: fewer than {count} directions could still be resisted",
                     warnings=(),
                 )
             )
