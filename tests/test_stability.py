@@ -329,3 +329,14 @@ def test_the_directions_needed_may_rise_while_the_test_runs(open_hand) -> None:
     assert [d.to_dict() for d in cut.directions[:2]] == [d.to_dict() for d in whole.directions[:2]]
     assert all(d.failure.startswith("not run: fewer than 6") for d in (*cut.directions[2:], cut.obman))
     assert len(asked) == len(DIRECTIONS) + 1  # asked before every run, ObMan's included
+
+
+def test_the_directions_named_first_run_first_and_change_no_result(grasp, open_hand) -> None:
+    whole = stability_test(*grasp, stop_at_failure=True).to_dict()
+    assert stability_test(*grasp, stop_at_failure=True, needed=6, first=("-z", "+y")).to_dict() == whole
+    dropped = stability_test(*open_hand, stop_at_failure=True)
+    cut = stability_test(*open_hand, stop_at_failure=True, needed=6, first=("-z",))
+    assert cut.direction("-z").to_dict() == dropped.direction("-z").to_dict()  # the one run made
+    assert all(d.failure.startswith("not run") for d in cut.directions if d.direction != "-z")
+    with pytest.raises(ValueError, match=r"first: unknown directions \['down'\]"):
+        stability_test(*grasp, needed=6, first=("down",))

@@ -15,7 +15,7 @@ from its state at that frame.
 from __future__ import annotations
 
 import copy
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, replace
 
 import mujoco
@@ -123,6 +123,7 @@ class GripBench:
         spec: StabilitySpec,
         object_index: int = 0,
         needed: int | Callable[[], int] = 0,
+        first: Sequence[str] = (),
     ) -> GripResult:
         """Replay with the object at ``pose`` and contacts from ``contact_time`` up to the release; test it.
 
@@ -135,6 +136,7 @@ class GripBench:
                 (:func:`~handsim.sim.stability.stability_test`; a function is asked before each direction):
                 the result's ``directions_held`` is then below it, and its other numbers are those of the
                 directions run. 0: the whole test.
+            first: With ``needed``: the directions to test first (those most likely to fail).
         """
         scene, schedule = self.scene, self.schedule
         model = object_pose_variant(scene, pose, object_index)
@@ -166,6 +168,7 @@ class GripBench:
             object_index=object_index,
             stop_at_failure=True,
             needed=needed,
+            first=first,
         )
         held = sum(d.success for d in stability.directions)
         moved = [

@@ -47,6 +47,7 @@ The search's parameters and results (:class:`PlacementSpec`, :class:`Candidate`,
 from __future__ import annotations
 
 import pickle
+import threading
 from collections.abc import Iterator
 from dataclasses import replace
 from pathlib import Path
@@ -166,7 +167,11 @@ def _place(
     # Directions held by each ranked candidate's finished grip test (-1: not finished). A candidate whose
     # grip can no longer resist as many directions as an earlier one's is neither the winner nor an
     # alternative, nor does it count towards the stop (it does not resist all six): its test ends there.
+    # So that such a test ends sooner, the directions that failed most often in the tests so far run first
+    # (the directions are independent: the whole tests are the same in any order).
     held = [-1] * len(ranked)
+    failures = dict.fromkeys(DIRECTIONS, 0)
+    counting = threading.Lock()
 
     def gripped(ranked_candidate: tuple[int, Candidate]) -> Candidate:
         rank, candidate = ranked_candidate
@@ -174,7 +179,12 @@ def _place(
         def needed() -> int:  # asked before each direction: on threads, earlier tests may finish meanwhile
             return max(held[:rank], default=0)
 
-        grip = bench.grip(candidate.pose, float(times[candidate.contact_frame]), spec.grip, needed=needed)
+        first = sorted(DIRECTIONS, key=lambda label: -failures[label])
+        contact = float(times[candidate.contact_frame])
+        grip = bench.grip(candidate.pose, contact, spec.grip, needed=needed, first=first)
+        with counting:
+            for d in grip.stability.directions:
+                failures[d.direction] += not d.success and d.simulated_time > 0  # the runs made
         held[rank] = grip.directions_held
         return replace(candidate, grip=grip)
 

@@ -22,7 +22,7 @@ from __future__ import annotations
 
 import copy
 import math
-from collections.abc import Callable, Mapping
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import asdict, dataclass, field, replace
 from types import MappingProxyType
 
@@ -213,6 +213,7 @@ def stability_test(
     mocap_quat: npt.ArrayLike | None = None,
     stop_at_failure: bool = False,
     needed: int | Callable[[], int] = 0,
+    first: Sequence[str] = (),
 ) -> StabilityResult:
     """Test whether the hand holds an object against gravity along ±x ±y ±z, and ObMan's displacement.
 
@@ -237,6 +238,9 @@ def stability_test(
             run are failures that say "not run", with no displacement. A function is asked before each run
             (a search's best so far, which other threads may raise meanwhile). For a search that only needs
             a grip that could match the best one found so far; 0: every run is made.
+        first: With ``needed``: directions to run before the others (labels of :data:`DIRECTIONS`, e.g. those
+            most likely to fail, so that a test out of reach ends sooner). The runs are independent, so a
+            direction's result does not depend on when it runs; the results are in :data:`DIRECTIONS` order.
 
     Returns:
         The per-direction results, the overall success, the ObMan simulation displacement and the spec.
@@ -258,6 +262,9 @@ def stability_test(
         )
     if not 0 <= object_index < len(objects):
         raise ValueError(f"object_index {object_index} names no object; the scene has {len(objects)}")
+    unknown = [label for label in first if label not in DIRECTIONS]
+    if unknown:
+        raise ValueError(f"first: unknown directions {unknown}; expected labels of {list(DIRECTIONS)}")
     qpos = _array(qpos, (model.nq,), "qpos")
     ctrl = _array(ctrl, (model.nu,), "ctrl")
     mocap = _mocap_pose(scene, qpos, mocap_pos, mocap_quat)
@@ -269,9 +276,15 @@ def stability_test(
     obman_steps = max(1, round(spec.obman_duration / frozen.opt.timestep))
     jobs = [(label, spec.gravity * np.asarray(unit), steps) for label, unit in DIRECTIONS.items()]
     jobs.append(("obman", spec.gravity * obman_dir, obman_steps))
-    if callable(needed) or needed > 0:
+    if callable(needed) or needed > 0:  # one after the other, the directions named first ahead, ObMan's last
+        by_label = {job[0]: job for job in jobs}
+        order = [*dict.fromkeys([*first, *DIRECTIONS]), "obman"]
         bound = needed if callable(needed) else lambda: needed
-        results = _until_out_of_reach(run, jobs, spec, stop_at_failure, bound)
+        ran = {
+            r.direction: r
+            for r in _until_out_of_reach(run, [by_label[d] for d in order], spec, stop_at_failure, bound)
+        }
+        results = [ran[label] for label, _, _ in jobs]
     else:  # the runs are independent (each starts from the same state): on threads, each on its own MjData
         runs = [run, *(run.fork() for _ in range(min(sim_threads(), len(jobs)) - 1))]
         results = map_on_workers(
@@ -298,7 +311,7 @@ def _until_out_of_reach(
     stop_at_failure: bool,
     needed: Callable[[], int],
 ) -> list[DirectionResult]:
-    """The runs of ``jobs`` (the directions, then ObMan's) in order, until ``needed()`` are out of reach.
+    """The runs of ``jobs`` (ObMan's last) in the order given, until ``needed()`` directions are out of reach.
 
     Each run made is the one :meth:`_Run.direction` makes alone; once fewer directions than ``needed()``
     (asked before each run) can still succeed, the rest are reported as failures that were not run.
