@@ -117,7 +117,7 @@ def test_grip_tests_that_cannot_match_an_earlier_grip_stop_and_leave_the_placeme
         placed.append(original(*args, **kwargs, use_cache=False))
         return placed[-1]
 
-    def whole(self, *args, needed=0, **kwargs):
+    def whole(self, *args, needed=0, first=(), **kwargs):
         return original_grip(self, *args, **kwargs)
 
     def watched(self, *args, **kwargs):

@@ -317,18 +317,19 @@ def test_a_grip_that_can_still_reach_the_directions_needed_runs_the_whole_test(g
 
 
 def test_the_directions_needed_may_rise_while_the_test_runs(open_hand) -> None:
-    """A function gives the count before each run (a search's best so far, raised by other threads)."""
+    """A function gives the count before each run until the test stops (a search's best so far, raised by
+    other threads)."""
     asked = []
 
     def needed() -> int:
         asked.append(len(asked))
-        return 0 if len(asked) <= 2 else 6
+        return 0 if len(asked) <= 2 else 6 + len(asked)  # rising: asked once it has stopped, it would say so
 
     whole = stability_test(*open_hand, stop_at_failure=True)
     cut = stability_test(*open_hand, stop_at_failure=True, needed=needed)
     assert [d.to_dict() for d in cut.directions[:2]] == [d.to_dict() for d in whole.directions[:2]]
-    assert all(d.failure.startswith("not run: fewer than 6") for d in (*cut.directions[2:], cut.obman))
-    assert len(asked) == len(DIRECTIONS) + 1  # asked before every run, ObMan's included
+    assert all(d.failure.startswith("not run: fewer than 9 ") for d in (*cut.directions[2:], cut.obman))
+    assert len(asked) == 3  # before the two runs made and the first not made: not once it has stopped
 
 
 def test_the_directions_named_first_run_first_and_change_no_result(grasp, open_hand) -> None:
@@ -340,3 +341,5 @@ def test_the_directions_named_first_run_first_and_change_no_result(grasp, open_h
     assert all(d.failure.startswith("not run") for d in cut.directions if d.direction != "-z")
     with pytest.raises(ValueError, match=r"first: unknown directions \['down'\]"):
         stability_test(*grasp, needed=6, first=("down",))
+    with pytest.raises(ValueError, match="first orders the runs of a test with needed"):
+        stability_test(*grasp, first=("-z",))

@@ -39,8 +39,8 @@ class GripResult:
 
     Attributes:
         directions_held: Gravity directions (of six) the grip resisted.
-        mean_displacement: Mean of the six directions' object displacements, m (a diverged direction counts
-            as the stability spec's limit).
+        mean_displacement: Mean of the six directions' object displacements, m (a diverged direction, or
+            one not run, counts as the stability spec's limit).
         normal_force: Sum of the hand–object contact normal forces at release, N.
         servo_torque: Sum of the absolute actuator torques of the finger flexion DoFs at release, N·m: what
             the servos exert because the recording closes past the object.
@@ -134,8 +134,9 @@ class GripBench:
             object_index: Which object (layout order).
             needed: Stop the stability test once fewer than this many directions can still be resisted
                 (:func:`~handsim.sim.stability.stability_test`; a function is asked before each direction):
-                the result's ``directions_held`` is then below it, and its other numbers are those of the
-                directions run. 0: the whole test.
+                the result's ``directions_held`` is then below it, its ``mean_displacement`` counts the
+                directions not run at the limit, and its stability test says which were not run. 0: the
+                whole test.
             first: With ``needed``: the directions to test first (those most likely to fail).
         """
         scene, schedule = self.scene, self.schedule

@@ -23,9 +23,10 @@ The search (:func:`place_object`):
    the grasp stability test (gravity along ±x ±y ±z, after DexGraspNet; :mod:`handsim.sim.grip`) counts the
    directions the grip resists. The winner resists the most directions; ties go to the later fit (less
    over-closure assumed), then to the smaller mean displacement, then to more links and less penetration.
-   A grip test ends (its directions in order) once its grip can no longer resist as many directions as an
-   earlier candidate's: such a candidate can be neither the winner nor an alternative, nor does it resist
-   all six, so the placement is the one of whole tests.
+   A grip test ends once its grip can no longer resist as many directions as an earlier candidate's (the
+   directions that failed most often so far run first): such a candidate can be neither the winner nor an
+   alternative, nor does it resist all six, so the placement is the one of whole tests. (A run not made
+   raises no error it would have raised: with threads, whether it is made depends on timing.)
 
 Every pose within the tolerance is a candidate: when none touches the hand, the feasible pose nearest the
 fingertips' centre is kept (with a note); only when no pose of any level is within the tolerance is the

@@ -115,12 +115,13 @@ class DirectionResult:
         success: The object stayed in contact (if required), moved less than the threshold (and turned
             less, if judged), and the run did not diverge.
         displacement: Distance between the object's centre of mass at the start and at the end, m; None if
-            the run diverged.
+            the run diverged or was not made (``stability_test(needed=…)``).
         rotation_deg: Angle of the object's rotation between the start and the end, degrees; None if the
-            run diverged.
+            run diverged or was not made.
         in_contact_at_end: The object touches the hand at the end.
         links_in_contact: Hand links touching the object at the end (names without ``hand/``).
-        simulated_time: Seconds simulated (the duration rounded to whole steps, or less if it diverged).
+        simulated_time: Seconds simulated (the duration rounded to whole steps, or less if it diverged or
+            stopped at the failure; 0 if it was not made).
         failure: Why it failed, for people; empty on success.
         warnings: MuJoCo warnings raised during the run, one line each.
     """
@@ -154,7 +155,7 @@ class StabilityResult:
         success: Every direction succeeded.
         simulation_displacement: ObMan's metric: the object's centre-of-mass displacement after
             ``spec.obman_duration`` under gravity along ``spec.obman_direction`` with the hand static, m;
-            None if that run diverged.
+            None if that run diverged or was not made.
         obman: The ObMan run in full (its ``success`` applies this spec's thresholds; ObMan has none).
         object: Prefix of the tested object (``obj/``).
         in_contact_at_start: The object touched the hand in the given state.
@@ -233,21 +234,26 @@ def stability_test(
             (checked every :data:`CHECK_STEPS` steps): the direction fails as it would at the end, its
             displacement and rotation are those at the stop, and ``simulated_time`` says how long it ran.
             For searches that only need the outcome; off for a full test.
-        needed: End the whole test as soon as fewer than this many directions can still be resisted (the
-            directions are then run one after the other, in order): the directions not run and the ObMan
-            run are failures that say "not run", with no displacement. A function is asked before each run
-            (a search's best so far, which other threads may raise meanwhile). For a search that only needs
-            a grip that could match the best one found so far; 0: every run is made.
-        first: With ``needed``: directions to run before the others (labels of :data:`DIRECTIONS`, e.g. those
-            most likely to fail, so that a test out of reach ends sooner). The runs are independent, so a
-            direction's result does not depend on when it runs; the results are in :data:`DIRECTIONS` order.
+        needed: End the whole test as soon as fewer than this many directions can still be resisted. The
+            runs are then made one after the other (the directions of ``first``, the other directions in
+            :data:`DIRECTIONS` order, ObMan's last), and the runs not made (ObMan's included, also when
+            all six directions ran) are failures that say "not run", with no displacement; an error such a
+            run would have raised is not raised. A function is asked before each run until the test stops
+            (a search's best so far, which other threads may raise meanwhile; it must never fall). For a
+            search that only needs a grip that could match the best one found so far; 0: every run is made
+            (on threads when :func:`~handsim.sim.parallel.sim_threads` allows).
+        first: With ``needed`` only: directions to run before the others (labels of :data:`DIRECTIONS`, e.g.
+            those most likely to fail, so that a test out of reach ends sooner). The runs are independent,
+            so a direction's result does not depend on when it runs; the results are in :data:`DIRECTIONS`
+            order.
 
     Returns:
         The per-direction results, the overall success, the ObMan simulation displacement and the spec.
 
     Raises:
         ValueError: An array has the wrong shape, ``object_index`` names no object, mocap values are
-            given for a scene without a mocap target, or the scene has several hands (the tests hold one).
+            given for a scene without a mocap target, the scene has several hands (the tests hold one), or
+            ``first`` names an unknown direction or comes without ``needed``.
         SimulationError: ``qpos``, ``ctrl`` or a mocap value is not finite (MuJoCo would silently reset
             the state or replace the control).
     """
@@ -265,6 +271,8 @@ def stability_test(
     unknown = [label for label in first if label not in DIRECTIONS]
     if unknown:
         raise ValueError(f"first: unknown directions {unknown}; expected labels of {list(DIRECTIONS)}")
+    if first and not callable(needed) and needed <= 0:
+        raise ValueError("first orders the runs of a test with needed; without it the runs go to threads")
     qpos = _array(qpos, (model.nq,), "qpos")
     ctrl = _array(ctrl, (model.nu,), "ctrl")
     mocap = _mocap_pose(scene, qpos, mocap_pos, mocap_quat)
@@ -314,13 +322,17 @@ def _until_out_of_reach(
     """The runs of ``jobs`` (ObMan's last) in the order given, until ``needed()`` directions are out of reach.
 
     Each run made is the one :meth:`_Run.direction` makes alone; once fewer directions than ``needed()``
-    (asked before each run) can still succeed, the rest are reported as failures that were not run.
+    (asked before each run until then) can still succeed, the rest are reported as failures not run.
     """
     results: list[DirectionResult] = []
     directions = len(jobs) - 1
+    stop = 0  # the count out of reach, once the test has stopped
     for label, gravity, steps in jobs:
-        failed = sum(not r.success for r in results[:directions])
-        if directions - failed < (count := needed()):
+        if not stop:
+            failed = sum(not r.success for r in results[:directions])
+            count = needed()
+            stop = count if directions - failed < count else 0
+        if stop:
             results.append(
                 DirectionResult(
                     direction=label,
@@ -331,7 +343,7 @@ def _until_out_of_reach(
                     in_contact_at_end=False,
                     links_in_contact=(),
                     simulated_time=0.0,
-                    failure=f"not run: fewer than {count} directions could still be resisted",
+                    failure=f"not run: fewer than {stop} directions could still be resisted",
                     warnings=(),
                 )
             )
