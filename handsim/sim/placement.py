@@ -174,6 +174,11 @@ def _place(
     failures = dict.fromkeys(DIRECTIONS, 0)
     counting = threading.Lock()
 
+    def with_grip(candidate: Candidate, **stop) -> Candidate:
+        """The candidate with its grip test (``stop``: :meth:`GripBench.grip`'s ``needed`` and ``first``)."""
+        contact = float(times[candidate.contact_frame])
+        return replace(candidate, grip=bench.grip(candidate.pose, contact, spec.grip, **stop))
+
     def gripped(ranked_candidate: tuple[int, Candidate]) -> Candidate:
         rank, candidate = ranked_candidate
 
@@ -181,13 +186,12 @@ def _place(
             return max(held[:rank], default=0)
 
         first = sorted(DIRECTIONS, key=lambda label: -failures[label])
-        contact = float(times[candidate.contact_frame])
-        grip = bench.grip(candidate.pose, contact, spec.grip, needed=needed, first=first)
+        result = with_grip(candidate, needed=needed, first=first)
         with counting:
-            for d in grip.stability.directions:
+            for d in result.grip.stability.directions:
                 failures[d.direction] += not d.success and d.simulated_time > 0  # the runs made
-        held[rank] = grip.directions_held
-        return replace(candidate, grip=grip)
+        held[rank] = result.grip.directions_held
+        return result
 
     drawn = []  # the collider's query count after each candidate drawn
 
@@ -219,8 +223,7 @@ def _place(
         )
         feasible = True
     elif search.nearest is not None:
-        nearest = search.with_contact(search.candidate(search.nearest[1]))
-        best = replace(nearest, grip=bench.grip(nearest.pose, float(times[nearest.contact_frame]), spec.grip))
+        best = with_grip(search.with_contact(search.candidate(search.nearest[1])))  # the whole test
         note = (
             f"no object pose within {spec.penetration * 1000:g} mm of penetration touches the hand on the "
             f"closing ramp: placed nearest the fingertips' centre without penetration ({queries} poses tried)"
