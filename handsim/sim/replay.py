@@ -332,7 +332,7 @@ def _members_ahead(
     if (
         not config.ensemble
         or not setup.placement.get("ensemble")
-        or setup.placement.get("feasible", True) is False
+        or not _placed(scene)
         or not _judges_hold(scene, release)
         or not window_long_enough(float(schedule.times[release]), setup.hold_window, spec)
         or sim_threads() <= 1  # last: asked only where the members will run (a bad setting raises there)
@@ -369,6 +369,11 @@ def _closure(placement: dict) -> dict:
     }
 
 
+def _placed(scene: SimScene) -> bool:
+    """Whether the glove placement found a feasible pose (a scene without a placement search: True)."""
+    return scene.setup.placement.get("feasible", True) is not False
+
+
 def _hold(
     scene: SimScene,
     schedule: ControlSchedule,
@@ -378,10 +383,9 @@ def _hold(
     spec: MetricSpec,
 ) -> HoldOutcome:
     """The hold outcome of a glove replay, or not judged when the placement was infeasible."""
-    placement = scene.setup.placement
     window = scene.setup.hold_window
     released = float(schedule.times[release])
-    if placement.get("feasible", True) is False:
+    if not _placed(scene):
         return not_judged(
             released,
             window,
