@@ -137,3 +137,44 @@ def test_grip_tests_that_cannot_match_an_earlier_grip_stop_and_leave_the_placeme
     assert pickle.dumps(pruned) == pickle.dumps(unstopped)
     if threads == "1":
         assert stopped == [False] + [True] * 14
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("threads", ["1", "2"])
+def test_poses_the_probe_settles_as_too_deep_leave_the_placement_unchanged(graspdb_dir, monkeypatch, threads):
+    """The mug's search settles many poses with the collider's probe (one geom pair's MuJoCo contacts)
+    instead of the full query: the placement, the number of poses tried included, is the one of full
+    queries, bit for bit."""
+    import pickle
+
+    import handsim.sim.collide as collide
+    import handsim.sim.scenarios as scenarios
+
+    placed, settled = [], []
+    original, original_init = scenarios.place_object, collide.HandObjectCollider.__init__
+    original_depth_links = collide.HandObjectCollider.depth_links
+
+    def uncached(*args, **kwargs):
+        placed.append(original(*args, **kwargs, use_cache=False))
+        return placed[-1]
+
+    def unprobed(self, *args, **kwargs):
+        original_init(self, *args, **kwargs)
+        self._probes = False
+
+    def counted(self, *args, **kwargs):
+        depths, links = original_depth_links(self, *args, **kwargs)
+        settled.append(sum(d == float("inf") for d in depths))
+        return depths, links
+
+    monkeypatch.setattr(scenarios, "place_object", uncached)
+    monkeypatch.setattr(collide.HandObjectCollider, "depth_links", counted)
+    monkeypatch.setenv("HANDSIM_THREADS", threads)
+    with monkeypatch.context() as patch:
+        patch.setattr(collide.HandObjectCollider, "__init__", unprobed)
+        load_trial(graspdb_dir / "04_ex01-rad-045-grasp-su03.txt")
+    assert sum(settled) == 0
+    load_trial(graspdb_dir / "04_ex01-rad-045-grasp-su03.txt")
+    full, probed = placed
+    assert sum(settled) > 10_000  # of the mug's ~45 000 queries
+    assert pickle.dumps(probed) == pickle.dumps(full)

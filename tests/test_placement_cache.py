@@ -227,6 +227,71 @@ def test_the_batched_queries_are_mujocos_contacts_pose_by_pose():
     assert collider.depth_links(positions[:0], quat) == ([], [])
 
 
+def _mug_grid() -> tuple[HandObjectCollider, np.ndarray, np.ndarray]:
+    """A collider of the mug in the default hand at rest, a grid of positions about the palm and a turn."""
+    scene = compile_scene(build_scene(default_hand(), build_object(get("mug"))))
+    collider = HandObjectCollider(scene, 0.002)
+    collider.set_hand(scene.model.qpos0)
+    mujoco.mj_kinematics(collider.model, collider.data)
+    palm = collider.data.xpos[scene.layout.link_bodies[0]].copy()
+    positions = palm + np.stack(np.meshgrid(*[np.linspace(-0.08, 0.08, 9)] * 3), axis=-1).reshape(-1, 3)
+    return collider, positions, np.array([0.5, 0.5, -0.5, 0.5])
+
+
+def test_the_probe_settles_only_poses_the_full_query_finds_too_deep():
+    # A pose settled by the probe (one geom pair's MuJoCo contacts) is one the full query reports deeper
+    # than the tolerance; every other pose's answer is the full query's, and settled poses are not counted
+    # as queries.
+    collider, positions, quat = _mug_grid()
+    full_depths, full_links = collider.depth_links(positions, quat)
+    asked = collider.queries
+    depths, links = collider.depth_links(positions, quat, settle=0.002)
+    settled = [i for i, d in enumerate(depths) if d == np.inf]
+    assert len(settled) > 50  # the grid goes deep into the mug: the probe settles many poses
+    assert all(full_depths[i] > 0.002 for i in settled)
+    assert all(links[i] == 0 for i in settled)
+    kept = [i for i in range(len(positions)) if i not in settled]
+    assert [depths[i] for i in kept] == [full_depths[i] for i in kept]
+    assert [links[i] for i in kept] == [full_links[i] for i in kept]
+    assert collider.queries == 2 * asked - len(settled)
+
+
+def test_the_probe_is_not_used_where_it_cannot_pay_or_cannot_be_trusted(tmp_path):
+    # A ball's full query costs what a probe does: not probed. An articulated object's explicit part pair
+    # would collide in the probe too (its contacts are not the hand's): not probed.
+    ball = compile_scene(build_scene(default_hand(), build_object(get("tennis_ball"))))
+    folder = tmp_path / "box"
+    folder.mkdir()
+    for name, (low, high) in (("bottom", (-60.0, 0.0)), ("top", (0.0, 10.0))):
+        box = trimesh.creation.box(extents=(120.0, high - low, 160.0))
+        box.apply_translation([-60.0, (low + high) / 2, 0.0])
+        box.export(folder / f"{name}.obj")
+    box = compile_scene(build_scene(default_hand(), build_object(arctic_object(folder))))
+    for scene in (ball, box):
+        collider = HandObjectCollider(scene, 0.002)
+        collider.set_hand(scene.model.qpos0)
+        mujoco.mj_kinematics(collider.model, collider.data)
+        palm = collider.data.xpos[scene.layout.link_bodies[0]].copy()
+        positions = palm + np.stack(np.meshgrid(*[np.linspace(-0.05, 0.05, 7)] * 3), axis=-1).reshape(-1, 3)
+        quat = np.array([1.0, 0.0, 0.0, 0.0])
+        expected = collider.depth_links(positions, quat)
+        assert max(expected[0]) > 0.002  # deep poses a probe could have settled
+        assert collider.depth_links(positions, quat, settle=0.002) == expected
+
+
+def test_a_fork_probes_on_its_own_model():
+    # The probe switches geom pairs on and off in a model of its own: a fork (another thread's collider)
+    # must not share it, and its answers are the original's.
+    collider, positions, quat = _mug_grid()
+    collider.depth_links(positions, quat, settle=0.002)
+    fork = collider.fork()
+    assert fork.model is collider.model
+    answers = fork.depth_links(positions, quat, settle=0.002)
+    assert fork._probe_model is not None and fork._probe_model is not collider._probe_model
+    full_depths, _ = collider.depth_links(positions, quat)
+    assert all(d == f or (d == np.inf and f > 0.002) for d, f in zip(answers[0], full_depths, strict=True))
+
+
 def test_a_meshs_inscribed_ball_is_solved_once_per_process_and_never_shared():
     box = np.array(list(itertools.product([-0.01, 0.03], [0.0, 0.02], [0.0, 0.04])))  # 4 × 2 × 4 cm
     centre, radius = collide._inscribed_ball(box.tobytes(), box.shape)

@@ -35,8 +35,10 @@ placement infeasible, and then it says so with the numbers (the replay's hold is
 Speed: the poses of one orientation are first screened together by cheap bounds
 (:meth:`HandObjectCollider.screen`): a pose that touches nothing, or that is surely deeper than the
 tolerance plus :data:`~handsim.sim.placement_search.SCREEN_MARGIN`, is settled without a collision query;
-the result is the same as querying every pose (an infeasible search is rerun without the bounds, so that
-its least penetration is MuJoCo's). On several threads (:mod:`handsim.sim.parallel`) the next candidates'
+so is a pose where the collider's probe, MuJoCo's detection on the one geom pair found deepest last, finds
+it deeper than the tolerance (:meth:`HandObjectCollider.depth_links`). The result is the same as querying
+every pose (an infeasible search is rerun without the bounds and the probe, so that its least penetration
+is MuJoCo's). On several threads (:mod:`handsim.sim.parallel`) the next candidates'
 grip tests run while the current one's does (:func:`~handsim.sim.parallel.map_until`): the candidates and
 the count of poses tried are those of testing them one after the other. :func:`place_object` keeps each
 result in the placement cache (:mod:`handsim.sim.placement_cache`).

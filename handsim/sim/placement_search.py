@@ -54,6 +54,7 @@ class PlacementSearch:
         self.screened = 0  # poses settled without a collision query
         self.pruned_deep = False  # some pose was settled as infeasible: the least penetration is not known
         self.collider = HandObjectCollider(scene, spec.touch)
+        self._forks: list[HandObjectCollider] = []  # the collider's forks for other threads (_helpers)
         self.points = object_points(self.collider)
         self.quats = distinct_orientations(axis_aligned_orientations(), self.points)
         model, geoms = self.collider.model, np.flatnonzero(self.collider.is_obj)
@@ -124,8 +125,9 @@ class PlacementSearch:
     def _fits(self, frame: int, poses: np.ndarray) -> list[tuple[np.ndarray, int]]:
         """The poses (N, 7) that fit (within the tolerance) and touch the hand at ``frame``, with their links.
 
-        A pose the bounds settle as clear fits and touches nothing (depth 0); one settled as deep is left
-        out; the others are collision queries.
+        A pose the bounds settle as clear fits and touches nothing (depth 0); one settled as deep (by the
+        bounds, or by the collider's probe: :meth:`HandObjectCollider.depth_links`) is left out; the others
+        are collision queries.
         """
         self.collider.set_hand(targets_qpos(self.scene, self.trajectory, frame))
         verdicts = self._verdicts(poses)
@@ -134,6 +136,7 @@ class PlacementSearch:
         depths, links = np.zeros(len(poses)), np.zeros(len(poses), dtype=np.int64)
         if asked.size:
             depths[asked], links[asked] = zip(*self._depths(poses[asked]), strict=True)
+            deep[asked[np.isinf(depths[asked])]] = True  # settled by the collider's probe
         self.screened += int(clear.sum() + deep.sum())
         self.pruned_deep = self.pruned_deep or bool(deep.any())
         kept = np.flatnonzero(~deep)
@@ -146,7 +149,9 @@ class PlacementSearch:
 
         The poses (N, 7) go to it in runs of one orientation of at most :data:`QUERY_CHUNK`; each thread
         queries its own copy of the collider's data (the hand at the same posture); the answers are those
-        of one collider querying them all (:mod:`handsim.sim.parallel`).
+        of one collider querying them all (:mod:`handsim.sim.parallel`). When screening, a pose the probe
+        finds deeper than the tolerance is settled (depth ``inf``): which poses are depends on the probe's
+        history, so on threads on their timing, but not what is concluded of them (too deep).
         """
         if not len(poses):
             return []
@@ -157,16 +162,26 @@ class PlacementSearch:
         ]
 
         def query(collider: HandObjectCollider, span: tuple[int, int]) -> tuple[list[float], list[int]]:
-            return collider.depth_links(poses[span[0] : span[1], :3], poses[span[0], 3:])
+            return collider.depth_links(poses[span[0] : span[1], :3], poses[span[0], 3:], settle)
 
+        settle = self.spec.penetration if self.screen else None
         threads = min(sim_threads(), len(poses) // MIN_THREAD_QUERIES, len(spans))
         if threads <= 1:
             parts = [query(self.collider, span) for span in spans]
         else:
-            colliders = [self.collider, *(self.collider.fork() for _ in range(threads - 1))]
+            colliders = [self.collider, *self._helpers(threads - 1)]
             parts = map_on_workers(query, spans, colliders)
             self.collider.queries += sum(c.queries for c in colliders[1:])
         return [answer for depths, links in parts for answer in zip(depths, links, strict=True)]
+
+    def _helpers(self, n: int) -> list[HandObjectCollider]:
+        """``n`` forks of the collider at its posture, their query counts at 0 (kept for the next call)."""
+        while len(self._forks) < n:
+            self._forks.append(self.collider.fork())
+        for helper in self._forks[:n]:
+            helper.follow(self.collider)
+            helper.queries = 0
+        return self._forks[:n]
 
     def _ranked(self, fitting: list[tuple[np.ndarray, int]]) -> list[tuple[tuple, np.ndarray]]:
         """Fitting poses ranked by what the recorded closing does to them (best first).
