@@ -281,15 +281,17 @@ def test_the_probe_is_not_used_where_it_cannot_pay_or_cannot_be_trusted(tmp_path
 
 def test_a_fork_probes_on_its_own_model():
     # The probe switches geom pairs on and off in a model of its own: a fork (another thread's collider)
-    # must not share it, and its answers are the original's.
+    # must not share it, and its answers are the original's; so are a pickled copy's.
     collider, positions, quat = _mug_grid()
     collider.depth_links(positions, quat, settle=0.002)
     fork = collider.fork()
     assert fork.model is collider.model
     answers = fork.depth_links(positions, quat, settle=0.002)
-    assert fork._probe_model is not None and fork._probe_model is not collider._probe_model
+    assert fork._probe is not None and fork._probe.model is not collider._probe.model
     full_depths, _ = collider.depth_links(positions, quat)
     assert all(d == f or (d == np.inf and f > 0.002) for d, f in zip(answers[0], full_depths, strict=True))
+    copied = pickle.loads(pickle.dumps(collider))  # the probe (views into its model) is made again
+    assert copied.depth_links(positions, quat, settle=0.002) == answers
 
 
 def test_a_meshs_inscribed_ball_is_solved_once_per_process_and_never_shared():

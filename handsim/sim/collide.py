@@ -92,8 +92,7 @@ class HandObjectCollider:
         self._geom_link = np.where(is_hand, self.link_index[body_of], -1)
         self._bind(mujoco.MjData(model))
         self.queries = 0
-        self._probe_model: mujoco.MjModel | None = None  # the model with only the probe pair colliding
-        self._probe: tuple[int, int] | None = None
+        self._probe: _Probe | None = None  # made at the first query that probes
         self._hand_geoms = np.flatnonzero(is_hand)
         self._obj_geoms = np.flatnonzero(self.is_obj)
         # the probe pays where the object has a mesh geom: the mug's full query (16 convex pieces) takes
@@ -118,6 +117,7 @@ class HandObjectCollider:
     def __getstate__(self) -> dict:
         state = self.__dict__.copy()
         del state["_object_pos"], state["_object_quat"]  # views into data: recreated from the copy's data
+        state["_probe"] = None  # made again when needed
         return state
 
     def __setstate__(self, state: dict) -> None:
@@ -131,7 +131,7 @@ class HandObjectCollider:
         """
         forked = copy.copy(self)
         forked._bind(mujoco.MjData(self.model))
-        forked._probe_model, forked._probe = None, None
+        forked._probe = None  # its own: the probe switches pairs on its model
         forked.queries = 0
         forked.follow(self)
         return forked
@@ -194,19 +194,17 @@ class HandObjectCollider:
         self._object_quat[:] = quat
         place, kinematics, collision = self._object_pos, mujoco.mj_kinematics, mujoco.mj_collision
         probing = settle is not None and self._probes
-        probe_model = self._probe_model if probing else None
-        if probing and probe_model is None:
-            probe_model = self._probe_model = copy.deepcopy(model)
-            probe_model.geom_contype[:] = 0
-            probe_model.geom_conaffinity[:] = 0
+        if probing and self._probe is None:
+            self._probe = _Probe(model)
+        probe = self._probe if probing else None
         limit = -settle if probing else 0.0
         owners, found, geoms, dists, settled = [], [], [], [], []
         for i, pos in enumerate(np.asarray(positions, dtype=float)):
             place[:] = pos
             kinematics(model, data)
-            if probing and self._probe is not None:
-                collision(probe_model, data)
-                if data.ncon and data.contact.dist.min() < limit:
+            if probe is not None and probe.pair is not None:
+                collision(probe.model, data)
+                if data.ncon and min(data.contact.dist.tolist()) < limit:  # Python min: cheaper here
                     settled.append(i)
                     continue
             collision(model, data)
@@ -216,10 +214,10 @@ class HandObjectCollider:
                 found.append(data.ncon)
                 geoms.append(contact.geom.copy())
                 dists.append(contact.dist.copy())
-                if probing:
+                if probe is not None:
                     deepest = int(dists[-1].argmin())
                     if dists[-1][deepest] < limit:
-                        self._aim(geoms[-1][deepest])
+                        probe.aim(int(geoms[-1][deepest, 0]), int(geoms[-1][deepest, 1]))
         self.queries += len(positions) - len(settled)
         distance = np.full((len(positions), self.layout.link_bodies.size), np.inf)
         if owners:
@@ -230,19 +228,6 @@ class HandObjectCollider:
         mask = np.zeros(len(positions), dtype=bool)
         mask[settled] = True
         return distance, mask
-
-    def _aim(self, pair: np.ndarray) -> None:
-        """Make ``pair`` (two geoms of a contact: a hand geom and an object geom) the probe's only pair."""
-        g1, g2 = int(pair[0]), int(pair[1])
-        if self._probe == (g1, g2):
-            return
-        model, probe = self.model, self._probe_model
-        if self._probe is not None:
-            probe.geom_contype[list(self._probe)] = 0
-            probe.geom_conaffinity[list(self._probe)] = 0
-        probe.geom_contype[[g1, g2]] = model.geom_contype[[g1, g2]]
-        probe.geom_conaffinity[[g1, g2]] = model.geom_conaffinity[[g1, g2]]
-        self._probe = (g1, g2)
 
     def hand_spheres(self) -> tuple[np.ndarray, np.ndarray]:
         """Centres (G, 3) and bounding radii (G,) of the hand's colliding geoms at the current posture.
@@ -344,6 +329,34 @@ class HandObjectCollider:
                 chunk = overlap[first : first + _CHUNK]
                 np.maximum.at(chunk, n, depth)
         return clear, overlap
+
+
+class _Probe:
+    """A copy of a collider's model in which one hand–object geom pair collides (none until aimed).
+
+    Its contacts at a pose are the full query's contacts of that pair, bit for bit: MuJoCo's narrowphase of a
+    pair does not depend on the other pairs.
+    """
+
+    def __init__(self, model: mujoco.MjModel) -> None:
+        self.model = copy.deepcopy(model)
+        self._contype, self._conaffinity = self.model.geom_contype, self.model.geom_conaffinity  # views
+        self._contype[:] = 0
+        self._conaffinity[:] = 0
+        self._colliding = (model.geom_contype.tolist(), model.geom_conaffinity.tolist())
+        self.pair: tuple[int, int] | None = None
+
+    def aim(self, g1: int, g2: int) -> None:
+        """Make geoms ``g1`` and ``g2`` (a contact's pair) the only pair that collides."""
+        if self.pair == (g1, g2):
+            return
+        contype, conaffinity = self._contype, self._conaffinity
+        if self.pair is not None:
+            for g in self.pair:
+                contype[g] = conaffinity[g] = 0
+        for g in (g1, g2):
+            contype[g], conaffinity[g] = self._colliding[0][g], self._colliding[1][g]
+        self.pair = (g1, g2)
 
 
 def _squared_distances(x: np.ndarray, x2: np.ndarray, y: np.ndarray, y2: np.ndarray) -> np.ndarray:
