@@ -75,7 +75,12 @@ class PlacementSearch:
         self.grasp_points = np.vstack(
             [self.centre, *((tips[t] + tips[o]) / 2 for t in thumbs for o in others)]
         )
-        self.groups = [finger_of(name) for name in layout.link_names]
+        groups = [finger_of(name) for name in layout.link_names]
+        labels = sorted(set(groups) | {"palm"})
+        self._group_of_link = np.array([[g == label for label in labels] for g in groups], dtype=bool)
+        self._palm = labels.index("palm")
+        self._opposing = np.isin(labels, ["thumb", "palm"])  # _ranked: against a finger
+        self._fingers = np.isin(labels, sorted(_FINGERS))
         self.feasible_poses = 0
         self.least: tuple[float, np.ndarray] | None = None  # least penetration seen, pose
         self.nearest: tuple[float, np.ndarray] | None = None  # feasible pose nearest the centre
@@ -199,11 +204,15 @@ class PlacementSearch:
         distances = np.concatenate(
             [self.collider.distances(poses[a:b, :3], poses[a, 3:]) for a, b in _orientation_runs(poses)]
         )
-        for (pose, links), distance in zip(fitting, distances, strict=True):
-            pressing = {self.groups[i] for i in np.flatnonzero(distance < -self.spec.penetration)}
-            pressing |= {"palm" for i in np.flatnonzero(np.isfinite(distance)) if self.groups[i] == "palm"}
-            opposed = bool(pressing & {"thumb", "palm"}) and bool(pressing & _FINGERS)
-            key = (opposed, len(pressing), links, -float(np.linalg.norm(pose[:3] - self.centre)))
+        # the groups pressing at each pose, (N, groups): a link deeper than the tolerance, or a palm link
+        # within the touch distance
+        groups = self._group_of_link
+        pressing = (distances < -self.spec.penetration) @ groups
+        pressing[:, self._palm] |= (np.isfinite(distances) @ groups)[:, self._palm]
+        opposed = pressing[:, self._opposing].any(axis=1) & pressing[:, self._fingers].any(axis=1)
+        counts = pressing.sum(axis=1).tolist()
+        for (pose, links), oppose, count in zip(fitting, opposed.tolist(), counts, strict=True):
+            key = (oppose, count, links, -float(np.linalg.norm(pose[:3] - self.centre)))
             ranked.append((key, pose))
         ranked.sort(key=lambda item: item[0], reverse=True)
         return ranked
