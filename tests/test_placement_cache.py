@@ -294,6 +294,26 @@ def test_a_fork_probes_on_its_own_model():
     assert copied.depth_links(positions, quat, settle=0.002) == answers
 
 
+def test_a_query_that_runs_out_of_contact_memory_is_an_error_not_a_wrong_depth():
+    # With too little arena memory MuJoCo drops contacts (mjWARN_CONTACTFULL) and goes on: the depths would
+    # be wrong, silently. 30 kB holds the mug's contacts at most poses of the grid, not at all.
+    from handsim.errors import SimulationError
+
+    spec = build_scene(default_hand(), build_object(get("mug")))
+    spec.memory = 30_000
+    scene = compile_scene(spec)
+    collider = HandObjectCollider(scene, 0.002)
+    collider.set_hand(scene.model.qpos0)
+    mujoco.mj_kinematics(collider.model, collider.data)
+    palm = collider.data.xpos[scene.layout.link_bodies[0]].copy()
+    positions = palm + np.stack(np.meshgrid(*[np.linspace(-0.08, 0.08, 9)] * 3), axis=-1).reshape(-1, 3)
+    quat = np.array([0.5, 0.5, -0.5, 0.5])
+    assert collider.depth_links(positions[:3], quat) == ([0.0] * 3, [0] * 3)  # far poses: no contacts
+    for settle in (None, 0.002):
+        with pytest.raises(SimulationError, match=r"ran out of MuJoCo's contact memory .* 30000 bytes"):
+            collider.depth_links(positions, quat, settle=settle)
+
+
 def test_a_meshs_inscribed_ball_is_solved_once_per_process_and_never_shared():
     box = np.array(list(itertools.product([-0.01, 0.03], [0.0, 0.02], [0.0, 0.04])))  # 4 × 2 × 4 cm
     centre, radius = collide._inscribed_ball(box.tobytes(), box.shape)

@@ -17,7 +17,12 @@ depth, :meth:`HandObjectCollider.bounds` says why).
 :meth:`HandObjectCollider.depth_links` can also settle a pose as too deep with a probe, MuJoCo's own
 detection on one hand–object geom pair (the deepest of the last query that found one too deep): a pair's
 contacts are the same whichever other pairs collide, so a probe contact deeper than the tolerance is one
-the full query would report.
+the full query would report. (Two MuJoCo cases where that reasoning would not hold are excluded or
+checked: a contact filter callback, ``mjcb_contactfilter``, would let every pair collide in the probe too,
+making it a full query, still exact; a full query that ran out of contact memory would have dropped pairs,
+and raises instead, :meth:`HandObjectCollider.distances`.) It pays where the object has mesh geoms, and an
+infeasible search is then more often run twice (:mod:`handsim.sim.placement`), as it always was when the
+bounds settled a pose as deep.
 """
 
 from __future__ import annotations
@@ -31,6 +36,7 @@ import numpy as np
 from scipy.spatial import ConvexHull, QhullError
 
 from handsim.datatypes.rotations import quat_to_matrix
+from handsim.errors import SimulationError
 from handsim.sim.compiled import SimScene
 
 _HAND_BIT, _OBJECT_BIT = 2, 2
@@ -38,6 +44,7 @@ _NO_CORE = (np.zeros(3), np.zeros(3), 0.0)
 _BALL_TYPES = frozenset({int(mujoco.mjtGeom.mjGEOM_SPHERE), int(mujoco.mjtGeom.mjGEOM_MESH)})
 """Object geom types whose inscribed ball bounds a query's depth (:meth:`HandObjectCollider.bounds`)."""
 _CHUNK = 4096  # poses per vectorised bound evaluation (memory: chunk × object balls × hand geoms × 3)
+_CONTACTFULL = int(mujoco.mjtWarning.mjWARN_CONTACTFULL)
 UNDECIDED, CLEAR, DEEP = 0, 1, 2
 """What :meth:`HandObjectCollider.screen` says of a pose: run the query; no link within the touch distance;
 deeper than the given depth."""
@@ -161,8 +168,10 @@ class HandObjectCollider:
         Args:
             positions: Object positions (N, 3), m.
             quat: The object's orientation (w, x, y, z) for all of them.
-            settle: When given, each pose is first probed (see the module docstring): one found deeper than
-                this is settled without the full query (not counted in :attr:`queries`).
+            settle: When given, and the object has a mesh geom and no explicit contact pair (elsewhere it
+                is ignored), each pose is first probed once a full query has found a pose deeper than this
+                (see the module docstring): a pose the probe finds deeper than this is settled without the
+                full query (not counted in :attr:`queries`).
 
         Returns:
             Per position, the depth (m; ``inf`` for a pose the probe settled: deeper than ``settle``, how
@@ -183,6 +192,10 @@ class HandObjectCollider:
 
         Returns:
             (N, links) distances, m: negative for a penetration, +inf beyond the touch distance.
+
+        Raises:
+            SimulationError: A query ran out of MuJoCo's contact memory (``mjWARN_CONTACTFULL``): it dropped
+                contacts, so its distances would be wrong.
         """
         return self._distances(positions, quat, None)[0]
 
@@ -198,6 +211,8 @@ class HandObjectCollider:
             self._probe = _Probe(model)
         probe = self._probe if probing else None
         limit = -settle if probing else 0.0
+        warnings = data.warning.number  # a view: MuJoCo counts in place
+        dropped = int(warnings[_CONTACTFULL])
         owners, found, geoms, dists, settled = [], [], [], [], []
         for i, pos in enumerate(np.asarray(positions, dtype=float)):
             place[:] = pos
@@ -218,6 +233,13 @@ class HandObjectCollider:
                     deepest = int(dists[-1].argmin())
                     if dists[-1][deepest] < limit:
                         probe.aim(int(geoms[-1][deepest, 0]), int(geoms[-1][deepest, 1]))
+        if warnings[_CONTACTFULL] != dropped:
+            raise SimulationError(
+                f"the placement's collision queries ran out of MuJoCo's contact memory (mjWARN_CONTACTFULL "
+                f"{int(warnings[_CONTACTFULL]) - dropped} times in {len(positions)} queries): contacts were "
+                f"dropped, so the depths would be wrong; give the scene more memory than its {model.narena} "
+                "bytes (MjSpec.memory, <size memory=.../>)"
+            )
         self.queries += len(positions) - len(settled)
         distance = np.full((len(positions), self.layout.link_bodies.size), np.inf)
         if owners:

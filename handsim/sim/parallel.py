@@ -10,7 +10,9 @@ glove placement's grip tests, taken in rank order until enough hold, the next on
 (:func:`handsim.sim.robustness.hold_robustness`) and the placement search's fit-frame collision queries
 (:class:`handsim.sim.placement_search.PlacementSearch`). Each run computes exactly what it computes alone,
 in the same order of floating-point operations, so results are bit-for-bit those of running them one
-after the other; only the wall time changes.
+after the other; only the wall time changes. (One exception, by design: which of the search's poses the
+collider's probe settles as too deep depends on its worker's earlier queries, so on timing; what is
+concluded of each pose does not, nor does the placement: :meth:`PlacementSearch._depths`.)
 
 How many threads: ``$HANDSIM_THREADS`` when set (``1``: everything in the calling thread), else one per
 core this process may use. A dataset run's worker processes set it to 1 (the pool already uses every
@@ -149,8 +151,8 @@ def map_on_workers(run: Callable[[W, T], R], items: Sequence[T], workers: Sequen
 
     For runs that need state of their own (an ``MjData``) but not a fresh one per item: each worker takes
     the next item not yet taken as soon as it is free (runs of different lengths keep every thread busy),
-    one after the other on its own thread. Which worker runs an item does not change its result: a worker's
-    state is reset by each run.
+    one after the other on its own thread. Which worker runs an item must not change what the caller makes
+    of its result (e.g. a worker's state reset by each run).
 
     Args:
         run: ``run(worker, item)``; a worker's state is used by one thread only.

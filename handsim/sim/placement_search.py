@@ -153,10 +153,11 @@ class PlacementSearch:
         """:meth:`HandObjectCollider.depth_links` of each pose, in order, the poses spread over threads.
 
         The poses (N, 7) go to it in runs of one orientation of at most :data:`QUERY_CHUNK`; each thread
-        queries its own copy of the collider's data (the hand at the same posture); the answers are those
-        of one collider querying them all (:mod:`handsim.sim.parallel`). When screening, a pose the probe
-        finds deeper than the tolerance is settled (depth ``inf``): which poses are depends on the probe's
-        history, so on threads on their timing, but not what is concluded of them (too deep).
+        queries its own fork of the collider (the hand at the same posture; :mod:`handsim.sim.parallel`).
+        Without screening the answers are those of one collider querying them all. When screening, a pose
+        the probe finds deeper than the tolerance comes back settled (depth ``inf``) instead of with its
+        depth: which poses do depends on each probe's history, so on threads on their timing, but every
+        one of them is too deep, which is all the search concludes of it.
         """
         if not len(poses):
             return []
@@ -180,7 +181,11 @@ class PlacementSearch:
         return [answer for depths, links in parts for answer in zip(depths, links, strict=True)]
 
     def _helpers(self, n: int) -> list[HandObjectCollider]:
-        """``n`` forks of the collider at its posture, their query counts at 0 (kept for the next call)."""
+        """``n`` forks of the collider at its posture, their query counts at 0.
+
+        Kept for the level's next calls (a fork's probe copies the model: ~2 ms for the mug) and dropped at
+        its end (:meth:`level`): each holds an ``MjData`` and a model copy (~18 MB for the mug).
+        """
         while len(self._forks) < n:
             self._forks.append(self.collider.fork())
         for helper in self._forks[:n]:
@@ -245,6 +250,7 @@ class PlacementSearch:
                 if best and best[0][0] > key:
                     key, pose = best[0]
             refined.append((key, pose))
+        self._forks.clear()  # not kept past the level (_helpers)
         return refined
 
     def _diverse(self, ranked: list, steps: dict) -> list:
