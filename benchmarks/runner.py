@@ -49,6 +49,7 @@ import tempfile
 import time
 from pathlib import Path
 
+import handsim
 from handsim.assets import TZIONAS_DIR
 from handsim.runner.records import load_records
 from handsim.thread_setting import THREADS_ENV
@@ -56,6 +57,10 @@ from handsim.trials import discover
 
 SHARED = Path(__file__).resolve().parents[1].parent / "shared" / "data" / "graspdb14"
 GRASPDB_SIZE = 2200
+TREE = Path(handsim.__file__).resolve().parents[1]
+"""The folder holding the ``handsim`` this benchmark imported: every run it starts imports that one too (its
+working folder and the head of ``PYTHONPATH``; a ``python -c`` child would otherwise import the ``handsim``
+of its working folder first, whatever ``PYTHONPATH`` says)."""
 _TRIAL_NUMBER = re.compile(r"-(\d{3})-grasp-")
 
 
@@ -119,6 +124,7 @@ def run(dataset: Path, out: Path, workers: int, frames: int) -> tuple[float, lis
         capture_output=True,
         text=True,
         env={**os.environ, THREADS_ENV: "1"},
+        cwd=TREE,
     )
     return float(done.stdout.split()[-1]), load_records(out).records
 
@@ -177,7 +183,7 @@ def ray_run(dataset: Path, out: Path, frames: int, log: Path) -> tuple[float, li
     with ray_head(2, log) as (address, _):
         done = subprocess.run(
             [sys.executable, "-c", RAY_RUN, str(dataset), str(out), address, str(frames)],
-            check=True, capture_output=True, text=True, env=env,
+            check=True, capture_output=True, text=True, env=env, cwd=TREE,
         )  # fmt: skip
     return float(done.stdout.split()[-1]), load_records(out).records
 
@@ -196,6 +202,8 @@ def main() -> None:
     parser.add_argument("--frames", type=int, default=4, help="frames rendered per trial")
     args = parser.parse_args()
     print(f"load average (1, 5, 15 min) at the start: {_load()} on {os.cpu_count()} cores")
+    print(f"handsim from {TREE}")
+    os.environ["PYTHONPATH"] = os.pathsep.join([str(TREE), *filter(None, [os.environ.get("PYTHONPATH")])])
     with tempfile.TemporaryDirectory() as tmp:
         root = Path(tmp)
         os.environ["HANDSIM_CACHE_DIR"] = str(root / "cache")  # inherited by every run and the Ray cluster
