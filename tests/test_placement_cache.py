@@ -26,7 +26,7 @@ from handsim.builders import build_object, build_scene, default_hand
 from handsim.builders.arctic_objects import arctic_object
 from handsim.builders.catalog import get
 from handsim.sim.collide import HandObjectCollider
-from handsim.sim.compiled import compile_scene
+from handsim.sim.compiled import SimScene, compile_scene
 from handsim.sim.hand_pose import targets_qpos
 from handsim.sim.placement import _searched, place_object
 from handsim.sim.placement_cache import entry_path, placement_key, read_entry
@@ -172,13 +172,7 @@ def test_a_cache_that_cannot_be_written_gives_the_placement_with_a_note(monkeypa
 def test_the_contacts_of_an_articulated_objects_own_parts_are_not_the_hands(tmp_path):
     # An ARCTIC-style box whose lid sinks 1 mm into its base: their explicit contact pair (no contype filter
     # stops it) collides in the placement's collider too, and must count as no hand link and no depth.
-    folder = tmp_path / "box"
-    folder.mkdir()
-    for name, (low, high) in (("bottom", (-60.0, 0.0)), ("top", (-1.0, 10.0))):
-        box = trimesh.creation.box(extents=(120.0, high - low, 160.0))
-        box.apply_translation([-60.0, (low + high) / 2, 0.0])
-        box.export(folder / f"{name}.obj")
-    scene = compile_scene(build_scene(default_hand(), build_object(arctic_object(folder))))
+    scene = _arctic_box(tmp_path, lid_bottom=-1.0)
     assert scene.model.npair > 0
     collider = HandObjectCollider(scene, 0.002)
     far = np.array([2.0, 2.0, 2.0])  # the object far from the hand: only its parts touch each other
@@ -227,14 +221,31 @@ def test_the_batched_queries_are_mujocos_contacts_pose_by_pose():
     assert collider.depth_links(positions[:0], quat) == ([], [])
 
 
-def _mug_grid() -> tuple[HandObjectCollider, np.ndarray, np.ndarray]:
-    """A collider of the mug in the default hand at rest, a grid of positions about the palm and a turn."""
-    scene = compile_scene(build_scene(default_hand(), build_object(get("mug"))))
+def _arctic_box(tmp_path, lid_bottom: float) -> SimScene:
+    """The default hand and an ARCTIC-style box (a 12 × 6 × 16 cm base, its lid from ``lid_bottom`` mm up)."""
+    folder = tmp_path / "box"
+    folder.mkdir()
+    for name, (low, high) in (("bottom", (-60.0, 0.0)), ("top", (lid_bottom, 10.0))):
+        box = trimesh.creation.box(extents=(120.0, high - low, 160.0))
+        box.apply_translation([-60.0, (low + high) / 2, 0.0])
+        box.export(folder / f"{name}.obj")
+    return compile_scene(build_scene(default_hand(), build_object(arctic_object(folder))))
+
+
+def _palm_grid(scene: SimScene, half: float = 0.08, count: int = 9) -> tuple[HandObjectCollider, np.ndarray]:
+    """A collider of the scene with the hand at rest, and a cubic grid of ``count``³ positions within
+    ± ``half`` (m) of the palm."""
     collider = HandObjectCollider(scene, 0.002)
     collider.set_hand(scene.model.qpos0)
     mujoco.mj_kinematics(collider.model, collider.data)
     palm = collider.data.xpos[scene.layout.link_bodies[0]].copy()
-    positions = palm + np.stack(np.meshgrid(*[np.linspace(-0.08, 0.08, 9)] * 3), axis=-1).reshape(-1, 3)
+    axis = np.linspace(-half, half, count)
+    return collider, palm + np.stack(np.meshgrid(axis, axis, axis), axis=-1).reshape(-1, 3)
+
+
+def _mug_grid() -> tuple[HandObjectCollider, np.ndarray, np.ndarray]:
+    """A collider of the mug in the default hand at rest, a grid of positions about the palm and a turn."""
+    collider, positions = _palm_grid(compile_scene(build_scene(default_hand(), build_object(get("mug")))))
     return collider, positions, np.array([0.5, 0.5, -0.5, 0.5])
 
 
@@ -260,19 +271,9 @@ def test_the_probe_is_not_used_where_it_cannot_pay_or_cannot_be_trusted(tmp_path
     # A ball's full query costs what a probe does: not probed. An articulated object's explicit part pair
     # would collide in the probe too (its contacts are not the hand's): not probed.
     ball = compile_scene(build_scene(default_hand(), build_object(get("tennis_ball"))))
-    folder = tmp_path / "box"
-    folder.mkdir()
-    for name, (low, high) in (("bottom", (-60.0, 0.0)), ("top", (0.0, 10.0))):
-        box = trimesh.creation.box(extents=(120.0, high - low, 160.0))
-        box.apply_translation([-60.0, (low + high) / 2, 0.0])
-        box.export(folder / f"{name}.obj")
-    box = compile_scene(build_scene(default_hand(), build_object(arctic_object(folder))))
+    box = _arctic_box(tmp_path, lid_bottom=0.0)
     for scene in (ball, box):
-        collider = HandObjectCollider(scene, 0.002)
-        collider.set_hand(scene.model.qpos0)
-        mujoco.mj_kinematics(collider.model, collider.data)
-        palm = collider.data.xpos[scene.layout.link_bodies[0]].copy()
-        positions = palm + np.stack(np.meshgrid(*[np.linspace(-0.05, 0.05, 7)] * 3), axis=-1).reshape(-1, 3)
+        collider, positions = _palm_grid(scene, half=0.05, count=7)
         quat = np.array([1.0, 0.0, 0.0, 0.0])
         expected = collider.depth_links(positions, quat)
         assert max(expected[0]) > 0.002  # deep poses a probe could have settled
@@ -301,12 +302,7 @@ def test_a_query_that_runs_out_of_contact_memory_is_an_error_not_a_wrong_depth()
 
     spec = build_scene(default_hand(), build_object(get("mug")))
     spec.memory = 30_000
-    scene = compile_scene(spec)
-    collider = HandObjectCollider(scene, 0.002)
-    collider.set_hand(scene.model.qpos0)
-    mujoco.mj_kinematics(collider.model, collider.data)
-    palm = collider.data.xpos[scene.layout.link_bodies[0]].copy()
-    positions = palm + np.stack(np.meshgrid(*[np.linspace(-0.08, 0.08, 9)] * 3), axis=-1).reshape(-1, 3)
+    collider, positions = _palm_grid(compile_scene(spec))
     quat = np.array([0.5, 0.5, -0.5, 0.5])
     assert collider.depth_links(positions[:3], quat) == ([0.0] * 3, [0] * 3)  # far poses: no contacts
     for settle in (None, 0.002):
