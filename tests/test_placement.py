@@ -50,6 +50,20 @@ def test_when_no_feasible_pose_touches_the_hand_the_one_nearest_the_fingertips_i
     ) in loaded.scene.setup.notes
 
 
+def _placements(monkeypatch) -> list:
+    """The placements ``load_trial`` makes from now on, each searched afresh (the cache bypassed)."""
+    import handsim.sim.scenarios as scenarios
+
+    placed, original = [], scenarios.place_object
+
+    def uncached(*args, **kwargs):
+        placed.append(original(*args, **kwargs, use_cache=False))
+        return placed[-1]
+
+    monkeypatch.setattr(scenarios, "place_object", uncached)
+    return placed
+
+
 @pytest.mark.parametrize(
     ("recording", "grip_tests", "threads"),
     [
@@ -66,14 +80,9 @@ def test_the_search_on_threads_places_as_on_one_thread(
     import pickle
 
     import handsim.sim.placement as placement
-    import handsim.sim.scenarios as scenarios
 
-    placed, drawn = [], []
-    original, original_until = scenarios.place_object, placement.map_until
-
-    def uncached(*args, **kwargs):
-        placed.append(original(*args, **kwargs, use_cache=False))
-        return placed[-1]
+    placed, drawn = _placements(monkeypatch), []
+    original_until = placement.map_until
 
     def counted(run, items, enough, threads=None):
         def counting():
@@ -84,7 +93,6 @@ def test_the_search_on_threads_places_as_on_one_thread(
         drawn.append(0)
         return original_until(run, counting(), enough, threads)
 
-    monkeypatch.setattr(scenarios, "place_object", uncached)
     monkeypatch.setattr(placement, "map_until", counted)
     for count in ("1", threads):
         monkeypatch.setenv("HANDSIM_THREADS", count)
@@ -107,15 +115,10 @@ def test_grip_tests_that_cannot_match_an_earlier_grip_stop_and_leave_the_placeme
     with one thread each of those stops at its first failed direction, or skips ObMan's run)."""
     import pickle
 
-    import handsim.sim.scenarios as scenarios
     from handsim.sim.grip import GripBench
 
-    placed, stopped = [], []
-    original, original_grip = scenarios.place_object, GripBench.grip
-
-    def uncached(*args, **kwargs):
-        placed.append(original(*args, **kwargs, use_cache=False))
-        return placed[-1]
+    placed, stopped = _placements(monkeypatch), []
+    original_grip = GripBench.grip
 
     def whole(self, *args, needed=0, first=(), **kwargs):
         return original_grip(self, *args, **kwargs)
@@ -126,7 +129,6 @@ def test_grip_tests_that_cannot_match_an_earlier_grip_stop_and_leave_the_placeme
         stopped.append(any(d.failure.startswith("not run") for d in runs))
         return result
 
-    monkeypatch.setattr(scenarios, "place_object", uncached)
     monkeypatch.setenv("HANDSIM_THREADS", threads)
     monkeypatch.setattr(GripBench, "grip", whole)
     load_trial(graspdb_dir / "01_ex01-rad-002-grasp-su01.txt")
@@ -148,15 +150,10 @@ def test_poses_the_probe_settles_as_too_deep_leave_the_placement_unchanged(grasp
     import pickle
 
     import handsim.sim.collide as collide
-    import handsim.sim.scenarios as scenarios
 
-    placed, settled = [], []
-    original, original_init = scenarios.place_object, collide.HandObjectCollider.__init__
+    placed, settled = _placements(monkeypatch), []
+    original_init = collide.HandObjectCollider.__init__
     original_depth_links = collide.HandObjectCollider.depth_links
-
-    def uncached(*args, **kwargs):
-        placed.append(original(*args, **kwargs, use_cache=False))
-        return placed[-1]
 
     def unprobed(self, *args, **kwargs):
         original_init(self, *args, **kwargs)
@@ -167,7 +164,6 @@ def test_poses_the_probe_settles_as_too_deep_leave_the_placement_unchanged(grasp
         settled.append(sum(d == float("inf") for d in depths))
         return depths, links
 
-    monkeypatch.setattr(scenarios, "place_object", uncached)
     monkeypatch.setattr(collide.HandObjectCollider, "depth_links", counted)
     monkeypatch.setenv("HANDSIM_THREADS", threads)
     with monkeypatch.context() as patch:
