@@ -9,7 +9,13 @@ after DexGraspNet) judges the grip: how many of the six directions it resists.
 
 Before contacts act, the object collides with nothing, so the hand's motion up to a candidate's contact frame
 does not depend on where the object is: the bench simulates it once (hand alone) and starts every candidate
-from its state at that frame.
+from its state at that frame, with the object at rest at its pose (a replay's object has by then sagged on
+its weld by a fraction of a millimetre). MuJoCo solves the hand's and the object's constraints as separate
+islands but chooses the solver's warm start for all of them at once, by their summed cost; so the object could
+in principle tip that choice at a step and change the hand's rounding. On the shared recordings' 29 ensemble
+poses (winners included) the hand's state before contact was bit for bit that of the hand-alone run, on every
+frame; the object's own state, the other way round, does depend on the hand's (``docs/replay.md``, "Ensemble
+members cannot share their run before contact").
 """
 
 from __future__ import annotations
