@@ -42,8 +42,9 @@ Where the remaining time goes (measured with cProfile and per-part CPU timers on
   metrics (~0.6 ms: contact slots, poses, tracking) and the summary and plausibility flags (~0.7 ms). On
   the glove scene (73–78 ms of stepping) these ~6 ms are the 6–9 % between ``replay()`` and raw.
 * ``env.step``: ~20 numpy calls on preallocated buffers (action check, controls, mocap targets, two state
-  gathers, the contact-force product, references, reward terms) and the ``info`` dict: 15–25 µs on a
-  quiet machine, ~40 µs on a loaded one, against ~250 µs of ``mj_step × 5`` on the Tzionas scene.
+  gathers, the contact-force product, references, reward terms) and the ``info`` dict: 31–52 µs per step
+  against 260–293 µs of ``mj_step × 5`` on the Tzionas scene (2026-11-28 evening, load below 1, three
+  runs of this benchmark's env part, least of 9 each): 0.95 would need ≤ 15 µs.
 * the vector environment: ``Batch.step`` runs the worlds on the threads; the main thread adds the
   vectorised controls and gathers and a short per-world loop for the observation features and reward
   terms (the single environment's own code, so the results are the same bitwise). Measured on this
@@ -53,7 +54,12 @@ Where the remaining time goes (measured with cProfile and per-part CPU timers on
   (``Batch.step`` 1443 µs): ~50 µs of Python per step and ~35 µs per world. MuJoCo's own two threads
   step two worlds in 437 µs against one world's 328 µs (1.50×), so N = 2 could reach at most 2 × 353 /
   437 = 1.62× one environment on this machine with no Python at all; at N = 8 the threads reach 1.82×
-  and the Python is a sixth of the step.
+  and the Python is a sixth of the step. That cap is the machine's, not MuJoCo's: the same measurement
+  on another 2-core VM of the same kind (2026-11-28 evening, load below 1) gave ``Batch.step`` 305 µs
+  for one world and 339 µs for two (1.80×, a cap of 1.91× at N = 2) against one environment's 323 µs,
+  with 77 µs of Python per vector step at N = 1, 104 µs at N = 2 and 191 µs at N = 8: there N = 2 scaled
+  1.50–1.52× and N = 4 and 8 reached 1.72–1.94×, and N = 2 at 1.7× would need the 104 µs cut to ≤ 41 µs
+  while the per-world observation and reward stay the single environment's own code (bitwise the same).
 
 Prints steps per second, the real-time factor and the ratios, with the load average beside them (the
 machine is shared); the last lines are ``replay_vs_raw=<ratio>`` (worst one-hand scene),
