@@ -35,7 +35,7 @@ cluster is stopped after each run (not every Ray of the machine, as ``ray stop``
 Run length (``--copies``, default 12: 36 trials, ~40 s per 2-worker run). A Ray run pays ~2 s that a
 pool run does not, whatever its length (the driver's ``import ray`` and connection, the cluster's daemons
 beside two busy workers, the disconnection), and its workers' trials take a few per cent longer than the
-pool's in the same runs (the same trial alone on one CPU takes the same time in both, 3.35–3.60 s for the
+pool's in the same runs (the same trial alone on one CPU takes the same time in both, 3.35–3.63 s for the
 mug). Measured on 2026-11-28 evening: Ray's runs were 0.2–3.7 s longer than the pool's at 18 trials
 (``ray_vs_pool`` 0.886 and 0.884, medians of three pairs) and 2.2–3.3 s longer at 36 trials (0.928 and
 0.950); the 2-worker scaling, which pays the pool's start once per run, was 1.82 and 1.88 at 18 trials
