@@ -1,6 +1,6 @@
 """Benchmark: dataset-run throughput with 1 and 2 workers and on a Ray cluster, a GraspDB-sized projection.
 
-Run: python benchmarks/runner.py [--copies N] [--frames N]
+Run: python benchmarks/runner.py [--copies N] [--frames N] [--ray-rounds N]
 
 The dataset is synthesised by repeating the real GraspDB14 recordings of ``../shared/data/graspdb14``
 (each copy renamed to another trial number, its annotation file copied alongside); without ``../shared``
@@ -39,8 +39,8 @@ pool's in the same runs (the same trial alone on one CPU takes the same time in 
 mug). Measured on 2026-11-28 evening: Ray's runs were 0.2–3.7 s longer than the pool's at 18 trials
 (``ray_vs_pool`` 0.886 and 0.884, medians of three pairs) and 2.2–3.3 s longer at 36 trials (0.928 and
 0.950); the 2-worker scaling, which pays the pool's start once per run, was 1.82 and 1.88 at 18 trials
-and 1.90 at 36. A GraspDB-sized run lasts ~45 min, where such fixed seconds vanish: the longer runs are
-the closer measure of it (and take ~7 min in all).
+and 1.90 and 1.96 at 36. A GraspDB-sized run lasts ~45 min, where such fixed seconds vanish: the longer
+runs are the closer measure of it (and take ~6 min in all).
 
 Projection (``graspdb_projection_min``): 2,200 glove trials of 300 frames on 2 cores = 2,200 × the
 1-worker wall time per trial (overheads included), with its replay part scaled from these recordings'
