@@ -26,7 +26,7 @@ from timing import median_seconds  # benchmarks/timing.py (scripts run from benc
 from handsim.builders.decompose import decompose
 from handsim.builders.decomposition_types import DecompositionError, DecompositionParams
 from handsim.datatypes.mesh import validate_mesh
-from handsim.io.graspdb import read_graspdb_glove, read_graspdb_raw
+from handsim.io.graspdb.glove import read_graspdb_glove, read_graspdb_raw
 
 ROWS = 10_000
 PARAMS = DecompositionParams(resolution=500, preprocess_resolution=30, mcts_iterations=60)

@@ -1,7 +1,8 @@
 """Benchmark: MANO parameters → hinge-angle trajectory, 10,000 frames (target < 1 s).
 
 Run: python benchmarks/mano_conversion.py
-Prints the median wall time of :func:`handsim.io.mano_pose.mano_pose_to_trajectory` (axis-angle → Rodrigues →
+Prints the median wall time of :func:`handsim.io.arctic.mano_pose.mano_pose_to_trajectory` (axis-angle →
+Rodrigues →
 Z·Y·X decomposition → residual check → root pose) for 10,000 random frames on the bundled mean-shape right
 hand, the largest decomposition residual, and for reference the time of reading an ARCTIC-layout
 ``.mano.npy`` of the same length with the restricted unpickler.
@@ -18,8 +19,8 @@ import numpy as np
 from timing import median_seconds  # benchmarks/timing.py (scripts run from benchmarks/)
 
 from handsim.builders.mano_hand import mano_hand_skeleton
-from handsim.io.arctic_motion import read_arctic_mano
-from handsim.io.mano_pose import MANOSequence, mano_pose_to_trajectory
+from handsim.io.arctic.mano_pose import MANOSequence, mano_pose_to_trajectory
+from handsim.io.arctic.sequence import read_arctic_mano
 
 NFRAMES = 10_000
 TARGET_S = 1.0

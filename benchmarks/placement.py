@@ -5,7 +5,8 @@ Run: python benchmarks/placement.py [--repeats N] [--data ../shared/data/graspdb
 For each of the three shared GraspDB14 trials on both hands (the parametric default hand and the GraspDB14
 ``default.xmlskel``), in one process (median of ``--repeats``):
 
-* placement: :func:`handsim.sim.placement.place_object` as :func:`handsim.sim.scenarios.glove_scene` calls
+* placement: :func:`handsim.sim.placement.place.place_object` as :func:`handsim.sim.scenarios.glove_scene`
+  calls
   it (candidates, fit frames, grip tests, the robustness perturbations' fit frames), timed by wrapping it,
   with the placement cache off (the search itself); ``cached``: the same call answered by the cache (a
   fresh temporary cache directory, written once, then read);

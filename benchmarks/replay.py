@@ -91,15 +91,15 @@ from handsim.builders.mano_hand import build_mano_hand, mano_hand_skeleton
 from handsim.builders.objects import build_object
 from handsim.datatypes.trajectory import ObjectTrack, Trajectory
 from handsim.io import read_skeleton, read_trajectory
-from handsim.io.tzionas_objects import read_tzionas_object
-from handsim.io.tzionas_sequence import read_tzionas_sequence
+from handsim.io.tzionas.objects import read_tzionas_object
+from handsim.io.tzionas.sequence import read_tzionas_sequence
 from handsim.sim.arctic_scene import arctic_scene
-from handsim.sim.compiled import compile_scene
 from handsim.sim.control import control_schedule
 from handsim.sim.drive import ScheduleDriver, scenario_switches
-from handsim.sim.metrics import MetricSpec
 from handsim.sim.replay import ReplayConfig, replay, run_schedule
 from handsim.sim.scenarios import glove_scene, recorded_scene
+from handsim.sim.scene.compiled import compile_scene
+from handsim.sim.specs import MetricSpec
 from handsim.sim.stepper import Stepper
 
 GRASPDB = Path(__file__).resolve().parents[1].parent / "shared" / "data" / "graspdb14"
@@ -131,7 +131,7 @@ def tzionas_case():
 
 def glove_case():
     if GRASPDB.exists():
-        from handsim.io.graspdb_annotations import attach_phases, find_annotation_file
+        from handsim.io.graspdb.annotations import attach_phases, find_annotation_file
 
         path = GRASPDB / "r_01_11_ex03-rad-004-grasp-su04.txt"
         skeleton = read_skeleton(GRASPDB / "default.xmlskel")

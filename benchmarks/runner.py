@@ -7,7 +7,7 @@ The dataset is synthesised by repeating the real GraspDB14 recordings of ``../sh
 the bundled Tzionas sequence is used. A first, untimed run of one copy of each recording warms the hull
 cache on disk (a cache folder of the benchmark's own, ``HANDSIM_CACHE_DIR``).
 
-The placement search is content-cached (:mod:`handsim.sim.placement_cache`): byte-identical copies would
+The placement search is content-cached (:mod:`handsim.sim.placement.cache`): byte-identical copies would
 share one search, which a real dataset, whose recordings all differ, never does. So every copy differs
 from the others in one sample (the first row's last sensor value moved by ``copy × 1e-5`` rad, far below
 the glove's resolution), and every timed run starts with no placement cache (the hulls kept): each trial

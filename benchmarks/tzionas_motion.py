@@ -13,9 +13,9 @@ from pathlib import Path
 
 from timing import median_seconds  # benchmarks/timing.py (scripts run from benchmarks/)
 
-from handsim.io.tzionas import read_tzionas_skeleton
-from handsim.io.tzionas_motion import fit_tzionas_motion, read_tzionas_object_motion
-from handsim.io.tzionas_sequence import read_tzionas_sequence
+from handsim.io.tzionas.motion import fit_tzionas_motion, read_tzionas_object_motion
+from handsim.io.tzionas.sequence import read_tzionas_sequence
+from handsim.io.tzionas.skeleton import read_tzionas_skeleton
 
 SHARED = Path(__file__).resolve().parents[1].parent / "shared" / "data" / "tzionas_ijcv16"
 BUNDLED = Path(__file__).resolve().parents[1] / "handsim" / "assets" / "tzionas_ijcv16"

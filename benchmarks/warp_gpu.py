@@ -9,7 +9,8 @@ machine has neither handsim's dependencies nor the recordings:
    inputs (start state, controls per frame, mocap root per frame, the contact switch and support release
    frames, 100 Hz control as in ``benchmarks/replay.py``) and the CPU replay's trajectory as the reference;
    for the glove scene also the stability batch of its release state (the frozen model, the start state
-   and the seven gravity vectors of :func:`handsim.sim.stability.stability_test`) with handsim's own results.
+   and the seven gravity vectors of :func:`handsim.sim.stability.gravity.stability_test`) with handsim's own
+   results.
 2. ``python benchmarks/warp_gpu.py run DIR`` (on the GPU machine; needs only ``mujoco``, ``numpy``,
    ``warp-lang`` and ``mujoco-warp``) measures, on that machine, with the same inputs:
 
@@ -68,9 +69,9 @@ def export(folder: Path) -> None:
     from replay import arctic_case, driver_at_start, glove_case, tzionas_case
 
     from handsim.sim.control import control_schedule
-    from handsim.sim.metrics import MetricSpec
     from handsim.sim.replay import run_schedule
-    from handsim.sim.stability import DIRECTIONS, StabilitySpec, _frozen_model, stability_test
+    from handsim.sim.specs import MetricSpec, StabilitySpec
+    from handsim.sim.stability.gravity import DIRECTIONS, _frozen_model, stability_test
 
     folder.mkdir(parents=True, exist_ok=True)
     index = {}

@@ -39,8 +39,8 @@ def glove_switch_inputs():
     from handsim.builders import build_object, build_scene, default_hand
     from handsim.builders.catalog import get
     from handsim.datatypes.trajectory import Phase, Trajectory
-    from handsim.sim.compiled import compile_scene
     from handsim.sim.scenarios import glove_scene
+    from handsim.sim.scene.compiled import compile_scene
 
     hand, ball = default_hand(), build_object(get("tennis_ball"))
     layout = compile_scene(build_scene(hand, ball)).layout

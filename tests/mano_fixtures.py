@@ -40,7 +40,7 @@ from scipy.spatial import ConvexHull
 from scipy.spatial.transform import Rotation
 
 from handsim.datatypes.skeleton import mj_name
-from handsim.io.mano import MEAN_JOINTS_FILE
+from handsim.io.arctic.mano import MEAN_JOINTS_FILE
 from handsim.sim import compile_spec
 
 PARENTS = (-1, 0, 1, 2, 0, 4, 5, 0, 7, 8, 0, 10, 11, 0, 13, 14)

@@ -19,10 +19,10 @@ from handsim.builders.mano_hand import build_mano_hands
 from handsim.datatypes.mesh import validate_mesh
 from handsim.datatypes.object_model import Hinge, ObjectModel, ObjectPart
 from handsim.errors import InputFileError, ModelError, TrajectoryError
-from handsim.io.arctic_hands import arctic_hand_trajectory, hand_side_check
-from handsim.io.arctic_motion import HANDS, read_arctic_sequence
-from handsim.io.mano import MANO_JOINT_NAMES, find_mano_files
+from handsim.io.arctic.mano import MANO_JOINT_NAMES, find_mano_files
+from handsim.io.arctic.sequence import HANDS, read_arctic_sequence
 from handsim.sim import compile_spec, warning_counts
+from handsim.trials.arctic_hands import arctic_hand_trajectory, hand_side_check
 from tests.mano_fixtures import (
     arctic_object_values,
     grasp_pose,

@@ -25,10 +25,10 @@ from handsim.builders.graspdb_objects import UnknownObjectError
 from handsim.builders.objects import build_object
 from handsim.cli import main
 from handsim.errors import InputFileError, ModelError
-from handsim.io.arctic_motion import ARCTIC_OBJECTS as ARCTIC_NAMES
-from handsim.io.arctic_motion import read_arctic_object
+from handsim.io.arctic.sequence import ARCTIC_OBJECTS as ARCTIC_NAMES
+from handsim.io.arctic.sequence import read_arctic_object
 from handsim.sim import compile_spec
-from handsim.sim.drop import drop_test
+from handsim.sim.stability.drop import drop_test
 from tests.arctic_fixtures import (
     RECORDED_ARTICULATION,
     recording,

@@ -19,8 +19,8 @@ from handsim.cli import main
 from handsim.datatypes.skeleton import mj_name
 from handsim.datatypes.trajectory import Trajectory
 from handsim.errors import TrajectoryError
-from handsim.io.arctic_motion import HANDS
-from handsim.io.mano import MANO_DIR_ENV, MANO_JOINT_NAMES
+from handsim.io.arctic.mano import MANO_DIR_ENV, MANO_JOINT_NAMES
+from handsim.io.arctic.sequence import HANDS
 from handsim.runner.records import read_records
 from handsim.sim.control import control_schedule
 from handsim.sim.drive import ScenarioSwitches, ScheduleDriver

@@ -15,7 +15,7 @@ from handsim.builders.objects import build_object, object_spec, prepare_object
 from handsim.builders.scene import build_scene
 from handsim.errors import InputFileError
 from handsim.sim import compile_spec, warning_counts
-from handsim.sim.drop import drop_test
+from handsim.sim.stability.drop import drop_test
 
 NAMES = catalog.names()
 

@@ -124,7 +124,7 @@ def test_inspect_prints_timing_phases_and_limit_violations_and_writes_a_plot(cap
 
 
 def test_calibrate_fits_a_calibration_sequence_and_writes_json(capsys, tmp_path):
-    from handsim.io.glove_calibration import load_calibration
+    from handsim.io.graspdb.calibration import load_calibration
     from tests.test_glove_calibration import _synthetic_sequence, _write_raw
 
     raw, switch, gains, _ = _synthetic_sequence()
@@ -222,8 +222,8 @@ def test_one_hand_trajectory_reader_names_an_arctic_sequence(tmp_path):
         read_trajectory(path)
     assert str(err.value) == (
         f"{path}: an ARCTIC sequence (two MANO hands in <seq>.mano.npy, the object in <seq>.object.npy), not "
-        "a one-hand trajectory: read it with handsim.io.arctic_motion.read_arctic_sequence (`handsim inspect "
-        "<seq>.mano.npy` summarises it)"
+        "a one-hand trajectory: read it with handsim.io.arctic.sequence.read_arctic_sequence "
+        "(`handsim inspect <seq>.mano.npy` summarises it)"
     )
 
 

@@ -203,7 +203,7 @@ def test_render_states_raises_error_listing_the_cameras_for_an_unknown_one():
 
     from handsim.builders import build_scene, default_hand
     from handsim.errors import HandsimError
-    from handsim.sim.compiled import compile_scene
+    from handsim.sim.scene.compiled import compile_scene
     from handsim.viz.render import render_states
 
     scene = compile_scene(build_scene(default_hand()))
@@ -220,7 +220,7 @@ def test_render_states_without_multisampling_renders_the_same_scene_and_leaves_t
     import numpy as np
 
     from handsim.builders import build_scene, default_hand
-    from handsim.sim.compiled import compile_scene
+    from handsim.sim.scene.compiled import compile_scene
     from handsim.viz.render import render_states
 
     scene = compile_scene(build_scene(default_hand()))
@@ -243,7 +243,7 @@ def test_render_states_without_shadows_makes_no_shadow_map_and_renders_the_same_
     import handsim.viz.render as render
     from handsim.builders import build_object, build_scene, default_hand
     from handsim.builders.catalog import get
-    from handsim.sim.compiled import compile_scene
+    from handsim.sim.scene.compiled import compile_scene
 
     scene = compile_scene(build_scene(default_hand(), build_object(get("tennis_ball"))))
     size = int(scene.model.vis.quality.shadowsize)

@@ -25,7 +25,8 @@ from handsim.builders.decomposition_types import (
     DecompositionError,
     DecompositionParams,
 )
-from handsim.builders.hull_cache import cache_key, default_cache_dir
+from handsim.builders.hull_cache import cache_key
+from handsim.cache import CorruptEntryError, array_checksum, default_cache_dir
 from handsim.datatypes.mesh import Mesh, validate_mesh
 from handsim.errors import MeshError
 
@@ -275,7 +276,7 @@ def _rewrite(entry: Path, target: Path, change: str) -> None:
             arrays["faces"] = arrays["faces"].copy()
             arrays["faces"][0, 0] = 10_000
         del arrays["checksum"]
-        arrays["checksum"] = np.array(hull_cache.array_checksum(arrays))
+        arrays["checksum"] = np.array(array_checksum(arrays))
     with open(target, "wb") as f:
         np.savez(f, **arrays)
 
@@ -296,7 +297,7 @@ def test_read_entry_rejects_damaged_cache_entry(
     first, cache = decomposed
     damaged = tmp_path / "entry.npz"
     _rewrite(entry_path(cache, first.key), damaged, change)
-    with pytest.raises(hull_cache.CorruptEntryError, match=rf"^{reason}$"):
+    with pytest.raises(CorruptEntryError, match=rf"^{reason}$"):
         hull_cache.read_entry(damaged)
 
 

@@ -8,7 +8,7 @@ import pytest
 from handsim.builders import default_hand, default_skeleton
 from handsim.errors import SkeletonError
 from handsim.io import read_skeleton, read_trajectory
-from handsim.io.parametric_skeleton import SEGMENT_RATIOS
+from handsim.io.graspdb.default_skeleton import SEGMENT_RATIOS
 from handsim.sim import compile_spec
 
 

@@ -16,8 +16,8 @@ import pytest
 from handsim.builders import build_hand
 from handsim.builders.surfaces import FITTED_SKIN, FITTED_SKIN_OFFSET
 from handsim.io import read_skeleton
-from handsim.sim.pad import pad_force_curve
 from handsim.sim.replay import replay
+from handsim.sim.stability.pad import pad_force_curve
 from handsim.trials import load_trial, tzionas
 
 ASSETS = Path(__file__).resolve().parents[1] / "handsim" / "assets"

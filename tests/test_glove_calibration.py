@@ -26,8 +26,8 @@ from handsim.glove import (
     estimate_calibration,
 )
 from handsim.glove.calibration import FORMAT, VERSION
-from handsim.io.glove_calibration import calibration_from_dict, load_calibration, save_calibration
-from handsim.io.graspdb import read_graspdb_raw
+from handsim.io.graspdb.calibration import calibration_from_dict, load_calibration, save_calibration
+from handsim.io.graspdb.glove import read_graspdb_raw
 
 IDX = {name: i for i, name in enumerate(SENSOR_NAMES)}
 UNMEASURED = ("I-DIPJ", "I-AA", "M-DIPJ", "R-DIPJ", "L-DIPJ")  # 0 counts on the 18-sensor glove

@@ -13,7 +13,7 @@ from hypothesis import strategies as st
 from handsim.datatypes.trajectory import Trajectory
 from handsim.errors import TrajectoryError
 from handsim.glove import CYBERGLOVE, DIP_PIP_RATIO, couple_dip, cyberglove_dip
-from handsim.io.graspdb import read_graspdb_glove
+from handsim.io.graspdb.glove import read_graspdb_glove
 
 REAL_TRIALS = (
     "r_01_11_ex03-rad-004-grasp-su04.txt",

@@ -15,14 +15,14 @@ from hypothesis import strategies as st
 from handsim.datatypes.trajectory import ObjectTrack, Phase, Trajectory
 from handsim.errors import FormatError, InputFileError, TrajectoryError
 from handsim.glove import AnnotationMatch, PhaseAnnotation, cut, split_by_switch, switch_segments
-from handsim.io.graspdb import read_graspdb_glove
-from handsim.io.graspdb_annotations import (
+from handsim.io.graspdb.annotations import (
     annotation_names,
     attach_phases,
     find_annotation_file,
     match_annotation,
     read_phase_annotations,
 )
+from handsim.io.graspdb.glove import read_graspdb_glove
 
 MOTION = "r_01_11_ex03-rad-004-grasp-su04.txt"
 ANNOTATION = "01_11_ex03-rad-004-grasp-su04_annot-.txt"

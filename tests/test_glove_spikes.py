@@ -16,7 +16,7 @@ from handsim.glove.spikes import (
     find_spikes,
     remove_spikes,
 )
-from handsim.io.graspdb import read_graspdb_glove
+from handsim.io.graspdb.glove import read_graspdb_glove
 
 DT = 1.0 / 60.0
 NAMES = ("a_flex", "b_flex", "c_flex", "d_abd")

@@ -5,7 +5,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from handsim.sim.metrics import FrameMetrics, MetricSpec
+from handsim.sim.metrics import FrameMetrics
+from handsim.sim.specs import MetricSpec
 from handsim.sim.summary import hold_outcome, window_long_enough
 
 SPEC = MetricSpec()  # slip 2 cm, contact gap 0.1 s, windows of at least 0.3 s

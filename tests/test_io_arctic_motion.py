@@ -16,10 +16,10 @@ from scipy.spatial.transform import Rotation
 
 from handsim.builders.mano_hand import build_mano_hand, mano_hand_skeleton
 from handsim.errors import FormatError, InputFileError
-from handsim.io.arctic import ARCTIC_HINGE_AXIS
-from handsim.io.arctic_motion import read_arctic_mano, read_arctic_object, read_arctic_sequence
-from handsim.io.mano import read_mano_model
-from handsim.io.mano_pose import mano_pose_to_trajectory
+from handsim.io.arctic.mano import read_mano_model
+from handsim.io.arctic.mano_pose import mano_pose_to_trajectory
+from handsim.io.arctic.sequence import read_arctic_mano, read_arctic_object, read_arctic_sequence
+from handsim.io.arctic.templates import ARCTIC_HINGE_AXIS
 from handsim.io.safe_pickle import load_npy
 from handsim.sim import compile_spec
 from tests.mano_fixtures import (

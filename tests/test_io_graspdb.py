@@ -24,8 +24,8 @@ from handsim.glove import (
     driven_dofs,
 )
 from handsim.io import read_trajectory
-from handsim.io.graspdb import read_graspdb_glove, read_graspdb_raw
-from handsim.io.graspdb_filenames import GraspDBName, filename_datatype, parse_graspdb_filename
+from handsim.io.graspdb.filenames import GraspDBName, filename_datatype, parse_graspdb_filename
+from handsim.io.graspdb.glove import read_graspdb_glove, read_graspdb_raw
 
 REAL_TRIALS = {
     "r_01_11_ex03-rad-004-grasp-su04.txt": 282,

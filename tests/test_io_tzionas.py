@@ -1,4 +1,4 @@
-"""Tests of the Tzionas/Ballan reader (handsim.io.tzionas)."""
+"""Tests of the Tzionas/Ballan reader (handsim.io.tzionas.skeleton)."""
 
 from __future__ import annotations
 
@@ -16,10 +16,10 @@ from scipy.spatial.transform import Rotation
 
 from handsim.errors import FormatError, InputFileError
 from handsim.io.off import read_off
-from handsim.io.tzionas import read_tzionas_skeleton
-from handsim.io.tzionas_motion_file import read_motion
-from handsim.io.tzionas_skel import read_limits, read_skel
-from handsim.io.tzionas_surface import read_skin, read_voi
+from handsim.io.tzionas.motion_file import read_motion
+from handsim.io.tzionas.skel import read_limits, read_skel
+from handsim.io.tzionas.skeleton import read_tzionas_skeleton
+from handsim.io.tzionas.surface import read_skin, read_voi
 
 HAND_BONES = 20
 HAND_DOFS = 31  # rx + ry + rz flags of the 19 non-root bones of Model_Hand_R.LIMITS, counted by hand

@@ -1,4 +1,4 @@
-"""Tests of the Tzionas/Ballan motion reader (handsim.io.tzionas_motion)."""
+"""Tests of the Tzionas/Ballan motion reader (handsim.io.tzionas.motion)."""
 
 from __future__ import annotations
 
@@ -19,16 +19,16 @@ from handsim.datatypes.rotations import rotation_about_axis
 from handsim.datatypes.skeleton import mj_name
 from handsim.errors import FormatError, InputFileError, TrajectoryError
 from handsim.io import read_trajectory
-from handsim.io.tzionas import read_tzionas_skeleton
-from handsim.io.tzionas_configs import read_index_bounds, read_models_info
-from handsim.io.tzionas_motion import (
+from handsim.io.tzionas.configs import read_index_bounds, read_models_info
+from handsim.io.tzionas.motion import (
     DEFAULT_FPS,
     fit_tzionas_motion,
     fit_tzionas_object_motion,
     read_tzionas_motion,
     read_tzionas_object_motion,
 )
-from handsim.io.tzionas_sequence import read_tzionas_sequence
+from handsim.io.tzionas.sequence import read_tzionas_sequence
+from handsim.io.tzionas.skeleton import read_tzionas_skeleton
 
 MM = 1e-3
 HAND_FRAMES = 186  # Configs/20/INDEX_BOUNDS.txt: TotalAlligned
@@ -245,7 +245,7 @@ def test_sequence_20_is_the_hand_trajectory_with_the_cube_track(tzionas_dir: Pat
 
 
 def test_pipe_articulation_is_the_hinge_angle_of_its_second_bone(tzionas_dir: Path) -> None:
-    from handsim.io.tzionas_objects import read_tzionas_object
+    from handsim.io.tzionas.objects import read_tzionas_object
 
     skel = tzionas_dir / "Models" / "17" / "Model_Object_Pipe_Gray.SKEL"
     track, fit = fit_tzionas_object_motion(skel)

@@ -11,7 +11,7 @@ from hypothesis import strategies as st
 
 from handsim.errors import FormatError, InputFileError
 from handsim.io import read_skeleton
-from handsim.io.xmlskel import read_xmlskel
+from handsim.io.graspdb.xmlskel import read_xmlskel
 
 JOINT = """<joint><name>{name}</name><id>{id}</id><position>{pos}</position>
 <limits><rotx>{rx}</rotx><roty>0 0</roty><rotz>{rz}</rotz></limits>{children}</joint>"""

@@ -3,7 +3,9 @@
 The contracts (a layers contract: cli → report/export → envs/runner → viz → trials → sim → builders → io →
 glove → datatypes → base; the report reads records only) are checked on the source tree. The second test
 copies the package, adds one upward import to a data-type module and shows that ``lint-imports`` refuses
-it, naming the offending import.
+it, naming the offending import; the inner contracts of the simulation layer (replay on top, then the
+placement search, the stability tests, the replay core's parts, the specs and the compiled scene) and of
+the readers (dataset families independent of each other) are shown to refuse a violation the same way.
 """
 
 from __future__ import annotations
@@ -37,7 +39,7 @@ def _lint_imports(root: Path) -> subprocess.CompletedProcess:
 def test_import_contracts_are_kept():
     run = _lint_imports(ROOT)
     assert run.returncode == 0, run.stdout + run.stderr
-    assert "Contracts: 3 kept, 0 broken." in run.stdout
+    assert "Contracts: 6 kept, 0 broken." in run.stdout
 
 
 def _package_copy(tmp_path: Path) -> Path:
@@ -67,8 +69,32 @@ def test_lint_imports_fails_on_a_cycle_within_a_layer(tmp_path):
     _add_lazy_import(root / "handsim" / "datatypes" / "mesh.py", "handsim.datatypes.object_model")
     run = _lint_imports(root)
     assert run.returncode == 1
-    assert "Contracts: 2 kept, 1 broken." in run.stdout
+    assert "Contracts: 5 kept, 1 broken." in run.stdout
     assert (
         "No cycles are allowed in handsim.datatypes." in run.stdout
         and "- .object_model -> .mesh" in run.stdout
     )
+
+
+def test_lint_imports_fails_when_a_stability_test_imports_the_placement_search(tmp_path):
+    root = _package_copy(tmp_path)
+    _add_lazy_import(root / "handsim" / "sim" / "stability" / "gravity.py", "handsim.sim.placement.search")
+    run = _lint_imports(root)
+    assert run.returncode == 1
+    assert "handsim.sim.stability is not allowed to import handsim.sim.placement:" in run.stdout
+
+
+def test_lint_imports_fails_when_a_spec_imports_the_replay_core(tmp_path):
+    root = _package_copy(tmp_path)
+    _add_lazy_import(root / "handsim" / "sim" / "specs.py", "handsim.sim.metrics")
+    run = _lint_imports(root)
+    assert run.returncode == 1
+    assert "handsim.sim.specs is not allowed to import handsim.sim.metrics:" in run.stdout
+
+
+def test_lint_imports_fails_when_one_dataset_family_reads_another(tmp_path):
+    root = _package_copy(tmp_path)
+    _add_lazy_import(root / "handsim" / "io" / "tzionas" / "motion.py", "handsim.io.graspdb.rows")
+    run = _lint_imports(root)
+    assert run.returncode == 1
+    assert "handsim.io.tzionas is not allowed to import handsim.io.graspdb:" in run.stdout

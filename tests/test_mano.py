@@ -14,9 +14,9 @@ from scipy.spatial.transform import Rotation
 from handsim.builders.mano_hand import build_mano_hand, mano_hand_skeleton, mano_model_skeleton, mano_skeleton
 from handsim.datatypes.rotations import axis_angle_to_matrix, matrix_to_zyx, rotation_error, zyx_to_matrix
 from handsim.errors import FormatError, ModelError, SkeletonError, TrajectoryError
-from handsim.io.mano import FINGERS, MANO_JOINT_NAMES, mano_joints, mano_mean_joints, read_mano_model
-from handsim.io.mano_pickle import CscStub, CsrStub
-from handsim.io.mano_pose import MANOSequence, full_mano_pose, mano_pose_to_trajectory
+from handsim.io.arctic.mano import FINGERS, MANO_JOINT_NAMES, mano_joints, mano_mean_joints, read_mano_model
+from handsim.io.arctic.mano_pickle import CscStub, CsrStub
+from handsim.io.arctic.mano_pose import MANOSequence, full_mano_pose, mano_pose_to_trajectory
 from handsim.io.safe_pickle import load_restricted_pickle
 from handsim.sim import compile_spec, warning_counts
 from tests.mano_fixtures import (

@@ -9,8 +9,8 @@ import numpy as np
 import pytest
 
 from handsim.builders import graspdb_objects, mesh_cache
-from handsim.builders.hull_cache import CorruptEntryError, array_checksum
 from handsim.builders.mesh_cache import entry_path, generated_mesh, mesh_key, read_entry, write_entry
+from handsim.cache import CorruptEntryError, array_checksum
 
 
 def _generate_mug():

@@ -15,10 +15,10 @@ from handsim.builders.decomposition_types import DecompositionParams
 from handsim.builders.objects import build_object, object_bounds, prepare_object
 from handsim.datatypes.object_model import Hinge, ObjectModel, ObjectPart, Primitive, mesh_object
 from handsim.errors import FormatError, InputFileError, ModelError
-from handsim.io.arctic import read_arctic_template
-from handsim.io.tzionas_objects import read_tzionas_object
+from handsim.io.arctic.templates import read_arctic_template
+from handsim.io.tzionas.objects import read_tzionas_object
 from handsim.sim import compile_spec
-from handsim.sim.drop import drop_test
+from handsim.sim.stability.drop import drop_test
 
 FAST = DecompositionParams(resolution=500, preprocess_resolution=30, mcts_iterations=60, max_convex_hull=8)
 

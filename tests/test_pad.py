@@ -7,7 +7,7 @@ import pytest
 
 from handsim.builders import default_hand
 from handsim.errors import ModelError
-from handsim.sim.pad import pad_force_curve
+from handsim.sim.stability.pad import pad_force_curve
 
 
 @pytest.fixture(scope="module")

@@ -11,8 +11,7 @@ import shutil
 
 import pytest
 
-from handsim.sim.metrics import MetricSpec
-from handsim.sim.placement_types import PlacementSpec
+from handsim.sim.specs import MetricSpec, PlacementSpec
 from handsim.trials import load_trial
 
 TRIAL = "r_01_11_ex03-rad-004-grasp-su04.txt"
@@ -79,7 +78,7 @@ def test_the_search_on_threads_places_as_on_one_thread(
     candidates drawn ahead of them (``map_until``) are needed."""
     import pickle
 
-    import handsim.sim.placement as placement
+    import handsim.sim.placement.place as placement
 
     placed, drawn = _placements(monkeypatch), []
     original_until = placement.map_until
@@ -115,7 +114,7 @@ def test_grip_tests_that_cannot_match_an_earlier_grip_stop_and_leave_the_placeme
     with one thread each of those stops at its first failed direction, or skips ObMan's run)."""
     import pickle
 
-    from handsim.sim.grip import GripBench
+    from handsim.sim.placement.grip import GripBench
 
     placed, stopped = _placements(monkeypatch), []
     original_grip = GripBench.grip
@@ -149,7 +148,7 @@ def test_poses_the_probe_settles_as_too_deep_leave_the_placement_unchanged(grasp
     queries, bit for bit."""
     import pickle
 
-    import handsim.sim.collide as collide
+    import handsim.sim.placement.collide as collide
 
     placed, settled = _placements(monkeypatch), []
     original_init = collide.HandObjectCollider.__init__

@@ -2,7 +2,7 @@
 
 Bounds settle many poses without a collision query (:meth:`HandObjectCollider.screen`): they must never
 contradict MuJoCo's own detection, and the search with them must be the search without them. The cache
-(:mod:`handsim.sim.placement_cache`) must give back the computed placement bit for bit and never trust a
+(:mod:`handsim.sim.placement.cache`) must give back the computed placement bit for bit and never trust a
 corrupt entry.
 """
 
@@ -18,20 +18,20 @@ import numpy as np
 import pytest
 import trimesh
 
-import handsim.sim.collide as collide
-import handsim.sim.placement as placement_module
+import handsim.sim.placement.collide as collide
+import handsim.sim.placement.place as placement_module
 import handsim.sim.scenarios as scenarios
 from handsim.assets import ASSETS_DIR
 from handsim.builders import build_object, build_scene, default_hand
 from handsim.builders.arctic_objects import arctic_object
 from handsim.builders.catalog import get
-from handsim.sim.collide import HandObjectCollider
-from handsim.sim.compiled import SimScene, compile_scene
-from handsim.sim.hand_pose import targets_qpos
-from handsim.sim.placement import _searched, place_object
-from handsim.sim.placement_cache import entry_path, placement_key, read_entry
-from handsim.sim.placement_search import SCREEN_MARGIN
-from handsim.sim.placement_types import PlacementSpec
+from handsim.sim.placement.cache import entry_path, placement_key, read_entry
+from handsim.sim.placement.collide import HandObjectCollider
+from handsim.sim.placement.hand_pose import targets_qpos
+from handsim.sim.placement.place import _searched, place_object
+from handsim.sim.placement.search import SCREEN_MARGIN
+from handsim.sim.scene.compiled import SimScene, compile_scene
+from handsim.sim.specs import PlacementSpec
 from handsim.trials import load_trial
 
 TENNIS = ASSETS_DIR / "demo" / "tennis_ball.grasp.json"

@@ -9,7 +9,6 @@ import pytest
 
 from handsim.assets import TZIONAS_DIR
 from handsim.datatypes.trajectory import Trajectory
-from handsim.sim.metrics import MetricSpec
 from handsim.sim.plausibility import (
     check_control_rate,
     limit_violations,
@@ -17,6 +16,7 @@ from handsim.sim.plausibility import (
     track_jumps,
 )
 from handsim.sim.replay import replay
+from handsim.sim.specs import MetricSpec
 from handsim.trials import load_trial
 
 

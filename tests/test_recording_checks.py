@@ -18,8 +18,8 @@ from handsim.cli import main
 from handsim.errors import TrajectoryError
 from handsim.glove.checks import CHECK_FIELDS, check_recording
 from handsim.glove.phases import AnnotationMatch
-from handsim.io.graspdb import read_graspdb_glove
-from handsim.io.graspdb_annotations import match_annotation, read_phase_annotations
+from handsim.io.graspdb.annotations import match_annotation, read_phase_annotations
+from handsim.io.graspdb.glove import read_graspdb_glove
 from handsim.runner.trial_record import recording_checks, trajectory_quality
 from handsim.sim.replay import ReplayConfig, replay
 from handsim.trials import find_trial, load_trial
@@ -126,7 +126,7 @@ def test_check_recording_refuses_an_annotation_match_without_its_intervals(tmp_p
     annotation = _write_annotation(tmp_path, FRAMES)
     message = (
         f"phase annotation {annotation}: the match carries none of its intervals; match it with "
-        "handsim.io.graspdb_annotations.match_annotation or check_annotation, which read them"
+        "handsim.io.graspdb.annotations.match_annotation or check_annotation, which read them"
     )
     with pytest.raises(TrajectoryError, match=re.escape(message)):
         check_recording(read_graspdb_glove(recording), AnnotationMatch(annotation, "given by hand"))

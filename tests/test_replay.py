@@ -18,15 +18,15 @@ from handsim.builders.objects import build_object
 from handsim.datatypes.trajectory import Phase, Trajectory
 from handsim.errors import SimulationError, TrajectoryError
 from handsim.io import read_skeleton, read_trajectory
-from handsim.io.graspdb_annotations import attach_phases, find_annotation_file
-from handsim.io.tzionas_objects import read_tzionas_object
-from handsim.io.tzionas_sequence import read_tzionas_sequence
-from handsim.sim.compiled import compile_scene
+from handsim.io.graspdb.annotations import attach_phases, find_annotation_file
+from handsim.io.tzionas.objects import read_tzionas_object
+from handsim.io.tzionas.sequence import read_tzionas_sequence
 from handsim.sim.control import control_schedule
 from handsim.sim.drive import ScenarioSwitches, ScheduleDriver
+from handsim.sim.placement.robustness import ensemble_scenes
 from handsim.sim.replay import ReplayConfig, member_verdict, replay
-from handsim.sim.robustness import ensemble_scenes
 from handsim.sim.scenarios import glove_scene, recorded_scene
+from handsim.sim.scene.compiled import compile_scene
 from handsim.sim.stepper import Stepper
 from handsim.sim.warnings import WARNING_NAMES
 from handsim.trials import load_trial
@@ -443,7 +443,7 @@ def test_a_replay_without_a_hold_does_not_ask_for_threads(monkeypatch):
 
 
 def test_the_model_hash_is_the_compiled_models_same_spec_same_hash_any_change_another():
-    from handsim.sim.compiled import model_digest
+    from handsim.sim.scene.compiled import model_digest
 
     spec = build_scene(default_hand(), build_object(get("tennis_ball")))
     first, again = compile_scene(spec), compile_scene(spec)

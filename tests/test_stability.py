@@ -18,14 +18,10 @@ from handsim.builders.hand import build_hand
 from handsim.builders.objects import build_object
 from handsim.builders.scene import build_scene
 from handsim.errors import SimulationError
-from handsim.io.parametric_skeleton import DEFAULT_BREADTH_RATIO, DEFAULT_HAND_LENGTH_M, default_skeleton
-from handsim.sim.compiled import SimScene, compile_scene
-from handsim.sim.stability import (
-    DIRECTIONS,
-    STABILITY_SPEC_VERSION,
-    StabilitySpec,
-    stability_test,
-)
+from handsim.io.graspdb.default_skeleton import DEFAULT_BREADTH_RATIO, DEFAULT_HAND_LENGTH_M, default_skeleton
+from handsim.sim.scene.compiled import SimScene, compile_scene
+from handsim.sim.specs import STABILITY_SPEC_VERSION, StabilitySpec
+from handsim.sim.stability.gravity import DIRECTIONS, stability_test
 
 BALL_CENTRE = (0.0, -0.075, 0.0739)
 """Under the palm of the default hand at the scene's default hand position (wrist at z = 0.12 m, palm

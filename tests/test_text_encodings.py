@@ -13,9 +13,9 @@ import pytest
 from handsim.assets import TZIONAS_DIR
 from handsim.errors import FormatError
 from handsim.io import read_skeleton, read_trajectory
-from handsim.io.glove_calibration import load_calibration
+from handsim.io.graspdb.calibration import load_calibration
 from handsim.io.text_files import decode_text, decode_utf8
-from handsim.io.tzionas_objects import read_tzionas_object
+from handsim.io.tzionas.objects import read_tzionas_object
 from tests.text_samples import FORMATS, TextFormat, as_windows_file
 
 

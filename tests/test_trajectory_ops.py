@@ -22,7 +22,7 @@ from handsim.datatypes.trajectory_ops import (
 )
 from handsim.errors import TrajectoryError
 from handsim.io import read_skeleton, read_trajectory
-from handsim.io.graspdb_annotations import attach_phases
+from handsim.io.graspdb.annotations import attach_phases
 
 _X = np.array([1.0, 0.0, 0.0])
 

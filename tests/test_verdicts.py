@@ -13,8 +13,8 @@ import json
 import pytest
 
 from handsim.assets import ASSETS_DIR
-from handsim.sim.metrics import MetricSpec
 from handsim.sim.replay import replay
+from handsim.sim.specs import MetricSpec
 from handsim.trials import load_trial
 
 DEMO_DIR = ASSETS_DIR / "demo"

@@ -17,17 +17,17 @@ import trimesh
 
 from handsim.assets import TZIONAS_DIR
 from handsim.glove import GloveCalibration
-from handsim.io.glove_calibration import load_calibration
-from handsim.io.graspdb import read_graspdb_glove, read_graspdb_raw
-from handsim.io.graspdb_annotations import read_phase_annotations
+from handsim.io.graspdb.annotations import read_phase_annotations
+from handsim.io.graspdb.calibration import load_calibration
+from handsim.io.graspdb.glove import read_graspdb_glove, read_graspdb_raw
+from handsim.io.graspdb.xmlskel import read_xmlskel
 from handsim.io.mesh import read_mesh_arrays
 from handsim.io.off import read_off
 from handsim.io.scripted import read_scripted_grasp
-from handsim.io.tzionas_configs import read_index_bounds, read_models_info
-from handsim.io.tzionas_motion_file import read_motion
-from handsim.io.tzionas_skel import read_limits, read_skel
-from handsim.io.tzionas_surface import read_skin, read_voi
-from handsim.io.xmlskel import read_xmlskel
+from handsim.io.tzionas.configs import read_index_bounds, read_models_info
+from handsim.io.tzionas.motion_file import read_motion
+from handsim.io.tzionas.skel import read_limits, read_skel
+from handsim.io.tzionas.surface import read_skin, read_voi
 from tests.test_io_tzionas import LIMITS, MOTION, OFF, SKEL, SKIN
 
 BONES = ["Lower Arm", "Fing.0", "Fing.1"]

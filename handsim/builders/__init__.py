@@ -14,7 +14,8 @@ catalogue for ``handsim catalog``, the object builder for ``handsim build object
 others (the hand builder needs SciPy's optimiser; the catalogue needs neither MuJoCo nor trimesh).
 :func:`default_hand` and :func:`default_skeleton` are bound at once (cheap): ``default_hand`` is also the
 name of its module, which the import system would otherwise bind here when it is first imported;
-``default_skeleton`` is plain data from :mod:`handsim.io.parametric_skeleton`, exported here beside the hand.
+``default_skeleton`` is plain data from :mod:`handsim.io.graspdb.default_skeleton`, exported here beside the
+hand.
 """
 
 from __future__ import annotations
@@ -23,7 +24,7 @@ import importlib
 from typing import TYPE_CHECKING, Any
 
 from handsim.builders.default_hand import default_hand
-from handsim.io.parametric_skeleton import default_skeleton
+from handsim.io.graspdb.default_skeleton import default_skeleton
 
 if TYPE_CHECKING:
     from handsim.builders.hand import build_hand

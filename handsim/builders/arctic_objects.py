@@ -1,6 +1,7 @@
 """ARCTIC objects as built: a template folder → two parts, a hinge range, colliding parts, a mass.
 
-:func:`arctic_object` reads the template (:func:`handsim.io.arctic.read_arctic_template`) and applies:
+:func:`arctic_object` reads the template (:func:`handsim.io.arctic.templates.read_arctic_template`) and
+applies:
 
 * **Hinge range** (:func:`arctic_hinge_range`): articulation 0 is the template's closed pose (ARCTIC's
   templates are closed at θ = 0 and open towards positive θ). With a recording, the range is the recorded
@@ -23,7 +24,7 @@ import numpy.typing as npt
 
 from handsim.datatypes.object_model import ObjectModel
 from handsim.errors import ModelError
-from handsim.io.arctic import read_arctic_template
+from handsim.io.arctic.templates import read_arctic_template
 
 HINGE_MARGIN = math.radians(10.0)
 """Added to each side of a recorded articulation range, radians: room for the hand to push a lid a little
@@ -181,7 +182,7 @@ def arctic_object(
 
     Raises:
         InputFileError: The folder is missing or is not a template.
-        FormatError, MeshError: See :func:`handsim.io.arctic.read_arctic_template`.
+        FormatError, MeshError: See :func:`handsim.io.arctic.templates.read_arctic_template`.
         ModelError: Both ``mass`` and ``density``, or a bad recording.
     """
     if mass is not None and density is not None:

@@ -27,10 +27,10 @@ from handsim.builders.graspdb_objects import (
 from handsim.datatypes.object_model import ObjectModel, mesh_object
 from handsim.datatypes.physical_ranges import DENSITY, OBJECT_MASS
 from handsim.errors import InputFileError
-from handsim.io.arctic_motion import ARCTIC_OBJECTS as ARCTIC_NAMES
+from handsim.io.arctic.sequence import ARCTIC_OBJECTS as ARCTIC_NAMES
 from handsim.io.mesh import MESH_SUFFIXES, read_mesh
 from handsim.io.text_files import require_file
-from handsim.io.tzionas_objects import read_tzionas_object
+from handsim.io.tzionas.objects import read_tzionas_object
 
 DEFAULT_DENSITY = 1000.0
 """kg/m³ for a mesh file given neither density nor mass (water; plastics are 900–1400)."""

@@ -43,14 +43,8 @@ from handsim.builders.decomposition_types import (
     DecompositionError,
     DecompositionParams,
 )
-from handsim.builders.hull_cache import (
-    CorruptEntryError,
-    bundled_entry,
-    cache_key,
-    default_cache_dir,
-    read_entry,
-    write_entry,
-)
+from handsim.builders.hull_cache import bundled_entry, cache_key, read_entry, write_entry
+from handsim.cache import CorruptEntryError, default_cache_dir
 from handsim.datatypes.mesh import FLATNESS_TOL, Mesh
 
 CONVEX_RTOL = 1e-3  # within 0.1 % of its hull's volume a mesh counts as convex (tessellation dents)

@@ -1,6 +1,6 @@
 """handsim's parametric default hand as a MuJoCo spec.
 
-The skeleton (:mod:`handsim.io.parametric_skeleton`, plain data) built by
+The skeleton (:mod:`handsim.io.graspdb.default_skeleton`, plain data) built by
 :func:`~handsim.builders.hand.build_hand` with the hand's breadth.
 """
 
@@ -8,7 +8,7 @@ from __future__ import annotations
 
 from typing import TYPE_CHECKING
 
-from handsim.io.parametric_skeleton import DEFAULT_BREADTH_RATIO, DEFAULT_HAND_LENGTH_M, default_skeleton
+from handsim.io.graspdb.default_skeleton import DEFAULT_BREADTH_RATIO, DEFAULT_HAND_LENGTH_M, default_skeleton
 
 if TYPE_CHECKING:
     import mujoco

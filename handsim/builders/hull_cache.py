@@ -1,20 +1,18 @@
 """The on-disk cache of convex decompositions, keyed by the content hash of the mesh and CoACD's settings.
 
-Entries live in ``cache_dir/coacd/<key[:2]>/<key>.npz`` (``cache_dir``: :func:`default_cache_dir`), keyed
-by :func:`cache_key`, with the catalogue's objects pre-decomposed in a read-only bundled cache
-(:func:`bundled_entry`). Entries are written atomically and carry a checksum; :func:`read_entry` raises
-:class:`CorruptEntryError` for any entry that cannot be trusted (:func:`handsim.builders.decompose.decompose`
-deletes, rebuilds and reports it). Only successes are cached.
+Entries live in ``cache_dir/coacd/<key[:2]>/<key>.npz`` (``cache_dir``:
+:func:`handsim.cache.default_cache_dir`), keyed by :func:`cache_key`, with the catalogue's objects
+pre-decomposed in a read-only bundled cache (:func:`bundled_entry`). Entries are written atomically and
+carry a checksum (:func:`handsim.cache.write_checked`); :func:`read_entry` raises
+:class:`~handsim.cache.CorruptEntryError` for any entry that cannot be trusted
+(:func:`handsim.builders.decompose.decompose` deletes, rebuilds and reports it). Only successes are cached.
 """
 
 from __future__ import annotations
 
 import hashlib
 import importlib.metadata
-import io
 import json
-import os
-import sys
 from functools import lru_cache
 from pathlib import Path
 
@@ -29,8 +27,8 @@ from handsim.builders.decomposition_types import (
     pack_hulls,
     unpack_hulls,
 )
+from handsim.cache import CorruptEntryError, read_checked, write_checked
 from handsim.datatypes.mesh import Mesh
-from handsim.files import write_atomic
 
 CACHE_FORMAT_VERSION = 1  # bump when the entry layout or the hull post-processing changes
 
@@ -45,28 +43,6 @@ def bundled_entry(key: str) -> Path:
     CoACD version, so another version decomposes anew.
     """
     return BUNDLED_CACHE_DIR / "coacd" / key[:2] / f"{key}.npz"
-
-
-def default_cache_dir() -> Path:
-    """The folder of handsim's on-disk caches.
-
-    Returns:
-        ``$HANDSIM_CACHE_DIR`` if set, else the platform's user cache folder: ``$XDG_CACHE_HOME/handsim``
-        or ``~/.cache/handsim`` on Linux, ``~/Library/Caches/handsim`` on macOS,
-        ``%LOCALAPPDATA%/handsim/Cache`` on Windows.
-    """
-    explicit = os.environ.get("HANDSIM_CACHE_DIR")
-    if explicit:
-        return Path(explicit).expanduser()
-    if sys.platform == "win32":
-        local = os.environ.get("LOCALAPPDATA")
-        base = Path(local) if local else Path.home() / "AppData" / "Local"
-        return base / "handsim" / "Cache"
-    if sys.platform == "darwin":
-        return Path.home() / "Library" / "Caches" / "handsim"
-    xdg = os.environ.get("XDG_CACHE_HOME")
-    base = Path(xdg) if xdg and os.path.isabs(xdg) else Path.home() / ".cache"
-    return base / "handsim"
 
 
 @lru_cache(maxsize=1)
@@ -96,62 +72,6 @@ def cache_key(mesh: Mesh, params: DecompositionParams) -> str:
         h.update(f"{name} {a.shape}\n".encode())
         h.update(a.tobytes())
     return h.hexdigest()
-
-
-class CorruptEntryError(Exception):
-    """A cache entry that cannot be trusted; the message says why."""
-
-
-def array_checksum(arrays: dict[str, np.ndarray]) -> str:
-    """SHA-256 of named arrays (names, dtypes, shapes and bytes, in name order): an entry's checksum."""
-    h = hashlib.sha256()
-    for k in sorted(arrays):
-        a = np.ascontiguousarray(arrays[k])
-        h.update(f"{k} {a.dtype.str} {a.shape}\n".encode())
-        h.update(a.tobytes())
-    return h.hexdigest()
-
-
-def write_checked(path: Path, arrays: dict[str, np.ndarray], format_version: int) -> None:
-    """Write named arrays as an ``.npz`` entry with its format and checksum, atomically.
-
-    The layout :func:`read_checked` verifies, shared by the on-disk caches (hulls, generated meshes).
-
-    Raises:
-        OSError: It cannot be written (:func:`handsim.files.write_atomic`).
-    """
-    arrays = {**arrays, "format": np.array(format_version, dtype=np.int64)}
-    arrays["checksum"] = np.array(array_checksum(arrays))
-    buffer = io.BytesIO()
-    np.savez(buffer, **arrays)
-    write_atomic(path, buffer.getvalue())
-
-
-def read_checked(path: Path, required: tuple[str, ...], format_version: int) -> dict[str, np.ndarray]:
-    """The arrays of an entry :func:`write_checked` wrote, verified (without ``format`` and ``checksum``).
-
-    Raises:
-        CorruptEntryError: Unreadable, an array of ``required`` missing, another format, or a checksum
-            mismatch.
-    """
-    try:
-        with np.load(path, allow_pickle=False) as data:
-            arrays = {k: np.asarray(data[k]) for k in data.files}
-    except Exception as e:  # any failure to parse means the entry cannot be used
-        raise CorruptEntryError(f"unreadable: {type(e).__name__}: {e}") from e
-    missing = [k for k in (*required, "format", "checksum") if k not in arrays]
-    if missing:
-        raise CorruptEntryError(f"missing arrays {', '.join(missing)}")
-    try:
-        if arrays["format"].shape != () or int(arrays["format"]) != format_version:
-            raise ValueError(f"format {arrays['format']!r}, expected {format_version}")
-    except (ValueError, TypeError) as e:
-        raise CorruptEntryError(str(e)) from e
-    stored = str(arrays.pop("checksum"))
-    if array_checksum(arrays) != stored:
-        raise CorruptEntryError("checksum mismatch")
-    del arrays["format"]
-    return arrays
 
 
 def write_entry(path: Path, hulls: tuple[ConvexHull, ...], seconds: float, notes: tuple[str, ...]) -> None:

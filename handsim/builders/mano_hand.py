@@ -5,7 +5,8 @@ The skeleton (:func:`mano_skeleton`):
 * the 16 MANO joints with identity frames (MANO's joint frames are aligned with the model frame at rest);
   each finger joint is three hinges about the model axes z, y, x, outermost first
   (``<joint>_z``, ``<joint>_y``, ``<joint>_x``), so ``Rz · Ry · Rx = exp(ω)`` of MANO's axis-angle ω
-  (:func:`handsim.io.mano_pose.mano_pose_to_trajectory` does the exact conversion); limits are the full Euler
+  (:func:`handsim.io.arctic.mano_pose.mano_pose_to_trajectory` does the exact conversion); limits are the
+  full Euler
   ranges (:data:`HINGE_LIMITS`), not anatomy; the wrist has no DoF (its pose is the root pose);
 * palm anchors ``index0``, ``middle0``, ``ring0``, ``pinky0`` (no DoF) that only shape the palm, so that
   :func:`build_hand`'s rule "a finger chain starts with a metacarpal inside the palm" gives every MANO
@@ -38,7 +39,7 @@ import numpy.typing as npt
 from handsim.builders.hand import build_hand
 from handsim.datatypes.skeleton import Dof, Joint, Skeleton, SkinnedMesh
 from handsim.errors import ModelError, SkeletonError
-from handsim.io.mano import (
+from handsim.io.arctic.mano import (
     FINGERS,
     HINGE_AXES,
     MANO_FILES,
@@ -263,7 +264,7 @@ def mano_hand_skeleton(
     Raises:
         ModelError: Non-zero betas without a model file.
         SkeletonError: ``side`` does not match the model file's hand.
-        FormatError: The model file is malformed (see :func:`handsim.io.mano.read_mano_model`).
+        FormatError: The model file is malformed (see :func:`handsim.io.arctic.mano.read_mano_model`).
     """
     if pkl_path is None:
         if betas is not None and np.any(np.asarray(betas, dtype=float) != 0.0):
@@ -374,7 +375,7 @@ def build_mano_hands(
 
     Args:
         mano_dir: The folder with the model files; None: ``$HANDSIM_MANO_DIR``
-            (:func:`handsim.io.mano.find_mano_files`).
+            (:func:`handsim.io.arctic.mano.find_mano_files`).
         betas: Side → shape coefficients (e.g. an ARCTIC subject's ``shape`` per hand); the sides given are
             the hands built.
         collision: ``"capsules"`` or ``"mesh"`` (see :func:`build_mano_hand`).

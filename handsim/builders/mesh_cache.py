@@ -4,7 +4,7 @@ GraspDB14's objects are generated with trimesh (:mod:`handsim.builders.graspdb_m
 (:func:`handsim.datatypes.mesh.validate_mesh`, trimesh again): importing trimesh and SciPy is 0.7 s, most of
 ``handsim build object mug`` once its hulls are cached. :func:`generated_mesh` stores each validated mesh
 in ``cache_dir/meshes/<key[:2]>/<key>.npz`` (``cache_dir``:
-:func:`~handsim.builders.hull_cache.default_cache_dir`) and reads it back on later calls.
+:func:`~handsim.cache.default_cache_dir`) and reads it back on later calls.
 
 The key (:func:`mesh_key`) is the SHA-256 of the object's name, :data:`MESH_CACHE_FORMAT`, handsim's source
 fingerprint (:func:`handsim.version.source_fingerprint`: any edit of handsim gives new keys), the NumPy,
@@ -27,7 +27,7 @@ from pathlib import Path
 
 import numpy as np
 
-from handsim.builders.hull_cache import CorruptEntryError, default_cache_dir, read_checked, write_checked
+from handsim.cache import CorruptEntryError, default_cache_dir, read_checked, write_checked
 from handsim.datatypes.mesh import Mesh
 from handsim.version import source_fingerprint
 
@@ -67,7 +67,7 @@ def entry_path(cache_dir: str | Path, key: str) -> Path:
 
 
 def write_entry(path: Path, mesh: Mesh) -> None:
-    """Write a mesh entry atomically (:func:`~handsim.builders.hull_cache.write_checked`).
+    """Write a mesh entry atomically (:func:`~handsim.cache.write_checked`).
 
     Raises:
         OSError: It cannot be written.
@@ -118,7 +118,7 @@ def generated_mesh(name: str, generate: Callable[[], Mesh], cache_dir: str | Pat
     Args:
         name: The catalogue name (the key; ``generate`` must depend on nothing else but handsim's code).
         generate: Makes the validated mesh.
-        cache_dir: Root of the cache; :func:`~handsim.builders.hull_cache.default_cache_dir` when None.
+        cache_dir: Root of the cache; :func:`~handsim.cache.default_cache_dir` when None.
 
     Returns:
         The mesh, bitwise the one ``generate`` gives.

@@ -8,7 +8,8 @@ are equal. handsim gives skin and the environment (table, floor) priority 1 and 
 * an object–table contact uses the table's friction;
 * an object–object contact (two parts of an articulated object, or two objects) uses the objects' own.
 
-Every value and its source is in ``docs/physics.md``; :func:`handsim.sim.pad.pad_force_curve` measures the
+Every value and its source is in ``docs/physics.md``; :func:`handsim.sim.stability.pad.pad_force_curve`
+measures the
 pad's force–penetration relation the way the literature measures a fingertip's: pressed on a rigid surface.
 """
 

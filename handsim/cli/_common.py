@@ -178,8 +178,8 @@ def control_rate(text: str) -> float:
     See :func:`handsim.sim.plausibility.min_control_rate` (20 Hz).
     """
     # lazy: the simulation stack (MuJoCo) is slow to import, and --help must not wait for it
-    from handsim.sim.metrics import MetricSpec
     from handsim.sim.plausibility import check_control_rate
+    from handsim.sim.specs import MetricSpec
 
     try:
         value = float(text)

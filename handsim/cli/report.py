@@ -156,7 +156,7 @@ def _report(args: argparse.Namespace) -> int:
 
     if args.mano_dir is not None:
         # lazy: the MANO reader, only with --mano-dir
-        from handsim.io.mano import find_mano_files
+        from handsim.io.arctic.mano import find_mano_files
 
         find_mano_files(args.mano_dir)  # before any work: says which files are needed and where to put them
     config = ReplayConfig(control_rate=args.rate, stability_at=None if args.stability == "none" else "grasp")

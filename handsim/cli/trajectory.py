@@ -17,8 +17,8 @@ def load_trajectory(path: str, skeleton_path: str | None, calibration_path: str 
     # lazy: the readers and glove checks, only for this command
     from handsim.glove.checks import check_recording
     from handsim.io import read_skeleton, read_trajectory
-    from handsim.io.glove_calibration import load_calibration
-    from handsim.io.graspdb_annotations import match_annotation
+    from handsim.io.graspdb.annotations import match_annotation
+    from handsim.io.graspdb.calibration import load_calibration
     from handsim.io.text_files import require_file
 
     require_file(path)  # before its skeleton: a folder named x.MOTION is not "x.SKEL: file not found"
@@ -35,7 +35,7 @@ def load_trajectory(path: str, skeleton_path: str | None, calibration_path: str 
 
 def _inspect_arctic(args: argparse.Namespace) -> int:
     # lazy: the ARCTIC and MANO readers, only for ARCTIC sequences
-    from handsim.io.arctic_motion import read_arctic_sequence
+    from handsim.io.arctic.sequence import read_arctic_sequence
     from handsim.viz.trajectory_report import describe_arctic
 
     given = [flag for flag, value in (("--skeleton", args.skeleton), ("--calibration", args.calibration),
@@ -75,8 +75,8 @@ def _inspect(args: argparse.Namespace) -> int:
 def _calibrate(args: argparse.Namespace) -> int:
     # lazy: the glove calibration and the raw-count reader, only for this command
     from handsim.glove import estimate_calibration
-    from handsim.io.glove_calibration import save_calibration
-    from handsim.io.graspdb import read_graspdb_raw
+    from handsim.io.graspdb.calibration import save_calibration
+    from handsim.io.graspdb.glove import read_graspdb_raw
 
     recording = read_graspdb_raw(args.recording)
     calibration = estimate_calibration(

@@ -4,7 +4,8 @@ Three naming schemes are known:
 
 * the GraspDB14 skeleton and the parametric default hand: prefixes ``th_``, ``if_``, ``mf_``, ``rf_``,
   ``lf_`` (thumb, index, middle, ring, little);
-* MANO (:data:`handsim.io.mano.FINGERS`): ``thumb1`` … ``pinky3`` (the palm anchors ``index0`` … are palm);
+* MANO (:data:`handsim.io.arctic.mano.FINGERS`): ``thumb1`` … ``pinky3`` (the palm anchors ``index0`` … are
+  palm);
 * the Tzionas/Ballan right hand: ``RFing_<i>_<j>`` and metacarpal ``RFing_<i>_Hand`` (MuJoCo names: the
   ``.SKEL``'s ``.`` becomes ``_``). The index ``i`` is fixed by the sample's skeleton geometry
   (:data:`TZIONAS_FINGERS`, pinned in ``tests/test_runner.py``): finger 4 is the thumb (two phalanges, its

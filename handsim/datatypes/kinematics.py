@@ -4,7 +4,7 @@ The one job here is :func:`fit_dof_angles`: the angles of a joint's degrees of f
 axes, outermost first, as :meth:`~handsim.datatypes.skeleton.Skeleton.forward_kinematics` composes them)
 that reproduce a recorded rotation, with the residual angle where the chain cannot reproduce it exactly
 (fewer than three axes). It serves every reader that turns recorded bone rotations into hinge angles
-(:mod:`handsim.io.tzionas_motion`); rotations of a fixed axis order with a closed form, such as MANO's
+(:mod:`handsim.io.tzionas.motion`); rotations of a fixed axis order with a closed form, such as MANO's
 Z·Y·X, use :func:`handsim.datatypes.rotations.matrix_to_zyx` instead.
 
 Quaternions are ``(w, x, y, z)`` and every rotation operation comes from :mod:`handsim.datatypes.rotations`.

@@ -252,11 +252,6 @@ class Skeleton:
         return float(np.linalg.norm(self.rest_positions[index] - self.rest_positions[parent]))
 
     @cached_property
-    def bone_lengths(self) -> np.ndarray:
-        """Length of every joint's incoming bone, metres, shape (njoints,); 0 for the root."""
-        return np.array([self.bone_length(i) for i in range(self.njoints)])
-
-    @cached_property
     def limits(self) -> np.ndarray:
         """DoF limits in radians, shape (ndof, 2)."""
         return np.array([[d.lower, d.upper] for d in self.dofs], dtype=float).reshape(-1, 2)
@@ -315,7 +310,3 @@ class Skeleton:
     def zero_pose(self) -> np.ndarray:
         """All-zero DoF angles (the rest pose), shape (ndof,)."""
         return np.zeros(self.ndof)
-
-    def clip_to_limits(self, q: npt.ArrayLike) -> np.ndarray:
-        """Return ``q`` clipped to the DoF limits (shape (ndof,) or (T, ndof))."""
-        return np.clip(np.asarray(q, dtype=float), self.limits[:, 0], self.limits[:, 1])

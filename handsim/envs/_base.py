@@ -15,7 +15,7 @@ import numpy as np
 import numpy.typing as npt
 
 from handsim.envs._render import OffscreenRenderer
-from handsim.sim.compiled import SimScene
+from handsim.sim.scene.compiled import SimScene
 from handsim.sim.stepper import Stepper
 
 RENDER_MODES = ("rgb_array",)

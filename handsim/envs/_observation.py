@@ -10,8 +10,8 @@ from collections.abc import Sequence
 
 import numpy as np
 
-from handsim.sim.compiled import SimScene
-from handsim.sim.layout import _SLOT, CONTACT_SLOTS
+from handsim.sim.scene.compiled import SimScene
+from handsim.sim.scene.layout import _SLOT, CONTACT_SLOTS
 
 POSE_LABELS = ("x", "y", "z", "qw", "qx", "qy", "qz")
 VELOCITY_LABELS = ("vx", "vy", "vz", "wx", "wy", "wz")
@@ -90,10 +90,10 @@ def add_state(obs: ObservationLayout, scene: SimScene) -> tuple[slice, np.ndarra
 class ContactSummary:
     """Per hand link, the total normal force on every object part; the deepest hand–object penetration.
 
-    Read from the metric sensors (:func:`handsim.sim.layout.instrument`) that MuJoCo fills inside
+    Read from the metric sensors (:func:`handsim.sim.scene.layout.instrument`) that MuJoCo fills inside
     ``mj_step``: one gather and one small matrix product per step. As in
     :func:`handsim.sim.metrics.frame_metrics`, a link × part pair contributes its first
-    :data:`~handsim.sim.layout.CONTACT_SLOTS` contacts (MuJoCo zero-fills unused slots).
+    :data:`~handsim.sim.scene.layout.CONTACT_SLOTS` contacts (MuJoCo zero-fills unused slots).
     """
 
     def __init__(self, scene: SimScene) -> None:

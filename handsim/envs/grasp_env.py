@@ -1,7 +1,7 @@
 """``handsim/Grasp-v0``: a hand above a catalogue object on the table; lift the object and hold it.
 
 The hand is handsim's parametric default hand without its wrist DoFs, palm down
-(:func:`handsim.sim.hand_pose.hand_frame`: fingers along +x), its root welded to a mocap target
+(:func:`handsim.sim.placement.hand_pose.hand_frame`: fingers along +x), its root welded to a mocap target
 (``hand_root="weld"``): the weld replaces the arm, so the hand can carry the object up while contacts
 still push back. The object rests on the table with its centre under a point
 :data:`GRASP_AHEAD` ahead of the palm's centre, the palm ``hand_clearance`` above its top.
@@ -36,10 +36,10 @@ from handsim.builders.scene import resting_position
 from handsim.envs._base import DEFAULT_CAMERA, DEFAULT_SIZE, HandEnv
 from handsim.envs._checks import nonnegative, positive
 from handsim.envs._observation import ContactSummary, ObservationLayout, add_state
-from handsim.io.parametric_skeleton import DEFAULT_BREADTH_RATIO, DEFAULT_HAND_LENGTH_M, default_skeleton
-from handsim.sim.compiled import SceneSetup, SimScene, compile_scene
+from handsim.io.graspdb.default_skeleton import DEFAULT_BREADTH_RATIO, DEFAULT_HAND_LENGTH_M, default_skeleton
 from handsim.sim.control import DEFAULT_CONTROL_RATE, substeps_for
-from handsim.sim.hand_pose import hand_frame
+from handsim.sim.placement.hand_pose import hand_frame
+from handsim.sim.scene.compiled import SceneSetup, SimScene, compile_scene
 
 ROOT_CONTROLS = ("velocity", "scripted")
 ZERO_ACTIONS = ("open", "mid")
@@ -338,7 +338,6 @@ class GraspEnv(HandEnv):
         self.object_name = object_name
         layout = self._scene.layout
         nu = len(layout.dof_names)
-        self._nu = nu
         self._steps = max(1, round(positive("duration", duration) / self.dt))
         self._lift_height = positive("lift_height", lift_height)
         self._hold_steps = max(1, math.ceil(nonnegative("hold_time", hold_time) / self.dt - 1e-9))

@@ -23,7 +23,7 @@ from typing import Any
 from handsim.assets import TZIONAS_DIR
 from handsim.datatypes.trajectory import Trajectory
 from handsim.errors import HandsimError
-from handsim.sim.compiled import SimScene
+from handsim.sim.scene.compiled import SimScene
 from handsim.trials import find_trial, load_trial
 
 DEFAULT_SEQUENCE = ("Models", "20")

@@ -29,9 +29,9 @@ from handsim.envs._checks import nonnegative, positive
 from handsim.envs.recordings import RecordingError, recordings_from_keywords
 from handsim.envs.replay_reward import DRIFT, STEP_NUMBERS, RewardWeights
 from handsim.envs.replay_task import ReplayTask
-from handsim.sim.compiled import SimScene
 from handsim.sim.control import DEFAULT_CONTROL_RATE, ControlSchedule, control_schedule
-from handsim.sim.metrics import MetricSpec
+from handsim.sim.scene.compiled import SimScene
+from handsim.sim.specs import MetricSpec
 
 
 def _layout_mismatch(recordings: Sequence, names: tuple[str, ...], other: tuple[str, ...]) -> str:
@@ -115,7 +115,7 @@ class ReplayEnv(HandEnv):
         max_object_drift: Terminate when a recorded object is farther than this from its recording, m;
             None never terminates for it (settable later: :meth:`set_max_object_drift`).
         release_delay: Scenes with supports (glove scenario): they are switched off this long after the
-            scene's ``release_time``, s (:attr:`handsim.sim.metrics.MetricSpec.release_delay`).
+            scene's ``release_time``, s (:attr:`handsim.sim.specs.MetricSpec.release_delay`).
         random_start: Reset to a frame drawn from the environment's seeded ``np_random``.
         reference_window: How many future frames of references the observation holds (≥ 1).
         reset_noise_scale: Half-width of the uniform noise on each hand joint at reset, rad.

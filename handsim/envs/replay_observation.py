@@ -15,9 +15,9 @@ import numpy as np
 
 from handsim.datatypes.rotations import quat_error_rotvec
 from handsim.envs._observation import POSE_LABELS, ContactSummary, ObservationLayout, add_state
-from handsim.sim.compiled import SimScene
 from handsim.sim.control import ControlSchedule
 from handsim.sim.drive import ScheduleDriver
+from handsim.sim.scene.compiled import SimScene
 
 HELD_LINKS = 2
 """Hand links touching an object that make it ``held`` (a grasp needs two opposing contacts)."""

@@ -23,8 +23,8 @@ from handsim.errors import HandsimError
 from handsim.export.errors import ExportError, RecordMismatchError
 from handsim.runner.portable import record_trial
 from handsim.runner.trial_record import sha256_file
-from handsim.sim.metrics import MetricSpec
 from handsim.sim.replay import ReplayConfig, replay
+from handsim.sim.specs import MetricSpec
 from handsim.trials import load_trial
 
 ENV_ID = "handsim/Replay-v0"

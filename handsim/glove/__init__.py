@@ -11,7 +11,7 @@ Sensor layout (:mod:`handsim.glove.sensors`):
 Calibration, raw counts → radians (:mod:`handsim.glove.calibration`):
 
 * :class:`GloveCalibration`, :func:`apply_calibration`; its JSON files are written and read by
-  :mod:`handsim.io.glove_calibration` (``save_calibration``, ``load_calibration``).
+  :mod:`handsim.io.graspdb.calibration` (``save_calibration``, ``load_calibration``).
 * :func:`estimate_calibration` — from a recorded calibration sequence (:data:`CALIBRATION_PROTOCOL`,
   :mod:`handsim.glove.calibration_estimation`).
 
@@ -27,7 +27,7 @@ no sensor drives (:data:`THUMB_REST_DOFS`) at a constant posture.
 Phases (:mod:`handsim.glove.phases`, on plain data): :func:`split_by_switch`, :func:`switch_segments`,
 :class:`PhaseAnnotation` and :class:`AnnotationMatch`, :func:`with_phases`, :func:`cut`. The GraspDB14
 phase annotation files are read, found beside a recording and matched to its frames by
-:mod:`handsim.io.graspdb_annotations` (``read_phase_annotations``, ``find_annotation_file``,
+:mod:`handsim.io.graspdb.annotations` (``read_phase_annotations``, ``find_annotation_file``,
 ``match_annotation``, ``attach_phases``).
 
 Spikes (:mod:`handsim.glove.spikes`): :func:`find_spikes`, :func:`remove_spikes` (single-sample jumps beyond

@@ -17,7 +17,8 @@ files instead spreads them over per-finger abductions (see ``docs/cyberglove.md`
 not reproduce.
 
 A calibration is a :class:`GloveCalibration`; :meth:`GloveCalibration.to_dict` gives its JSON object
-(schema :data:`VERSION`, in ``docs/cyberglove.md``), saved and loaded by :mod:`handsim.io.glove_calibration`.
+(schema :data:`VERSION`, in ``docs/cyberglove.md``), saved and loaded by
+:mod:`handsim.io.graspdb.calibration`.
 One is estimated from a recorded calibration sequence by :mod:`handsim.glove.calibration_estimation`.
 """
 
@@ -196,7 +197,7 @@ class GloveCalibration:
     def to_dict(self) -> dict[str, Any]:
         """The calibration as the JSON object of schema :data:`VERSION`.
 
-        Written and read as a file by :mod:`handsim.io.glove_calibration`.
+        Written and read as a file by :mod:`handsim.io.graspdb.calibration`.
         """
         sensors = []
         for i, name in enumerate(SENSOR_NAMES):

@@ -113,7 +113,8 @@ def estimate_calibration(
     kept in :attr:`GloveCalibration.residuals`.
 
     Args:
-        raw_sequence: Raw counts of the sequence, shape (T, 23) (:func:`handsim.io.graspdb.read_graspdb_raw`).
+        raw_sequence: Raw counts of the sequence, shape (T, 23)
+        (:func:`handsim.io.graspdb.glove.read_graspdb_raw`).
         switch: Switch state per frame, shape (T,).
         protocol: The reference poses; the default is the GraspDB14 protocol, :data:`CALIBRATION_PROTOCOL`.
         base: Gains and offsets for what the protocol does not determine, and the abduction coupling to

@@ -2,7 +2,7 @@
 
 :func:`check_recording` is what a GraspDB14 trial and ``handsim inspect`` do with a recording as read:
 attach the phases of the annotation that belongs to it (as matched by
-:func:`handsim.io.graspdb_annotations.match_annotation`) and remove single-sample spikes
+:func:`handsim.io.graspdb.annotations.match_annotation`) and remove single-sample spikes
 (:func:`handsim.glove.spikes.remove_spikes`). :class:`RecordingChecks` says what was done, for notes,
 records and the command line.
 """
@@ -68,7 +68,7 @@ def check_recording(
     Args:
         trajectory: A glove recording as read (every sample valid).
         annotation: The phase annotation it uses, with its intervals as read
-            (:func:`handsim.io.graspdb_annotations.match_annotation`); the phases it attaches add their
+            (:func:`handsim.io.graspdb.annotations.match_annotation`); the phases it attaches add their
             note to the trajectory's.
 
     Returns:
@@ -83,7 +83,7 @@ def check_recording(
     if annotation.path is not None and not annotation.intervals:
         raise TrajectoryError(
             f"phase annotation {annotation.path}: the match carries none of its intervals; match it with "
-            "handsim.io.graspdb_annotations.match_annotation or check_annotation, which read them"
+            "handsim.io.graspdb.annotations.match_annotation or check_annotation, which read them"
         )
     if annotation.path is not None and not checked.phases:
         checked = with_phases(checked, annotation.intervals, source=str(annotation.path))

@@ -6,7 +6,7 @@ Two sources name frame intervals of a recording:
   sequence and the start and end of each task. :func:`switch_segments` / :func:`split_by_switch` turn
   the switch state into ``on``/``off`` :class:`~handsim.datatypes.trajectory.Phase` intervals.
 * **Phase annotation files** (``<motion name>_annot-.txt``), read by
-  :mod:`handsim.io.graspdb_annotations` into :class:`PhaseAnnotation` intervals (label, 0-based start,
+  :mod:`handsim.io.graspdb.annotations` into :class:`PhaseAnnotation` intervals (label, 0-based start,
   exclusive stop); :class:`AnnotationMatch` says which annotation a recording uses, and why.
 
 Phases become named frame intervals of a :class:`~handsim.datatypes.trajectory.Trajectory` (``start`` 0-based,
@@ -137,7 +137,7 @@ class PhaseAnnotation:
 class AnnotationMatch:
     """Which phase annotation a recording uses, and why (or why none).
 
-    Made by :func:`handsim.io.graspdb_annotations.match_annotation` (or ``check_annotation``).
+    Made by :func:`handsim.io.graspdb.annotations.match_annotation` (or ``check_annotation``).
 
     Attributes:
         path: The annotation file used, or None.
@@ -166,7 +166,7 @@ def with_phases(
 ) -> Trajectory:
     """Set a trajectory's phases from given intervals.
 
-    From an annotation file: :func:`handsim.io.graspdb_annotations.attach_phases`.
+    From an annotation file: :func:`handsim.io.graspdb.annotations.attach_phases`.
 
     Args:
         trajectory: The recording the phases belong to.

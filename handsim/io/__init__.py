@@ -7,15 +7,16 @@ Entry points:
   calibration), Tzionas/Ballan hand ``.MOTION`` files (with the sequence's object tracks) and handsim's
   synthetic scripted grasps (``.grasp.json``, :mod:`handsim.io.scripted`).
 
-GraspDB14 files beside a recording: phase annotations (:mod:`handsim.io.graspdb_annotations`) and glove
-calibrations (:mod:`handsim.io.glove_calibration`: ``load_calibration``, ``save_calibration``). The
+GraspDB14 files beside a recording: phase annotations (:mod:`handsim.io.graspdb.annotations`) and glove
+calibrations (:mod:`handsim.io.graspdb.calibration`: ``load_calibration``, ``save_calibration``). The
 parametric default hand's skeleton, plain data from published proportions, is
-:func:`handsim.io.parametric_skeleton.default_skeleton`.
+:func:`handsim.io.graspdb.default_skeleton.default_skeleton`.
 
-Other sources, with their own readers: ARCTIC (:mod:`handsim.io.arctic_motion`: ``read_arctic_sequence``
+Other sources, with their own readers: ARCTIC (:mod:`handsim.io.arctic.sequence`: ``read_arctic_sequence``
 — both hands and the object —, ``read_arctic_mano``, ``read_arctic_object``; templates in
-:mod:`handsim.io.arctic`), MANO models and poses (:mod:`handsim.io.mano`: ``read_mano_model``;
-:mod:`handsim.io.mano_pose`: ``mano_pose_to_trajectory``), meshes (:mod:`handsim.io.mesh`).
+:mod:`handsim.io.arctic.templates`), MANO models and poses (:mod:`handsim.io.arctic.mano`:
+``read_mano_model``;
+:mod:`handsim.io.arctic.mano_pose`: ``mano_pose_to_trajectory``), meshes (:mod:`handsim.io.mesh`).
 """
 
 from __future__ import annotations
@@ -26,14 +27,14 @@ from typing import TYPE_CHECKING
 from handsim.datatypes.skeleton import Skeleton
 from handsim.datatypes.trajectory import Trajectory
 from handsim.errors import InputFileError
-from handsim.io.graspdb import read_graspdb_glove
+from handsim.io.graspdb.glove import read_graspdb_glove
+from handsim.io.graspdb.xmlskel import read_xmlskel
 from handsim.io.scripted import read_scripted_grasp
 from handsim.io.text_files import require_file
-from handsim.io.tzionas import read_tzionas_skeleton
-from handsim.io.tzionas_configs import config_dir_of
-from handsim.io.tzionas_motion import read_tzionas_motion
-from handsim.io.tzionas_sequence import read_tzionas_sequence
-from handsim.io.xmlskel import read_xmlskel
+from handsim.io.tzionas.configs import config_dir_of
+from handsim.io.tzionas.motion import read_tzionas_motion
+from handsim.io.tzionas.sequence import read_tzionas_sequence
+from handsim.io.tzionas.skeleton import read_tzionas_skeleton
 
 if TYPE_CHECKING:
     from handsim.glove.calibration import GloveCalibration
@@ -51,7 +52,7 @@ def _suffix_or_error(path: Path, known: dict[str, str], what: str) -> str:
     if what == "trajectory" and path.name.endswith((".mano.npy", ".object.npy")):
         raise InputFileError(
             f"{path}: an ARCTIC sequence (two MANO hands in <seq>.mano.npy, the object in <seq>.object.npy), "
-            "not a one-hand trajectory: read it with handsim.io.arctic_motion.read_arctic_sequence "
+            "not a one-hand trajectory: read it with handsim.io.arctic.sequence.read_arctic_sequence "
             "(`handsim inspect <seq>.mano.npy` summarises it)"
         )
     suffix = path.suffix.lower()
@@ -128,7 +129,7 @@ def _read_tzionas(path: Path) -> Trajectory:
     if not path.stem.startswith("Model_Hand"):
         raise InputFileError(
             f"{path}: not a hand motion (Model_Hand_*.MOTION); object motions are read with "
-            "handsim.io.tzionas_motion.read_tzionas_object_motion"
+            "handsim.io.tzionas.motion.read_tzionas_object_motion"
         )
     if (config_dir_of(path.parent) / "MODELS_INFO.txt").is_file():
         return read_tzionas_sequence(path.parent, hand=path.stem)

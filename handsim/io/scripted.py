@@ -39,7 +39,7 @@ import numpy as np
 
 from handsim.datatypes.trajectory import Phase, Trajectory
 from handsim.errors import FormatError
-from handsim.io.parametric_skeleton import DEFAULT_HAND_LENGTH_M, default_skeleton
+from handsim.io.graspdb.default_skeleton import DEFAULT_HAND_LENGTH_M, default_skeleton
 from handsim.io.text_files import decode_utf8, read_bytes, sha256_of
 
 if TYPE_CHECKING:
@@ -136,7 +136,7 @@ def read_scripted_grasp(path: str | Path, skeleton: Skeleton | None = None) -> T
     Args:
         path: The scripted grasp file.
         skeleton: The hand whose DoFs become the columns; default the parametric default hand of the
-            file's ``hand_length`` (:func:`handsim.io.parametric_skeleton.default_skeleton`).
+            file's ``hand_length`` (:func:`handsim.io.graspdb.default_skeleton.default_skeleton`).
 
     Returns:
         The trajectory: times in s, targets in rad, phases ``rest``, ``close``, ``grasp`` (first contact

@@ -3,7 +3,7 @@
 ``render_report(OUT)`` reads ``OUT/records.jsonl`` and ``OUT/run.json`` and writes ``OUT/report.html`` (one
 self-contained page: inline CSS, SVG plots, frames as ``data:`` URIs, no scripts), ``OUT/report.md`` and
 ``OUT/summary.json``. Modules: :mod:`~handsim.report.records` (reading), :mod:`~handsim.report.aggregate`
-(numbers), :mod:`~handsim.report.summary` (the JSON summary), :mod:`~handsim.report.svg` (charts),
+(numbers), :mod:`~handsim.report.summary` (the JSON summary), :mod:`~handsim.report.charts` (SVG charts),
 :mod:`~handsim.report.html_doc` and :mod:`~handsim.report.html_trial` (HTML),
 :mod:`~handsim.report.markdown` (Markdown).
 """

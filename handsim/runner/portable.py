@@ -125,7 +125,8 @@ def _joined(base: Path, path: str) -> str:
 def portable_traceback(exc: BaseException) -> str:
     """``exc``'s traceback, each source file named relative to the ``sys.path`` folder it was imported from.
 
-    ``File "/site-packages/handsim/io/graspdb.py"`` becomes ``File "handsim/io/graspdb.py"``: the text does
+    ``File "/site-packages/handsim/io/graspdb/glove.py"`` becomes ``File "handsim/io/graspdb/glove.py"``: the
+    text does
     not depend on where Python, handsim or the virtual environment are installed. Files outside every
     ``sys.path`` folder keep their full name.
     """

@@ -17,8 +17,8 @@ import numpy as np
 from handsim.errors import HandsimError
 from handsim.runner.png import encode_png
 from handsim.runner.trial_record import touching_links
-from handsim.sim.compiled import SimScene
 from handsim.sim.replay import ReplayResult
+from handsim.sim.scene.compiled import SimScene
 from handsim.viz.headless import offscreen_backend
 from handsim.viz.render import render_states
 

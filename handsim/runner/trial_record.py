@@ -18,10 +18,10 @@ import numpy as np
 from handsim.datatypes.fingers import finger_groups
 from handsim.datatypes.trajectory import Trajectory
 from handsim.glove.checks import CHECK_FIELDS, RecordingChecks
-from handsim.sim.compiled import SimScene
 from handsim.sim.curves import CURVES, DEG, row_max, tracking_error
 from handsim.sim.plausibility import limit_violations
 from handsim.sim.replay import ReplayResult
+from handsim.sim.scene.compiled import SimScene
 from handsim.trials import TrialEntry
 from handsim.version import __version__
 
@@ -127,7 +127,8 @@ def recording_checks(checks: RecordingChecks | None, scene: SimScene) -> dict:
     Returns:
         ``annotation`` (the annotation file used, or None), ``annotation_note`` (which file and why, or why
         none), ``phase_source`` (``"phase"``: the annotated grasp phase; ``"peak flexion"``: found from the
-        finger flexion, :func:`handsim.sim.grasp_frame.grasp_frame`; None without a grasp), ``spikes``
+        finger flexion, :func:`handsim.sim.placement.grasp_frame.grasp_frame`; None without a grasp),
+        ``spikes``
         (single-sample spikes filled), ``spike_frames``, ``spike_max_speed_rad_s``; the checks' keys are None
         when the recording was not checked.
     """

@@ -25,9 +25,9 @@ from handsim.builders.scene import build_scene
 from handsim.datatypes.poses import compose
 from handsim.datatypes.trajectory import Trajectory
 from handsim.errors import TrajectoryError
-from handsim.sim.compiled import SceneSetup, SimScene, compile_scene
-from handsim.sim.model import compile_spec
 from handsim.sim.scenarios import attach_welded_hands
+from handsim.sim.scene.compiled import SceneSetup, SimScene, compile_scene
+from handsim.sim.scene.model import compile_spec
 
 
 def lowest_point(obj: mujoco.MjSpec, pose: np.ndarray, articulation: float | None) -> tuple[float, float]:

@@ -17,7 +17,7 @@ from handsim.datatypes.poses import compose
 from handsim.datatypes.trajectory import ObjectTrack, Trajectory
 from handsim.datatypes.trajectory_ops import resample
 from handsim.errors import TrajectoryError
-from handsim.sim.compiled import SimScene
+from handsim.sim.scene.compiled import SimScene
 from handsim.sim.stepper import check_controls
 
 DEFAULT_CONTROL_RATE = 100.0

@@ -14,8 +14,8 @@ import mujoco
 import numpy as np
 import numpy.typing as npt
 
-from handsim.sim.compiled import SimScene
 from handsim.sim.control import ControlSchedule
+from handsim.sim.scene.compiled import SimScene
 from handsim.sim.stepper import Stepper, WarningEvent
 
 
@@ -37,7 +37,7 @@ def scenario_switches(scene: SimScene, schedule: ControlSchedule, release_delay:
     """The switch frames of ``scene``'s setup on ``schedule``'s frames.
 
     Args:
-        scene: The scene (its :class:`~handsim.sim.compiled.SceneSetup` holds the times).
+        scene: The scene (its :class:`~handsim.sim.scene.compiled.SceneSetup` holds the times).
         schedule: The control frames.
         release_delay: Seconds after the setup's release time at which the supports go off.
     """

@@ -1,7 +1,7 @@
 """Per-frame physics-plausibility metrics of a replay, and their summary.
 
 Everything is computed from what the stepping loop recorded: the state (``qpos``) at every frame time and
-the metric sensors (:mod:`handsim.sim.layout`); only the fingertips' kinematic targets need forward
+the metric sensors (:mod:`handsim.sim.scene.layout`); only the fingertips' kinematic targets need forward
 kinematics here. Conventions: frame ``k`` is trajectory time ``t_k``; the
 state at ``t_k`` results from the targets of frame ``k − 1``; errors compare it with the references at
 ``t_k``. Contact sensors are evaluated by MuJoCo in the last step's forward pass, one step (2 ms) before the
@@ -10,100 +10,17 @@ recorded state.
 
 from __future__ import annotations
 
-from dataclasses import asdict, dataclass, field
+from dataclasses import dataclass, field
 
 import mujoco
 import numpy as np
 
 from handsim.datatypes.poses import compose, inverse
 from handsim.datatypes.rotations import quat_angle
-from handsim.sim.compiled import SimScene
 from handsim.sim.control import ControlSchedule
-from handsim.sim.layout import _SLOT, CONTACT_SLOTS
-from handsim.sim.placement_types import PlacementSpec
+from handsim.sim.scene.compiled import SimScene
+from handsim.sim.scene.layout import _SLOT, CONTACT_SLOTS
 from handsim.sim.self_contact import self_penetration_track
-from handsim.sim.spec_checks import check_nonnegative, check_positive, check_version
-from handsim.sim.stability import StabilitySpec
-
-METRIC_SPEC_VERSION = "2"
-HOLD_ORIENTATIONS = ("grip", "palm down")
-"""How the glove scenario orients the hand for the hold (:attr:`MetricSpec.hold_orientation`)."""
-
-
-@dataclass(frozen=True)
-class MetricSpec:
-    """Every parameter the metrics and scenarios use; written into each result (sources: docs/physics.md).
-
-    Attributes:
-        version: Changes whenever a definition or default below changes.
-        drift_tolerance: Recorded objects: a frame is "on track" when the object's position is within this
-            distance of the recording, m (the issue's 1 cm).
-        release_delay: Glove scenario: the support is switched off this long after the grasp has closed, s
-            (lets the fingers reach the grasp the recording reached; ~3 servo time constants).
-        slip_limit: Glove scenario: the object is lost once it moved this far relative to the hand root
-            since release, m.
-        contact_gap: Glove scenario: the object is lost once no hand link touched it for this long, s.
-        min_hold_window: Glove scenario: holding is judged only over at least this long after release, s;
-            a shorter window is "not judged". An object in free fall crosses the 2 cm slip limit in 64 ms
-            (√(2 · 0.02 / 9.81)); over 0.3 s any slip accelerating at 0.45 m/s² (5 % of g) or more does.
-        robustness_shift: Glove scenario: the hold-robustness ensemble moves the placed object by this much
-            along each axis of the scene, m.
-        robustness_turn_deg: … and turns it by this much about each axis, degrees.
-        hold_orientation: Glove scenario: ``"grip"`` — the hand is palm down (GraspDB14's objects are picked
-            up from a table) when its grip resists gravity that way, else turned so that gravity pulls along
-            the axis direction its grip resists best (a hand on its side, fingers down), never into the palm
-            (an object lying on an open hand is no grasp); ``"palm down"`` — always palm down.
-        placement: The glove placement search's parameters
-            (:class:`~handsim.sim.placement_types.PlacementSpec`).
-        stability: The grasp stability tests' parameters (:class:`~handsim.sim.stability.StabilitySpec`).
-    """
-
-    version: str = METRIC_SPEC_VERSION
-    drift_tolerance: float = 0.01
-    release_delay: float = 0.1
-    slip_limit: float = 0.02
-    contact_gap: float = 0.1
-    min_hold_window: float = 0.3
-    robustness_shift: float = 0.002
-    robustness_turn_deg: float = 5.0
-    hold_orientation: str = "grip"
-    placement: PlacementSpec = field(default_factory=PlacementSpec)
-    stability: StabilitySpec = field(default_factory=StabilitySpec)
-
-    def __post_init__(self) -> None:
-        check_version(self.version, METRIC_SPEC_VERSION, "metric")
-        check_positive(self, ("drift_tolerance", "slip_limit", "contact_gap", "min_hold_window"))
-        if self.hold_orientation not in HOLD_ORIENTATIONS:
-            raise ValueError(
-                f"unknown hold_orientation {self.hold_orientation!r}; "
-                f"expected one of {list(HOLD_ORIENTATIONS)}"
-            )
-        check_nonnegative(self, ("release_delay", "robustness_shift", "robustness_turn_deg"))
-
-    def to_dict(self) -> dict:
-        """JSON-ready parameters."""
-        result = asdict(self)
-        result["placement"] = self.placement.to_dict()
-        result["stability"] = self.stability.to_dict()
-        return result
-
-    @classmethod
-    def from_dict(cls, fields: dict) -> MetricSpec:
-        """The spec whose :meth:`to_dict` gave ``fields`` (as read back from JSON).
-
-        Raises:
-            ValueError: ``fields`` are of another version, or a value is out of its range.
-        """
-        values = dict(fields)
-        if values.get("version") != METRIC_SPEC_VERSION:
-            raise ValueError(
-                f"metric spec version {values.get('version')!r}; this handsim reads {METRIC_SPEC_VERSION!r}"
-            )
-        stability = dict(values["stability"])
-        stability["obman_direction"] = tuple(stability["obman_direction"])
-        values["stability"] = StabilitySpec(**stability)
-        values["placement"] = PlacementSpec.from_dict(values["placement"])
-        return cls(**values)
 
 
 @dataclass(frozen=True)
@@ -132,7 +49,7 @@ class FrameMetrics:
         times: Trajectory time of each frame, s (N,).
         contact_count: Contacts per hand link × object part (N, links, parts).
         normal_force: Sum of contact normal forces per hand link × object part, N (N, links, parts); over
-            :data:`~handsim.sim.layout.CONTACT_SLOTS` contacts in a pair only the first are summed.
+            :data:`~handsim.sim.scene.layout.CONTACT_SLOTS` contacts in a pair only the first are summed.
         truncated_pairs: Link × part pairs with more contacts than were summed (N,).
         penetration: Deepest hand–object penetration, m, ≥ 0 (N,).
         tracking_error: Achieved minus target joint angle, rad (N, ndof), in actuator order.
@@ -152,7 +69,8 @@ class FrameMetrics:
         target_self_penetration: The same for the hand put at its targets (the recording's own postures).
         target_self_penetration_pair: Its links.
         part_object: The object of each part (parts,).
-        hand_names: The scene's hands (:attr:`~handsim.sim.layout.HandLayout.name`; ``("",)`` for one hand).
+        hand_names: The scene's hands (:attr:`~handsim.sim.scene.layout.HandLayout.name`; ``("",)`` for one
+        hand).
         hand_penetration: Deepest penetration of each hand into any object part, m, ≥ 0 (N, hands).
         link_hand: The hand (index into ``hand_names``) of each link along the ``links`` axis (links,).
         dof_hand: The hand of each column of ``tracking_error`` (ndof,).

@@ -4,11 +4,13 @@ MuJoCo's ``mj_step`` and ``mj_collision`` release the GIL, so runs on separate `
 read-only ``MjModel``) use every core without copying the model or spawning processes.
 
 Used where one result needs several runs that do not depend on each other: the stability test's seven
-gravity runs (:func:`handsim.sim.stability.stability_test`, hence the replay's test at the release), the
+gravity runs (:func:`handsim.sim.stability.gravity.stability_test`, hence the replay's test at the release),
+the
 glove placement's grip tests, taken in rank order until enough hold, the next ones running ahead
 (:func:`map_until`), the replays of the robustness ensemble's members
-(:func:`handsim.sim.robustness.hold_robustness`) and the placement search's fit-frame collision queries
-(:class:`handsim.sim.placement_search.PlacementSearch`). Each run computes exactly what it computes alone,
+(:func:`handsim.sim.placement.robustness.hold_robustness`) and the placement search's fit-frame collision
+queries
+(:class:`handsim.sim.placement.search.PlacementSearch`). Each run computes exactly what it computes alone,
 in the same order of floating-point operations, so results are bit-for-bit those of running them one
 after the other; only the wall time changes. (One exception, by design: which of the search's poses the
 collider's probe settles as too deep depends on its worker's earlier queries, so on timing; what is

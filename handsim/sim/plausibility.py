@@ -24,11 +24,12 @@ from dataclasses import asdict, dataclass, field
 import numpy as np
 
 from handsim.datatypes.trajectory import Trajectory
-from handsim.sim.compiled import SimScene
 from handsim.sim.control import ControlSchedule
 from handsim.sim.drive import ScenarioSwitches
-from handsim.sim.layout import SceneLayout
-from handsim.sim.metrics import FrameMetrics, MetricSpec
+from handsim.sim.metrics import FrameMetrics
+from handsim.sim.scene.compiled import SimScene
+from handsim.sim.scene.layout import SceneLayout
+from handsim.sim.specs import MetricSpec
 
 FLAG_FRAMES_LISTED = 10
 """Most frame indices a flag lists (the count is always given)."""

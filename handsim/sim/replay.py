@@ -14,14 +14,15 @@ from dataclasses import asdict, dataclass, field
 import numpy as np
 
 from handsim.datatypes.trajectory import Trajectory
-from handsim.sim.compiled import SimScene
 from handsim.sim.control import DEFAULT_CONTROL_RATE, ControlSchedule, control_schedule
 from handsim.sim.drive import ScenarioSwitches, ScheduleDriver, scenario_switches
-from handsim.sim.metrics import FrameMetrics, HoldTracks, MetricSpec, frame_metrics, hold_tracks
+from handsim.sim.metrics import FrameMetrics, HoldTracks, frame_metrics, hold_tracks
 from handsim.sim.parallel import sim_threads
+from handsim.sim.placement.robustness import HoldRobustness, Outcome, hold_robustness, member_outcomes
 from handsim.sim.plausibility import Flag, check_control_rate, is_valid, replay_flags
-from handsim.sim.robustness import HoldRobustness, Outcome, hold_robustness, member_outcomes
-from handsim.sim.stability import StabilityResult, stability_test
+from handsim.sim.scene.compiled import SimScene
+from handsim.sim.specs import MetricSpec
+from handsim.sim.stability.gravity import StabilityResult, stability_test
 from handsim.sim.stepper import Stepper, WarningEvent
 from handsim.sim.summary import (
     HoldOutcome,
@@ -36,7 +37,7 @@ MEMBER_FIRST_LOOK = 0.1
 """Seconds after the release at which a robustness-ensemble member's run is first looked at for a loss
 (then at doubling intervals: 0.2 s, 0.4 s …), so that a member that loses its object stops simulating soon
 after (:func:`member_verdict`). Not physics: only how often a run is looked at; the verdicts are the same
-at any value. 0.1 s is the contact gap that loses an object (:class:`~handsim.sim.metrics.MetricSpec`);
+at any value. 0.1 s is the contact gap that loses an object (:class:`~handsim.sim.specs.MetricSpec`);
 members lost in the shared recordings lost it 0.04–0.10 s after the release."""
 
 
@@ -50,11 +51,13 @@ class ReplayConfig:
         metrics: Thresholds and scenario parameters (versioned, written into each result).
         keep_states: Keep ``qpos`` of every frame in the result (for rendering videos); off by default to
             keep results small.
-        stability_at: Run the grasp stability tests (:func:`~handsim.sim.stability.stability_test`) on the
+        stability_at: Run the grasp stability tests (:func:`~handsim.sim.stability.gravity.stability_test`)
+            on the
             state at this trajectory time, s; ``"grasp"``: at the end of the scene's hold window (glove
             scenario); None: no test.
         ensemble: Glove scenario: judge the hold over the scene's robustness ensemble too
-            (:mod:`handsim.sim.robustness`) and test the grip at the release in six gravity directions.
+            (:mod:`handsim.sim.placement.robustness`) and test the grip at the release in six gravity
+            directions.
 
     Raises:
         ValueError: ``control_rate`` is not a number or below the minimum, or ``stability_at`` is a
@@ -408,7 +411,7 @@ def member_verdict(scene: SimScene, schedule: ControlSchedule, spec: MetricSpec)
     in ``tests/test_replay.py``).
 
     Args:
-        scene: The member's scene (:func:`handsim.sim.robustness.ensemble_scenes`).
+        scene: The member's scene (:func:`handsim.sim.placement.robustness.ensemble_scenes`).
         schedule: The control schedule of the trajectory on the ensemble's scenes (one for all members: they
             differ only in the object's starting pose and contact time, not in the hand or the frames).
         spec: The replay's metric parameters.

@@ -12,7 +12,7 @@
   itself, there is no table, and the (first) hand's first root position is the origin.
 * **Glove only** (:func:`glove_scene`; GraspDB14): the hand's root is fixed, palm down, and the object is
   placed where it fits in the closing hand and the recorded closing grips it best
-  (:mod:`handsim.sim.placement`), held there by a support weld that the replay switches off
+  (:mod:`handsim.sim.placement.place`), held there by a support weld that the replay switches off
   :attr:`MetricSpec.release_delay` after the grasp has closed.
 """
 
@@ -30,13 +30,13 @@ from handsim.datatypes.poses import compose, transform_points
 from handsim.datatypes.rotations import quat_multiply, quat_rotate, rotation_onto
 from handsim.datatypes.trajectory import Trajectory
 from handsim.errors import ModelError, TrajectoryError
-from handsim.sim.compiled import SceneSetup, SimScene, compile_scene
 from handsim.sim.control import DEFAULT_CONTROL_RATE
-from handsim.sim.grasp_frame import GraspFrame, grasp_frame
-from handsim.sim.hand_pose import hand_frame
-from handsim.sim.metrics import MetricSpec
-from handsim.sim.placement import place_object
-from handsim.sim.placement_types import Candidate
+from handsim.sim.placement.candidates import Candidate
+from handsim.sim.placement.grasp_frame import GraspFrame, grasp_frame
+from handsim.sim.placement.hand_pose import hand_frame
+from handsim.sim.placement.place import place_object
+from handsim.sim.scene.compiled import SceneSetup, SimScene, compile_scene
+from handsim.sim.specs import MetricSpec
 
 CAMERA_DOWN = (0.0, 1.0, 0.0)
 """Image down (+y) of a pinhole camera frame, e.g. the Tzionas rigging world (extrinsics identity)."""
@@ -274,7 +274,8 @@ def glove_scene(
         hand: The hand the trajectory drives (its root fixed; wrist DoFs stay hinges).
         trajectory: Joint targets named like the hand's DoFs.
         obj: The object (:func:`handsim.builders.build_object`).
-        grasp: The grasp frames and hold window; default :func:`~handsim.sim.grasp_frame.grasp_frame` (the
+        grasp: The grasp frames and hold window; default
+            :func:`~handsim.sim.placement.grasp_frame.grasp_frame` (the
             ``grasp`` phase, else peak flexion).
         spec: Placement, release and robustness parameters (default :class:`MetricSpec`).
         control_rate: Control frames per second of the replays the placement's grip tests reproduce.

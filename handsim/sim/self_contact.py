@@ -15,7 +15,7 @@ from dataclasses import dataclass
 import mujoco
 import numpy as np
 
-from handsim.sim.compiled import SimScene
+from handsim.sim.scene.compiled import SimScene
 
 
 @dataclass(frozen=True)

@@ -17,7 +17,7 @@ import numpy as np
 import numpy.typing as npt
 
 from handsim.errors import SimulationError
-from handsim.sim.compiled import SimScene
+from handsim.sim.scene.compiled import SimScene
 from handsim.sim.warnings import WARNING_NAMES
 
 DIVERGENCE_WARNINGS = frozenset({"mjWARN_BADQPOS", "mjWARN_BADQVEL", "mjWARN_BADQACC", "mjWARN_BADCTRL"})

@@ -8,7 +8,8 @@ import numpy as np
 
 from handsim.sim.curves import DEG, MM
 from handsim.sim.curves import slip as slip_curve
-from handsim.sim.metrics import FrameMetrics, HoldTracks, MetricSpec
+from handsim.sim.metrics import FrameMetrics, HoldTracks
+from handsim.sim.specs import MetricSpec
 
 NO_OBJECT = "not judged: no object (a hand-only sequence: nothing to touch, hold or drift)"
 """Why a replay without objects judges no hand–object contact, hold or drift."""

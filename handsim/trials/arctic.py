@@ -16,10 +16,10 @@ from typing import TYPE_CHECKING
 
 from handsim.builders.arctic_objects import arctic_object
 from handsim.builders.mano_hand import build_mano_hands
-from handsim.io.arctic_hands import arctic_trajectory, hand_side_check
-from handsim.io.arctic_motion import HANDS, read_arctic_sequence
-from handsim.io.mano import MANO_DIR_ENV, find_mano_files
+from handsim.io.arctic.mano import MANO_DIR_ENV, find_mano_files
+from handsim.io.arctic.sequence import HANDS, read_arctic_sequence
 from handsim.sim.arctic_scene import arctic_scene
+from handsim.trials.arctic_hands import arctic_trajectory, hand_side_check
 from handsim.trials.base import (
     LoadedTrial,
     Trial,
@@ -32,7 +32,7 @@ from handsim.trials.kind import TrialKind
 from handsim.trials.sorting import Sorting, TrialEntry, group_fields, relative, trial_input
 
 if TYPE_CHECKING:
-    from handsim.sim.metrics import MetricSpec
+    from handsim.sim.specs import MetricSpec
 
 MANO_SUFFIX = ".mano.npy"
 OBJECT_SUFFIX = ".object.npy"

@@ -26,13 +26,13 @@ from typing import TYPE_CHECKING
 from handsim.builders.catalog import resolve
 from handsim.builders.objects import object_spec, prepare_object
 from handsim.errors import HandsimError, InputFileError
-from handsim.io.parametric_skeleton import DEFAULT_HAND_LENGTH_M
+from handsim.io.graspdb.default_skeleton import DEFAULT_HAND_LENGTH_M
 
 if TYPE_CHECKING:
     from handsim.datatypes.object_model import ObjectModel
     from handsim.datatypes.trajectory import Trajectory
     from handsim.glove.checks import RecordingChecks
-    from handsim.sim.compiled import SimScene
+    from handsim.sim.scene.compiled import SimScene
 
 HAND_COLLISIONS = ("capsules", "mesh")
 """Hand collision shapes: capsules and a convex palm, or per-bone hulls of a skinned mesh."""

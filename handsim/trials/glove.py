@@ -18,7 +18,7 @@ if TYPE_CHECKING:
     from handsim.datatypes.skeleton import Skeleton
     from handsim.datatypes.trajectory import Trajectory
     from handsim.glove.checks import RecordingChecks
-    from handsim.sim.metrics import MetricSpec
+    from handsim.sim.specs import MetricSpec
 
 
 def parametric_hand(trial: Trial) -> tuple[Skeleton, mujoco.MjSpec, str]:
@@ -45,7 +45,7 @@ def glove_loaded(
         hand: The hand the trajectory drives.
         hand_text: The hand, for people.
         trajectory: The recording as joint targets, with its phases.
-        metrics: Placement thresholds (default :class:`~handsim.sim.metrics.MetricSpec`).
+        metrics: Placement thresholds (default :class:`~handsim.sim.specs.MetricSpec`).
         progress: Show a progress bar while an uncached convex decomposition runs.
         notes: Notes of the hand's reader (and of the recording's checks).
         checks: What the recording's checks found (GraspDB14 recordings), or None when not checked.

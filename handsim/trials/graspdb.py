@@ -4,7 +4,7 @@ A recording is a ``.txt`` file (GraspDB14's FK-oracle files have no extension). 
 default hand unless a skeleton is given; the object is the one given, else the one whose id the file name
 carries (``r_01_11_ex03-…`` → id 1, the tennis ball); phases come from the
 recording's ``_annot-`` file beside it when it covers exactly the recording's frames
-(:func:`handsim.io.graspdb_annotations.match_annotation`), else from the finger flexion (scenario ``glove``).
+(:func:`handsim.io.graspdb.annotations.match_annotation`), else from the finger flexion (scenario ``glove``).
 Single-sample spikes are marked invalid and filled before the recording is judged
 (:func:`handsim.glove.checks.check_recording`).
 """
@@ -21,11 +21,11 @@ from handsim.glove import apply_thumb_rest, thumb_rest_note
 from handsim.glove.checks import check_recording
 from handsim.glove.phases import AnnotationMatch
 from handsim.io import read_skeleton, read_trajectory
-from handsim.io.glove_calibration import load_calibration
-from handsim.io.graspdb import graspdb_row_count
-from handsim.io.graspdb_annotations import check_annotation, find_annotation_file, match_annotation
-from handsim.io.graspdb_filenames import filename_datatype, parse_graspdb_filename
-from handsim.io.parametric_skeleton import DEFAULT_HAND_LENGTH_M
+from handsim.io.graspdb.annotations import check_annotation, find_annotation_file, match_annotation
+from handsim.io.graspdb.calibration import load_calibration
+from handsim.io.graspdb.default_skeleton import DEFAULT_HAND_LENGTH_M
+from handsim.io.graspdb.filenames import filename_datatype, parse_graspdb_filename
+from handsim.io.graspdb.glove import graspdb_row_count
 from handsim.trials.base import (
     LoadedTrial,
     Trial,
@@ -40,8 +40,7 @@ from handsim.trials.kind import TrialKind
 from handsim.trials.sorting import Sorting, TrialEntry, TrialInput, trial_input
 
 if TYPE_CHECKING:
-    from handsim.glove.phases import AnnotationMatch
-    from handsim.sim.metrics import MetricSpec
+    from handsim.sim.specs import MetricSpec
 
 _NAME_HELP = "spec 003 §4.1.2: <objID>[_<graspID>|_<actionID>]_ex<NN>-rad|raw-<trialID>-grasp-su<actorID>.txt"
 

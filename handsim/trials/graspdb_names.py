@@ -1,6 +1,6 @@
 """What a GraspDB14 motion file name says, as the group-by fields of a dataset run (spec ``003_…`` §4.1.2).
 
-:func:`handsim.io.graspdb_filenames.parse_graspdb_filename` decodes the name's fields; this module turns them
+:func:`handsim.io.graspdb.filenames.parse_graspdb_filename` decodes the name's fields; this module turns them
 into names people group by: the object's catalogue name (Table 4.1 via
 :mod:`handsim.builders.graspdb_objects`), the grasp type (Table 3.3, after Feix et al.), the action
 (Table 4.2) and the recording scenario (§3.6).
@@ -10,7 +10,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from handsim.io.graspdb_filenames import GraspDBName
+from handsim.io.graspdb.filenames import GraspDBName
 
 
 @dataclass(frozen=True)

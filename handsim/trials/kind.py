@@ -11,7 +11,7 @@ from handsim.trials.base import LoadedTrial, Trial, TrialOptions
 from handsim.trials.sorting import Sorting
 
 if TYPE_CHECKING:  # an annotation only: the trial registry loads without MuJoCo (start-up time)
-    from handsim.sim.metrics import MetricSpec
+    from handsim.sim.specs import MetricSpec
 
 
 @dataclass(frozen=True)

@@ -25,7 +25,7 @@ from handsim.trials.discovery import Discovery, discover_with
 from handsim.trials.kind import TrialKind
 
 if TYPE_CHECKING:
-    from handsim.sim.metrics import MetricSpec
+    from handsim.sim.specs import MetricSpec
 
 KINDS: tuple[TrialKind, ...] = (tzionas.KIND, arctic.KIND, scripted.KIND, graspdb.KIND)
 """Every kind of trial, in the order discovery lets them claim a dataset's files."""
@@ -153,7 +153,7 @@ def load_trial(
     Args:
         trial: A :class:`~handsim.trials.base.Trial`, or a recording path (then ``options`` go to
             :func:`find_trial`).
-        metrics: Thresholds of the glove placement search (default :class:`~handsim.sim.metrics.MetricSpec`);
+        metrics: Thresholds of the glove placement search (default :class:`~handsim.sim.specs.MetricSpec`);
             replay with the same.
         progress: Show a progress bar while an object's convex decomposition runs (uncached meshes).
         **options: :func:`find_trial`'s keyword arguments, with a path only.

@@ -20,7 +20,7 @@ from handsim.trials.kind import TrialKind
 from handsim.trials.sorting import Sorting, TrialEntry, group_fields, trial_input
 
 if TYPE_CHECKING:
-    from handsim.sim.metrics import MetricSpec
+    from handsim.sim.specs import MetricSpec
 
 
 def _matches(path: Path) -> bool:

@@ -7,7 +7,7 @@ The hand is the motion's own ``.SKEL`` (+ ``.LIMITS``, ``.OFF``, ``.SKIN`` besid
 A sequence whose ``MODELS_INFO.txt`` lists two hands (``Model_Hand_R`` and ``Model_Hand_L``) is one trial
 whose recording is its ``Models/NN`` folder: both hands in one scene (``hand/right/``, ``hand/left/``), each
 root following its own recorded pose and its DoFs driven by its own motion
-(:func:`~handsim.io.tzionas_sequence.read_tzionas_hands`), the objects as for one hand. Either hand's
+(:func:`~handsim.io.tzionas.sequence.read_tzionas_hands`), the objects as for one hand. Either hand's
 ``.MOTION`` given as the recording finds the whole sequence (a note says so).
 """
 
@@ -21,8 +21,8 @@ from handsim.builders import build_hand
 from handsim.builders.surfaces import FITTED_SKIN
 from handsim.errors import HandsimError
 from handsim.io import read_skeleton, read_trajectory
-from handsim.io.tzionas_configs import config_dir_of, read_models_info
-from handsim.io.tzionas_sequence import object_track_name, read_tzionas_hands, two_hand_models
+from handsim.io.tzionas.configs import config_dir_of, read_models_info
+from handsim.io.tzionas.sequence import object_track_name, read_tzionas_hands, two_hand_models
 from handsim.sim.scenarios import recorded_scene
 from handsim.trials.base import (
     LoadedTrial,
@@ -36,7 +36,7 @@ from handsim.trials.kind import TrialKind
 from handsim.trials.sorting import Sorting, TrialEntry, TrialInput, group_fields, trial_input
 
 if TYPE_CHECKING:
-    from handsim.sim.metrics import MetricSpec
+    from handsim.sim.specs import MetricSpec
 
 _HAND_MOTION = re.compile(r"Model_Hand.*\.motion", re.IGNORECASE)
 _MODEL_FILE = re.compile(r"Model_(?:Hand|Object).*\.(?:skel|limits|motion|off|skin|voi|zones)", re.IGNORECASE)

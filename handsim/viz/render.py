@@ -30,7 +30,7 @@ import numpy as np
 import numpy.typing as npt
 
 from handsim.errors import HandsimError
-from handsim.sim.compiled import SimScene
+from handsim.sim.scene.compiled import SimScene
 from handsim.viz.headless import offscreen_renderer
 
 DEFAULT_FPS = 30.0

@@ -16,7 +16,7 @@ from handsim.datatypes.skeleton import Skeleton
 from handsim.datatypes.trajectory import Trajectory
 from handsim.datatypes.trajectory_ops import LimitReport, limit_violations
 from handsim.glove.gaps import find_gaps
-from handsim.io.arctic_motion import ArcticSequence
+from handsim.io.arctic.sequence import ArcticSequence
 
 
 @dataclass(frozen=True)
@@ -193,7 +193,7 @@ def describe_arctic(sequence: ArcticSequence) -> ArcticReport:
     """Frames, both hands (wrist travel, fitting error), the object and its articulation range.
 
     Args:
-        sequence: The sequence (:func:`handsim.io.arctic_motion.read_arctic_sequence`).
+        sequence: The sequence (:func:`handsim.io.arctic.sequence.read_arctic_sequence`).
 
     Returns:
         The report.

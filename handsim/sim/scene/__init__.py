@@ -1,0 +1,8 @@
+"""Scene composition for simulation: the compiled model, its layout of names and sensors, model summaries.
+
+* :mod:`~handsim.sim.scene.model` — compiling an ``MjSpec`` with MuJoCo's errors made readable;
+* :mod:`~handsim.sim.scene.layout` — the ids, addresses and sensor slots of a compiled scene;
+* :mod:`~handsim.sim.scene.compiled` — :class:`~handsim.sim.scene.compiled.SimScene`, a compiled scene with
+  its
+  layout, ready to step.
+"""
