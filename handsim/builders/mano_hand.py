@@ -5,9 +5,9 @@ The skeleton (:func:`mano_skeleton`):
 * the 16 MANO joints with identity frames (MANO's joint frames are aligned with the model frame at rest);
   each finger joint is three hinges about the model axes z, y, x, outermost first
   (``<joint>_z``, ``<joint>_y``, ``<joint>_x``), so ``Rz · Ry · Rx = exp(ω)`` of MANO's axis-angle ω
-  (:func:`handsim.io.arctic.mano_pose.mano_pose_to_trajectory` does the exact conversion); limits are the
-  full Euler
-  ranges (:data:`HINGE_LIMITS`), not anatomy; the wrist has no DoF (its pose is the root pose);
+  (:func:`handsim.io.arctic.mano_pose.mano_pose_to_trajectory` does the exact conversion, continuous in
+  time); limits are coordinate ranges wide enough for continuous angles (:data:`HINGE_LIMITS`), not
+  anatomy; the wrist has no DoF (its pose is the root pose);
 * palm anchors ``index0``, ``middle0``, ``ring0``, ``pinky0`` (no DoF) that only shape the palm, so that
   :func:`build_hand`'s rule "a finger chain starts with a metacarpal inside the palm" gives every MANO
   phalanx its own colliding capsule;
@@ -68,11 +68,17 @@ fingertip over the last bone's length, from the mean-shape fingertip offsets in 
 of github.com/christsa/dgrasp (e.g. index 23.6 mm / 22.2 mm)."""
 
 HINGE_LIMITS: dict[str, tuple[float, float]] = {
-    "z": (-math.pi, math.pi),
-    "y": (-math.pi / 2, math.pi / 2),
-    "x": (-math.pi, math.pi),
+    "z": (-2.0 * math.pi, 2.0 * math.pi),
+    "y": (-2.0 * math.pi, 2.0 * math.pi),
+    "x": (-2.0 * math.pi, 2.0 * math.pi),
 }
-"""Joint ranges in radians: the full range of the Z·Y·X Euler angles (no anatomical clamping)."""
+"""Joint ranges in radians: coordinate ranges, not anatomy (MANO fits are anatomically regularised). The
+targets are continuous in time (:func:`handsim.datatypes.rotations.continuous_zyx`), so a joint whose
+rotation passes ±180° or near y = ±90° leaves the principal Euler box (z, x in [−π, π], y in [−π/2, π/2]).
+Each column is centred on zero (its middle within ±π, y's within ±π/2), so ±2π holds every sequence in
+which a hinge's angle spans at most a whole turn (one and a half for y): more only where the joint turns
+round. The ranges stay finite because the position actuators' ``ctrlrange`` equals them and the
+environments scale actions to them."""
 
 FINGER_KINDS: dict[str, str] = {"z": "flex", "y": "abd", "x": "pron"}
 """DoF kinds of the four fingers (z flexion, y ab/adduction about the palm normal, x axial rotation); the

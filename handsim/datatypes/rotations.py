@@ -24,7 +24,8 @@ Four things do not, each for a measured reason:
   costs about 40 µs per call, and they must not renormalise their input (scipy's ``from_quat`` does).
 * :func:`matrix_to_zyx` keeps its own extraction: scipy's ``as_euler("ZYX")`` warns and sets the third
   angle to zero at gimbal lock and reconstructs rotations 1e-4 rad from the lock only to 3.5e-8 rad,
-  where this one is exact to rounding (< 1e-14 rad) everywhere.
+  where this one is exact to rounding (< 1e-14 rad) everywhere. :func:`continuous_zyx` chooses, frame by
+  frame, among the exact solutions the one nearest the previous frame's (scipy has no such choice).
 * :func:`slerp` is element-wise between pairs with exact endpoints and NaN for a zero quaternion;
   scipy's ``Slerp`` interpolates along one keyframe sequence and rejects zero quaternions.
 * :func:`rotation_error` measures the angle between matrices from their Frobenius distance, accurate
@@ -230,16 +231,128 @@ def matrix_to_zyx(rotation: npt.ArrayLike) -> np.ndarray:
         rotation: Rotation matrices, shape (..., 3, 3).
 
     Returns:
-        Angles in radians, shape (..., 3): a, c in [−π, π], b in [−π/2, π/2].
+        Angles in radians, shape (..., 3): a, c in [−π, π], b in [−π/2, π/2]; a = 0 at gimbal lock.
     """
     r = np.asarray(rotation, dtype=float)
     cos_b = np.hypot(r[..., 0, 0], r[..., 1, 0])
     b = np.arctan2(-r[..., 2, 0], cos_b)
     a = np.where(cos_b > _GIMBAL_COS, np.arctan2(r[..., 1, 0], r[..., 0, 0]), 0.0)
+    return np.stack([a, b, _zyx_third(r, a, b)], axis=-1)
+
+
+def _zyx_third(r: np.ndarray, a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """The x angle ``c`` of ``R`` given ``a`` and ``b``: the angle of the remainder ``Ry(b)ᵀ Rz(a)ᵀ R``."""
     turned = zyx_to_matrix(np.stack([a, b, np.zeros_like(a)], axis=-1))  # Rz(a) · Ry(b)
     rest = np.swapaxes(turned, -1, -2) @ r
-    c = np.arctan2(rest[..., 2, 1] - rest[..., 1, 2], rest[..., 1, 1] + rest[..., 2, 2])
-    return np.stack([a, b, c], axis=-1)
+    return np.arctan2(rest[..., 2, 1] - rest[..., 1, 2], rest[..., 1, 1] + rest[..., 2, 2])
+
+
+def zyx_alternative(angles: npt.ArrayLike) -> np.ndarray:
+    """The other Z·Y·X solution of the same rotation: ``(a + π, π − b, c + π)``, shape (..., 3).
+
+    ``Rz(a + π) Ry(π − b) Rx(c + π) = Rz(a) Ry(b) Rx(c)`` exactly. Away from gimbal lock every solution is
+    one of these two plus whole turns of each angle; at lock (cos b = 0) they coincide and only
+    ``a − c`` (b = π/2) or ``a + c`` (b = −π/2) is defined.
+    """
+    x = np.asarray(angles, dtype=float)
+    return np.stack([x[..., 0] + math.pi, math.pi - x[..., 1], x[..., 2] + math.pi], axis=-1)
+
+
+def wrap_angle(x: npt.ArrayLike) -> np.ndarray:
+    """Angles in radians moved by whole turns into [−π, π)."""
+    return (np.asarray(x, dtype=float) + math.pi) % (2.0 * math.pi) - math.pi
+
+
+def continuous_zyx(rotation: npt.ArrayLike) -> np.ndarray:
+    """Z·Y·X angles of rotations over time, continuous in time: each frame's solution nearest the last.
+
+    :func:`matrix_to_zyx` returns each rotation's principal angles, which jump by a turn where an angle
+    crosses ±π and flip to the other solution (:func:`zyx_alternative`) where the path passes near
+    b = ±π/2. Here every frame after the first takes, among all exact solutions (both families, any whole
+    turns of each angle), the one whose largest angle change from the previous frame's is smallest. At
+    gimbal lock only ``a ∓ c`` is defined: ``a`` and ``c`` then share the change evenly, towards the middle
+    of the neighbouring frames' solutions (a path through the lock keeps its own pace). Each column is
+    finally moved as a whole by the solutions' symmetries (whole turns; the other family where the
+    middle of the y angle's range lies beyond ±π/2) so that the middle of its range lies nearest zero: y
+    in [−π/2, π/2], z and x in [−π, π].
+
+    The change this gives between frames is bounded by the recorded rotation's (proof and measurements in
+    ``docs/mano.md``): with φ the angle of the rotation from one frame to the next and
+    ``β = (|b₀| + |b₁| + φ) / 2`` (principal y angles of both frames), every angle changes by at most
+    ``φ / cos β`` when β < π/2, and by at most π always.
+
+    Args:
+        rotation: Rotation matrices, shape (T, ..., 3, 3); axis 0 is time.
+
+    Returns:
+        Angles (a, b, c) in radians, shape (T, ..., 3), with ``Rz(a) Ry(b) Rx(c)`` equal to each rotation to
+        rounding.
+
+    Raises:
+        ValueError: ``rotation`` is not of shape (T, ..., 3, 3).
+    """
+    r = np.asarray(rotation, dtype=float)
+    if r.ndim < 3 or r.shape[-2:] != (3, 3):
+        raise ValueError(f"expected rotation matrices of shape (T, ..., 3, 3), got {r.shape}")
+    n = r.shape[0]
+    if n == 0:
+        return np.zeros((*r.shape[:-2], 3))
+    flat_r = r.reshape(n, -1, 3, 3)
+    angles = matrix_to_zyx(flat_r)
+    locked = np.hypot(flat_r[..., 0, 0], flat_r[..., 1, 0]) <= _GIMBAL_COS
+    for k in np.flatnonzero(locked[0] & ~locked[min(1, n - 1)]):  # a first frame at lock: towards the next
+        angles[0, k] = _locked_nearest(flat_r[0, k], angles[0, k], angles[1, k])
+    for t, k in zip(*np.nonzero(locked[1:]), strict=True):  # frame order: each after the one it follows
+        before = angles[t, k]
+        if t + 2 < n and not locked[t + 2, k]:  # aim between the frames either side (the path's own way)
+            after = _nearest_solution(angles[t + 2, k], before)
+            before = before + wrap_angle(after - before) / 2.0
+        angles[t + 1, k] = _locked_nearest(flat_r[t + 1, k], angles[t + 1, k], before)
+    same_step, cross_step = _steps(angles[1:], angles[:-1])
+    # the steps between two frames are the same whichever family the previous frame took (the map is an
+    # isometry of the wrapped angles), so each frame switches family where the other one is nearer
+    flip = np.concatenate([np.zeros((1, angles.shape[1]), dtype=bool), cross_step < same_step])
+    family = np.cumsum(flip, axis=0) % 2 == 1
+    lifted = np.unwrap(np.where(family[..., None], zyx_alternative(angles), angles), axis=0)
+    return _centred(lifted).reshape((*r.shape[:-2], 3))
+
+
+def _steps(angles: np.ndarray, previous: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Largest wrapped change over the three angles from ``previous``: of ``angles``, of the other family."""
+    same = np.abs(wrap_angle(angles - previous)).max(axis=-1)
+    return same, np.abs(wrap_angle(zyx_alternative(angles) - previous)).max(axis=-1)
+
+
+def _nearest_solution(angles: np.ndarray, previous: np.ndarray) -> np.ndarray:
+    """``angles`` (3,) or their other family, whichever changes least from ``previous`` (:func:`_steps`)."""
+    same, cross = _steps(angles, previous)
+    return zyx_alternative(angles) if cross < same else angles
+
+
+def _locked_nearest(r: np.ndarray, angles: np.ndarray, near: np.ndarray) -> np.ndarray:
+    """A rotation at gimbal lock as the angles nearest ``near``: ``a`` and ``c`` share the change."""
+    a, b, c = angles
+    a0, _, c0 = near
+    sign = 1.0 if b > 0 else -1.0  # b = π/2: R depends on a − c; b = −π/2: on a + c
+    delta = float(wrap_angle(a0 - sign * c0 - (a - sign * c)))
+    a_near = a0 - delta / 2.0
+    return np.array([a_near, b, float(_zyx_third(r, np.array(a_near), np.array(b)))])
+
+
+def _centred(angles: np.ndarray) -> np.ndarray:
+    """Each column (T, K, 3) moved by Z·Y·X symmetries so that the middle of its range is nearest zero."""
+    out = angles.copy()
+    turn = 2.0 * math.pi
+    middle = (out.min(axis=0) + out.max(axis=0)) / 2.0
+    out[..., 1] -= turn * np.round(middle[:, 1] / turn)
+    middle_b = middle[:, 1] - turn * np.round(middle[:, 1] / turn)
+    other = np.abs(middle_b) > math.pi / 2.0  # reflect about ±π/2: the other family
+    out[..., 1] = np.where(other, np.sign(middle_b) * math.pi - out[..., 1], out[..., 1])
+    out[..., 0] += np.where(other, math.pi, 0.0)
+    out[..., 2] += np.where(other, math.pi, 0.0)
+    middle_ac = (out[..., ::2].min(axis=0) + out[..., ::2].max(axis=0)) / 2.0
+    out[..., ::2] -= turn * np.round(middle_ac / turn)
+    return out
 
 
 def rotation_error(r1: npt.ArrayLike, r2: npt.ArrayLike) -> np.ndarray:

@@ -7,6 +7,7 @@ from functools import cached_property
 
 import numpy as np
 
+from handsim.datatypes.flags import Flag
 from handsim.errors import TrajectoryError
 
 
@@ -63,6 +64,8 @@ class Trajectory:
         source: The file the trajectory was read from.
         sha256: SHA-256 of that file's bytes ("" when not read from a file).
         notes: Decisions and repairs made while reading, for the user to see.
+        flags: What a check of the recording found that makes a replay of it mean less (e.g. ARCTIC hands
+            that look swapped): every replay reports them among its flags (:mod:`handsim.datatypes.flags`).
     """
 
     times: np.ndarray
@@ -80,6 +83,7 @@ class Trajectory:
     source: str = ""
     sha256: str = ""
     notes: tuple[str, ...] = ()
+    flags: tuple[Flag, ...] = ()
 
     def __post_init__(self) -> None:
         t = np.asarray(self.times)

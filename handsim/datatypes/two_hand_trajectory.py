@@ -24,7 +24,7 @@ def join_hands(
     """One-hand trajectories of the same frames as one trajectory for a two-hand scene.
 
     Each hand's DoF columns are renamed ``<hand>/<dof>`` and its ``root_pose`` goes under
-    ``hand_roots[hand]``; the hands' notes are prefixed ``<hand> hand: ``.
+    ``hand_roots[hand]``; the hands' notes are prefixed ``<hand> hand: ``; their flags are kept (each once).
 
     Args:
         hands: Hand name (``"right"``, ``"left"``) → its trajectory (with a ``root_pose``), in scene order.
@@ -50,6 +50,7 @@ def join_hands(
     rootless = [name for name, t in hands.items() if t.root_pose is None]
     if rootless:
         raise TrajectoryError(f"hands {rootless} have no root pose to follow; {counts}")
+    flags = [f for t in hands.values() for f in t.flags]
     return Trajectory(
         times=first.times,
         dof_names=tuple(f"{name}/{d}" for name, t in hands.items() for d in t.dof_names),
@@ -60,4 +61,5 @@ def join_hands(
         source=first.source if source is None else source,
         sha256=first.sha256 if sha256 is None else sha256,
         notes=tuple(f"{name} hand: {note}" for name, t in hands.items() for note in t.notes),
+        flags=tuple(f for k, f in enumerate(flags) if f not in flags[:k]),
     )

@@ -5,9 +5,10 @@ reads "held" or "warnings none" off a trial that could not have been judged.
 
 * :func:`check_control_rate` refuses a control rate too low for the metrics: a control frame must be at
   most half the shortest time the metrics judge (:func:`min_control_rate`).
-* :func:`replay_flags` flags a replay (:class:`Flag`): too few frames, the hand starting inside the object,
-  a recorded track jumping faster than anything a hand moves, targets beyond the joint limits. (A hold
-  window too short to judge holding is the hold judgement's own "not judged":
+* :func:`replay_flags` flags a replay (:class:`~handsim.datatypes.flags.Flag`): the recording's own flags
+  (:attr:`Trajectory.flags`, e.g. ARCTIC hands that look swapped), too few frames, the hand starting inside
+  the object, a recorded track jumping faster than anything a hand moves, targets beyond the joint limits.
+  (A hold window too short to judge holding is the hold judgement's own "not judged":
   :func:`handsim.sim.summary.hold_outcome`.) A flag with ``invalid`` set makes the replay *not valid*
   (``summary["valid"]`` false): its numbers are reported but excluded from a dataset's rates; the
   joint-limit flag is a note (the actuators clamp such targets to the limits).
@@ -19,10 +20,11 @@ from __future__ import annotations
 
 import math
 import numbers
-from dataclasses import asdict, dataclass, field
+from dataclasses import asdict, dataclass
 
 import numpy as np
 
+from handsim.datatypes.flags import Flag
 from handsim.datatypes.trajectory import Trajectory
 from handsim.sim.control import ControlSchedule
 from handsim.sim.drive import ScenarioSwitches
@@ -108,28 +110,6 @@ class PlausibilitySpec:
     def to_dict(self) -> dict:
         """JSON-ready thresholds."""
         return asdict(self)
-
-
-@dataclass(frozen=True)
-class Flag:
-    """Why a replay's numbers mean less than they seem.
-
-    Attributes:
-        code: ``"too_few_frames"``, ``"initial_penetration"``, ``"track_jump"`` or
-            ``"joint_limits"``.
-        invalid: The replay is not valid (its numbers must not enter rates); False for a note.
-        reason: One line for people, with the numbers.
-        values: The numbers (SI units in the key names), JSON-ready.
-    """
-
-    code: str
-    invalid: bool
-    reason: str
-    values: dict = field(default_factory=dict)
-
-    def to_dict(self) -> dict:
-        """JSON-ready fields."""
-        return {"code": self.code, "invalid": self.invalid, "reason": self.reason, "values": self.values}
 
 
 def limit_violations(trajectory: Trajectory, layout: SceneLayout) -> dict[str, tuple[int, float]]:
@@ -265,10 +245,10 @@ def replay_flags(
         limits: Thresholds (default :class:`PlausibilitySpec`).
 
     Returns:
-        The flags, invalidating ones first, in a fixed order.
+        The flags, the recording's own first, then the invalidating ones, in a fixed order.
     """
     limits = limits or PlausibilitySpec()
-    flags: list[Flag] = []
+    flags: list[Flag] = list(trajectory.flags)  # the recording's own (e.g. ARCTIC hands that look swapped)
     if schedule.frames < 2:
         flags.append(
             Flag(

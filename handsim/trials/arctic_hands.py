@@ -18,7 +18,9 @@ hold the object, so the reading that touches the object (without entering it) is
 :func:`hand_contact` measures, frame by frame, how close each reading of an entry comes to the object's
 surface and whether it enters it; :func:`hand_side_check` flags a sequence as swapped only when both entries
 touch the object only mirrored (a hand idle in its own reading may land on the object mirrored, so one entry
-alone never flags). It flags, never refuses; ``docs/mano.md`` gives the measured margins.
+alone never flags). It flags, never refuses: a swapped verdict is the replay flag ``hands_swapped``
+(:attr:`SideCheck.flags`, not valid), carried by the trajectory into every replay's flags;
+``docs/mano.md`` gives the measured margins.
 """
 
 from __future__ import annotations
@@ -28,6 +30,7 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
+from handsim.datatypes.flags import Flag
 from handsim.datatypes.object_model import ObjectModel
 from handsim.datatypes.rotations import axis_angle_to_matrix, quat_to_matrix
 from handsim.datatypes.skeleton import Skeleton
@@ -163,8 +166,8 @@ class SideCheck:
 
     Attributes:
         verdict: ``"as stored"`` (a hand touches the object only as stored, and none only mirrored),
-            ``"swapped"`` (both hands touch it only when each entry drives the other hand's model: flagged)
-            or ``"not judged"``.
+            ``"swapped"`` (both hands touch it only when each entry drives the other hand's model: flagged,
+            :attr:`flags`) or ``"not judged"``.
         right: The evidence of the ``right`` entry.
         left: The evidence of the ``left`` entry.
         message: One line for the user.
@@ -174,6 +177,28 @@ class SideCheck:
     right: HandContact
     left: HandContact
     message: str
+
+    @property
+    def flags(self) -> tuple[Flag, ...]:
+        """The ``hands_swapped`` flag of a ``"swapped"`` verdict (not valid), none for the others.
+
+        A replay of swapped hands drives each MANO model with the other hand's data, so its numbers judge
+        nothing; the trajectory carries the flag (:attr:`Trajectory.flags`) into every replay's flags.
+        """
+        if self.verdict != "swapped":
+            return ()
+        values = {
+            entry.side: {
+                "own_fraction": entry.own_fraction,
+                "other_fraction": entry.other_fraction,
+                "own_closest_mm": entry.own_closest * 1000.0,
+                "other_closest_mm": entry.other_closest * 1000.0,
+                "own_inside_fraction": entry.own_inside,
+                "other_inside_fraction": entry.other_inside,
+            }
+            for entry in (self.right, self.left)
+        }
+        return (Flag("hands_swapped", True, self.message, {"verdict": self.verdict, **values}),)
 
 
 def hand_points(

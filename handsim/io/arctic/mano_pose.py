@@ -9,7 +9,13 @@ frame, joint order and sides are :mod:`handsim.io.arctic.mano`'s):
   palm normal, where finger rotations (ab/adduction) stay far from the ±90° gimbal lock, while the
   large rotations (finger flexion about z, the thumb's about x) sit on the outer axes. The conversion
   from axis-angle is exact up to rounding (residual reported in :attr:`Trajectory.notes`).
-* **Angles** come out in the Euler ranges: z and x in [−π, π], y in [−π/2, π/2] (the hinge limits).
+* **Continuous in time.** Each frame's angles are the exact solution nearest the previous frame's
+  (:func:`handsim.datatypes.rotations.continuous_zyx`): no turn where an angle crosses ±π, no flip to the
+  other solution near y = ±90°, so the linear interpolation to the control rate never sweeps round. Each
+  hinge changes between frames by at most ``φ / cos β`` (φ the recorded rotation between the frames, β
+  the mean of their principal |y| plus φ/2; ``docs/mano.md``), never by more than π. The angles are then
+  moved by whole turns into the skeleton's hinge ranges where needed, at the fewest frames (a note names
+  them: only a hinge whose angle spans more than its range, a joint that turns round, needs it).
 * **Root.** MANO rotates the whole hand by the global rotation ``rot`` about the wrist joint J0 (not the
   origin) and then translates by ``trans``, so the wrist body's world pose is position ``J0 + trans``,
   orientation ``exp(rot)`` (quaternion w, x, y, z) — what :attr:`Trajectory.root_pose` holds.
@@ -17,11 +23,12 @@ frame, joint order and sides are :mod:`handsim.io.arctic.mano`'s):
   the stored pose is relative to ``hands_mean``: full pose = pose + hands_mean.
 * **Left hands.** A left-hand pose does not drive a right hand (error).
 
-The Z·Y·X angles come from :func:`handsim.datatypes.rotations.matrix_to_zyx` (exact also at gimbal lock).
+The Z·Y·X angles come from :func:`handsim.datatypes.rotations.continuous_zyx` (exact also at gimbal lock).
 """
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -30,7 +37,7 @@ import numpy.typing as npt
 from handsim.datatypes.rotations import (
     axis_angle_to_matrix,
     axis_angle_to_quat,
-    matrix_to_zyx,
+    continuous_zyx,
     rotation_error,
     zyx_to_matrix,
 )
@@ -145,8 +152,11 @@ def mano_pose_to_trajectory(
 ) -> Trajectory:
     """Convert MANO parameters to hinge-angle targets and a wrist root pose for a MANO skeleton.
 
-    Each joint's axis-angle ``ω`` becomes the Z·Y·X angles with ``Rz(a) Ry(b) Rx(c) = exp(ω)``; the largest
-    rotation error of that decomposition is reported in ``notes``. The root pose is the wrist body's world
+    Each joint's axis-angle ``ω`` becomes the Z·Y·X angles with ``Rz(a) Ry(b) Rx(c) = exp(ω)``, continuous in
+    time (each frame the exact solution nearest the previous frame's,
+    :func:`handsim.datatypes.rotations.continuous_zyx`) and within the skeleton's hinge ranges (moved by
+    whole turns where needed, with a note); the largest rotation error of the decomposition and the
+    largest hinge change between frames are reported in ``notes``. The root pose is the wrist body's world
     pose: position ``J0 + trans`` (MANO rotates about the wrist J0 of the skeleton's shape, then
     translates), orientation ``exp(rot)`` as a quaternion (w, x, y, z).
 
@@ -183,13 +193,11 @@ def mano_pose_to_trajectory(
         seq, flat_hand_mean=flat_hand_mean, hands_mean=hands_mean, hands_components=hands_components
     ).reshape(n, 15, 3)
     rotations = axis_angle_to_matrix(pose)
-    angles = matrix_to_zyx(rotations)  # (n, 15, 3): z, y, x
+    names = [[f"{j}_{ax}" for ax, _ in HINGE_AXES] for j in MANO_JOINT_NAMES[1:]]
+    limits = {dof.name: (dof.lower, dof.upper) for dof in skeleton.dofs}
+    angles, moved = _within_ranges(continuous_zyx(rotations), np.array(names), limits)  # (n, 15, 3): z y x
     residual = float(rotation_error(zyx_to_matrix(angles), rotations).max()) if n else 0.0
-    columns = {
-        f"{j}_{ax}": angles[:, k, a]
-        for k, j in enumerate(MANO_JOINT_NAMES[1:])
-        for a, (ax, _) in enumerate(HINGE_AXES)
-    }
+    columns = {names[k][a]: angles[:, k, a] for k in range(15) for a in range(3)}
     targets = np.zeros((n, skeleton.ndof))
     for c, name in enumerate(skeleton.dof_names):
         targets[:, c] = columns.get(name, 0.0)
@@ -206,6 +214,8 @@ def mano_pose_to_trajectory(
         *seq.notes,
         f"MANO pose {convention}",
         f"Z·Y·X hinge decomposition: max rotation residual {residual:.1e} rad over {n * 15} joint rotations",
+        _step_note(angles, rotations),
+        *moved,
         "root pose = wrist body: position J0 + trans (MANO rotates about J0), quaternion of rot",
     )
     return Trajectory(
@@ -218,4 +228,75 @@ def mano_pose_to_trajectory(
         source=seq.source,
         sha256=seq.sha256,
         notes=notes,
+    )
+
+
+def _within_ranges(
+    angles: np.ndarray, names: np.ndarray, limits: dict[str, tuple[float, float]]
+) -> tuple[np.ndarray, tuple[str, ...]]:
+    """Hinge angles (N, 15, 3) moved by whole turns into their DoFs' ranges where they leave them; a note.
+
+    A whole turn leaves the joint's rotation as it is, but the servo sweeps a turn where a column's offset
+    changes, so each column that leaves its range gets the fewest changes (:func:`_fewest_turns`) and the
+    note names the DoFs and the frames of the sweeps.
+    """
+    lower, upper = np.moveaxis(np.array([[limits[str(name)] for name in row] for row in names]), -1, 0)
+    outside = (angles < lower) | (angles > upper)
+    if not outside.any():
+        return angles, ()
+    out = angles.copy()
+    sweeps: set[int] = set()
+    for k, a in zip(*np.nonzero(outside.any(axis=0)), strict=True):
+        out[:, k, a], changes = _fewest_turns(angles[:, k, a], float(lower[k, a]), float(upper[k, a]))
+        sweeps.update(changes)
+    moved = out != angles
+    dofs = [str(name) for name in names[moved.any(axis=0)]]
+    frames = sorted(sweeps)
+    listed = ", ".join(str(f) for f in frames[:10]) + (" …" if len(frames) > 10 else "")
+    return out, (
+        f"{int(moved.sum())} hinge targets of {len(dofs)} DoF{'' if len(dofs) == 1 else 's'} "
+        f"({', '.join(dofs)}) moved by whole turns into the hinge ranges (the angle spans more than its "
+        "range: the joint turns round in the sequence): the rotations are the recorded ones, but the servo "
+        f"sweeps a turn at {len(frames)} "
+        + ("frame" if len(frames) == 1 else "frames")
+        + (f" ({listed})" if frames else ""),
+    )
+
+
+def _fewest_turns(x: np.ndarray, lower: float, upper: float) -> tuple[np.ndarray, list[int]]:
+    """A column (N,) moved by whole turns into [lower, upper] with the fewest offset changes; their frames.
+
+    At the first frame, and again where the column leaves the range, it takes the offset that keeps it in
+    range the longest (the furthest-reaching choice needs the fewest changes); where no offset fits (a
+    range narrower than a turn), the one nearest the range's middle, for that frame.
+    """
+    turn = 2.0 * math.pi
+    out, changes, t, n = x.copy(), [], 0, x.shape[0]
+    while t < n:
+        rest = x[t:]
+        offsets = list(range(math.ceil((lower - x[t]) / turn), math.floor((upper - x[t]) / turn) + 1))
+        offsets = offsets or [round(((lower + upper) / 2 - x[t]) / turn)]
+        reach = {}
+        for k in offsets:
+            bad = np.flatnonzero((rest + turn * k < lower) | (rest + turn * k > upper))
+            reach[k] = t + (int(bad[0]) if bad.size else n - t)
+        k = max(offsets, key=lambda k: (reach[k], -abs(k)))
+        stop = max(reach[k], t + 1)
+        out[t:stop] = x[t:stop] + turn * k
+        changes += [t] if t else []
+        t = stop
+    return out, changes
+
+
+def _step_note(angles: np.ndarray, rotations: np.ndarray) -> str:
+    """The largest hinge change between frames beside the recorded rotation between those frames."""
+    if angles.shape[0] < 2:
+        return "hinge targets continuous in time (one frame)"
+    step = np.abs(np.diff(angles, axis=0)).max(axis=2)  # (N − 1, 15)
+    t, k = np.unravel_index(int(np.argmax(step)), step.shape)
+    turned = float(rotation_error(rotations[t + 1, k], rotations[t, k]))
+    return (
+        "hinge targets continuous in time (each frame the exact Z·Y·X solution nearest the last): largest "
+        f"hinge change between frames {math.degrees(float(step[t, k])):.3g}° ({MANO_JOINT_NAMES[k + 1]}, "
+        f"frames {t}–{t + 1}, where the recorded joint rotation turned {math.degrees(turned):.3g}°)"
     )
