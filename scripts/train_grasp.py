@@ -1,7 +1,9 @@
 """Train PPO on handsim/Grasp-v0 (lift the tennis ball and hold it) for several seeds and measure each.
 
-    python scripts/train_grasp.py --minutes 24 --seeds 0 1 2 --jobs 3 --out docs/rl/grasp   # docs/rl.md's run
-    python scripts/train_grasp.py --timesteps 512 --seeds 0 --out /tmp/x                   # a smoke run
+    python scripts/train_grasp.py --minutes 24 --seeds 0 1 2 --jobs 3   # writes runs/grasp-<date>-<time>/
+    python scripts/train_grasp.py --minutes 24 --seeds 0 1 2 --jobs 3 --out docs/rl/grasp --overwrite
+                                                                      # docs/rl.md's run
+    python scripts/train_grasp.py --timesteps 512 --seeds 0 --out /tmp/x  # a smoke run
 
 Needs the optional extras ``rl`` and ``plot``. One seed trains in one process (``--jobs`` seeds at a time,
 each with one torch thread); the environment keywords are :data:`ENV_KWARGS`, PPO's are
@@ -41,7 +43,14 @@ from pathlib import Path
 import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-from train_residual import learn, make_vec_env, save_figure, script_parser
+from train_residual import (
+    add_output_options,
+    learn,
+    make_vec_env,
+    output_folder,
+    save_figure,
+    script_parser,
+)
 
 from handsim.envs.grasp_env import GraspEnv, finger_coupling
 
@@ -469,7 +478,7 @@ def main(argv: list[str] | None = None) -> dict:
         metavar="SIGMA",
         help="no training: evaluate the scripted grasp with Gaussian noise of each SIGMA on its actions",
     )
-    parser.add_argument("--out", default="docs/rl/grasp")
+    add_output_options(parser, "grasp")
     args = parser.parse_args(argv)
     env_kwargs = training_env_kwargs(args)
     if args.script_noise is not None:
@@ -477,8 +486,9 @@ def main(argv: list[str] | None = None) -> dict:
         for record in records:
             print(json.dumps(record))
         return {"env_kwargs": env_kwargs, "script_noise": records}
-    out = Path(args.out)
+    out = output_folder(parser, args, "grasp")
     out.mkdir(parents=True, exist_ok=True)
+    args.out = str(out)
     if args.jobs > 1:
         with ProcessPoolExecutor(args.jobs) as pool:
             seeds = list(pool.map(train_seed, [args] * len(args.seeds), args.seeds))

@@ -2,6 +2,10 @@
 
 from __future__ import annotations
 
+import importlib.util
+import json
+from pathlib import Path
+
 import mujoco
 import numpy as np
 
@@ -51,3 +55,33 @@ def glove_switch_inputs():
     grasp = (Phase("grasp", int(np.searchsorted(t, 0.8)), 100),)
     trajectory = Trajectory(t, layout.dof_names, targets, np.ones_like(targets, bool), phases=grasp)
     return glove_scene(hand, trajectory, ball), trajectory
+
+
+def write_short_grasp(folder: str | Path, name: str = "cube") -> Path:
+    """A scripted grasp of the default hand (27 DoFs) on catalogue object ``name``, 0.8 s: a quick trial.
+
+    Returns:
+        The file, ``FOLDER/NAME.grasp.json``.
+    """
+    grasp = {
+        "format": "handsim-scripted-grasp", "version": 1, "description": "a short test grasp",
+        "object": name, "hand_length": 0.19, "rate_hz": 60, "rest_s": 0.1, "close_s": 0.3,
+        "hold_s": 0.3, "open_s": 0.1, "closure": 0.7,
+    }  # fmt: skip
+    path = Path(folder) / f"{name}.grasp.json"
+    path.parent.mkdir(parents=True, exist_ok=True)
+    path.write_text(json.dumps(grasp))
+    return path
+
+
+def load_script(name: str):
+    """The module of ``scripts/NAME.py``, loaded from its file (the scripts are no package).
+
+    Returns:
+        The module, its code run (its ``main`` not called).
+    """
+    path = Path(__file__).resolve().parents[1] / "scripts" / f"{name}.py"
+    spec = importlib.util.spec_from_file_location(name, path)
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module

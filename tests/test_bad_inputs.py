@@ -10,9 +10,11 @@ can skip.
 
 from __future__ import annotations
 
+import json
 import os
 import shutil
 import signal
+import socket
 import subprocess
 import sys
 from dataclasses import dataclass
@@ -291,6 +293,49 @@ def test_every_trial_failing_exits_1_with_the_errors_counted(capsys, tmp_path):
     code, first, out = cli(["report", "--render-only", str(tmp_path / "out")], capsys)
     assert (code, first) == (1, "handsim report: error: every trial failed (2 of 2): 2 FormatError")
     assert "2 trials: 0 ok, 0 diverged, 2 failed" in out
+
+
+def test_a_report_into_a_folder_another_run_writes_exits_1_naming_that_run(capsys, tmp_path):
+    from handsim.runner.output_lock import LOCK_FILE, OutputLock
+
+    out = tmp_path / "out"
+    other = ["handsim", "report", "other", "-o", str(out)]
+    with OutputLock(out / LOCK_FILE, what="held", command=other):
+        holder = (out / LOCK_FILE).read_text()
+        code, first, _ = cli(["report", str(SCRIPTED), "-o", str(out), "--workers", "1"], capsys)
+        assert (out / LOCK_FILE).read_text() == holder  # the holder's lock is untouched
+    started = json.loads(holder)["started"]
+    assert (code, first) == (
+        1,
+        f"handsim: error: output folder {out} is in use by another run (pid {os.getpid()} on "
+        f"{socket.gethostname()}, started {started}: handsim report other -o {out}; lock file "
+        f"{out / LOCK_FILE}): wait for it to end, or write to another place",
+    )
+    assert not (out / "records.jsonl").exists()
+
+
+def test_an_export_of_a_dataset_id_another_export_writes_exits_1_naming_that_export(
+    capsys, tmp_path, monkeypatch
+):
+    pytest.importorskip("minari", reason="the Minari export needs: pip install 'handsim[minari]'")
+    from handsim.runner.output_lock import OutputLock
+
+    monkeypatch.setenv("MINARI_DATASETS_PATH", str(tmp_path / "minari"))
+    (tmp_path / "run").mkdir()
+    (tmp_path / "run" / "records.jsonl").write_text('{"schema": 1, "id": "a", "status": "ok"}\n')
+    lock_file = tmp_path / "minari" / ".handsim-export" / "handsim" / "busy-v0.lock"
+    with OutputLock(lock_file, what="held", command=["handsim", "export", "minari", "other"]):
+        started = json.loads(lock_file.read_text())["started"]
+        code, first, _ = cli(
+            ["export", "minari", str(tmp_path / "run"), "--dataset-id", "handsim/busy-v0"], capsys
+        )
+    assert (code, first) == (
+        1,
+        f"handsim: error: Minari dataset 'handsim/busy-v0' is in use by another run (pid {os.getpid()} on "
+        f"{socket.gethostname()}, started {started}: handsim export minari other; lock file {lock_file}): "
+        "wait for it to end, or write to another place",
+    )
+    assert not (tmp_path / "minari" / "handsim").exists()
 
 
 @linux_only

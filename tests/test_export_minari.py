@@ -27,6 +27,7 @@ from handsim.export.episode import INFO_DOCS, STEP_INFO_KEYS, replay_record
 from handsim.runner.portable import portable_record
 from handsim.sim.replay import ReplayConfig, replay
 from handsim.trials import Trial, find_trial, load_trial
+from tests.helpers import write_short_grasp
 
 minari = pytest.importorskip("minari", reason="the Minari export needs: pip install 'handsim[minari]'")
 pytest.importorskip("h5py", reason="minari's HDF5 storage needs h5py: pip install 'minari[hdf5]'")
@@ -382,3 +383,31 @@ def test_export_refuses_trials_with_different_layouts_in_one_dataset(record, gra
     assert meta["summary"]["held"] == glove["summary"]["held"]
     assert meta["hold"]["held"] == glove["hold"]["held"]
     assert glove_data.storage.metadata["handsim"]["skipped"] == []
+
+
+def test_trials_of_different_layouts_are_refused_before_any_is_replayed(
+    record, tmp_path, datasets_root, monkeypatch
+) -> None:
+    from handsim.export import episode_replays
+
+    grasp = write_short_grasp(tmp_path)  # the default hand, 27 DoFs
+    scripted = _record(find_trial(grasp), record_id="a/cube")
+    run = _write_records(tmp_path / "run", record, scripted, {**scripted, "id": "b/cube"})
+
+    def replayed(*args, **kwargs):
+        raise AssertionError("a trial was replayed before every layout was compared")
+
+    monkeypatch.setattr(episode_replays, "replay_record", replayed)
+    with pytest.raises(LayoutMismatchError) as caught:
+        export_minari(run, "mixed/hands-v0")
+    assert str(caught.value).startswith(
+        "trial 'tzionas/Models/20' does not fit the dataset begun with trial 'a/cube': observation_names: "
+        "156 vs 205 elements;"
+    )
+    assert (
+        ". The 3 trials have 2 layouts: 2 like 'a/cube' (27 DoFs, 156 observations), 1 like "
+        "'tzionas/Models/20' (31 DoFs, 205 observations). A Minari dataset has one observation and action "
+        "space: export such trials as separate datasets (--only)"
+    ) in str(caught.value)
+    assert not (datasets_root / "mixed").exists()  # no namespace, no dataset, no work folder left
+    assert not (datasets_root / ".handsim-export").exists()

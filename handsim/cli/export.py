@@ -1,7 +1,8 @@
 """``handsim export minari``: a dataset run's replayed trials as a Minari dataset.
 
-Exit codes: 0 written; 1 a handsim error (minari not installed, the dataset exists, no records, a trial
-that no longer reproduces its record …); 2 a usage error.
+Exit codes: 0 written; 1 a handsim error (minari not installed, the dataset exists, another export of it
+runs, no records, a trial that no longer reproduces its record …); 2 a usage error. What the export found
+and put right before it began (what a killed export left, a stale lock) is printed as ``note`` lines.
 """
 
 from __future__ import annotations
@@ -31,6 +32,8 @@ def _run_minari(args: argparse.Namespace) -> int:
         author_email=args.author_email,
         code_permalink=args.code_permalink,
         progress=sys.stderr.isatty(),
+        on_note=lambda note: print(f"note        {note}", flush=True),
+        command=["handsim", *sys.argv[1:]],
     )
     info = dataset.storage.metadata["handsim"]
     print(f"dataset     {args.dataset_id}")
@@ -63,7 +66,10 @@ def register(commands: Commands) -> None:
         "observations as the environment's, actions = the absolute joint targets applied (not the "
         "environment's residuals), the environment's rewards, infos with contact forces, penetration, "
         "tracking error and object drift; each episode's metadata holds its trial id and the record's "
-        "plausibility numbers. Diverged and failed trials are skipped and listed.",
+        "plausibility numbers. Diverged and failed trials are skipped and listed. Every trial's layout is "
+        "checked before any is replayed. The dataset appears whole or not at all, also under kill -9: it "
+        "is built aside and moved into place when complete (an --overwrite keeps the old one until then), "
+        "and the next export puts right what a killed one left, printing a note.",
     )
     minari.add_argument("out_dir", metavar="OUT", help="the folder handsim report wrote (with records.jsonl)")
     minari.add_argument(

@@ -25,7 +25,7 @@ from handsim.runner.portable import record_trial
 from handsim.runner.trial_record import sha256_file
 from handsim.sim.replay import ReplayConfig, replay
 from handsim.sim.specs import MetricSpec
-from handsim.trials import load_trial
+from handsim.trials import LoadedTrial, load_trial
 
 ENV_ID = "handsim/Replay-v0"
 """The environment the episodes are steps of."""
@@ -246,6 +246,32 @@ def flat_metadata(prefix: str, value: object, out: dict) -> None:
         out[prefix] = json.dumps(value, default=str)
 
 
+def record_layout(record: dict, *, root: str | Path | None = None) -> EpisodeLayout:
+    """The observation and action layout a record's episode would have, without replaying it.
+
+    Checks what :func:`replay_record` checks before replaying (the record's fields, the inputs' SHA-256,
+    the model's hash), then builds the trial's environment: an export compares every trial's layout
+    before it replays any.
+
+    Args:
+        record: One line of a run's ``records.jsonl``.
+        root: The folder relative input paths are relative to (the run's dataset folder).
+
+    Returns:
+        The layout.
+
+    Raises:
+        ExportError: The record lacks what an episode needs (trial, parameters, summary).
+        RecordMismatchError: An input changed or is missing, the trial no longer loads, or its model differs.
+    """
+    rid, config, loaded = _loaded(record, root)
+    env = _replay_env(rid, loaded, config)
+    try:
+        return episode_layout(env)
+    finally:
+        env.close()
+
+
 def replay_record(
     record: dict, *, root: str | Path | None = None, rtol: float = 1e-6, atol: float = 1e-9
 ) -> ReplayedEpisode:
@@ -270,37 +296,19 @@ def replay_record(
         RecordMismatchError: The record cannot be reproduced: an input changed or is missing, the trial no
             longer loads, the model or the summary differ (the message lists every difference).
     """
-    rid = str(record.get("id", "?"))
-    if not isinstance(record.get("trial"), dict):
-        raise ExportError(f"trial {rid!r}: the record has no trial (the files to load)")
-    if not isinstance(record.get("summary"), dict):
-        raise ExportError(f"trial {rid!r}: the record has no summary to check a new replay against")
-    config = replay_config(record)
-    problems = input_problems(record, root)
-    if problems:
-        raise RecordMismatchError(f"trial {rid!r}: its inputs changed since the run: {'; '.join(problems)}")
+    rid, config, loaded = _loaded(record, root)
     try:
-        loaded = load_trial(record_trial(record, root), metrics=config.metrics)
-        _check_model(rid, record, loaded.scene.model_sha256)
         result = replay(loaded.scene, loaded.trajectory, config)
-        problems = summary_problems(record["summary"], result.summary, rtol, atol)
-        if problems:
-            then = (record.get("versions") or {}).get("mujoco", "not recorded")
-            raise RecordMismatchError(
-                f"trial {rid!r}: replaying it now gives other numbers than the record (mujoco "
-                f"{mujoco.__version__} now, {then} in the run): {'; '.join(problems)}"
-            )
-        env = ReplayEnv(
-            loaded.scene,
-            loaded.trajectory,
-            control_rate=config.control_rate,
-            release_delay=config.metrics.release_delay,
-            max_object_drift=None,
-        )
-    except ExportError:
-        raise
     except HandsimError as exc:
         raise RecordMismatchError(f"trial {rid!r}: cannot be replayed any more: {exc}") from exc
+    problems = summary_problems(record["summary"], result.summary, rtol, atol)
+    if problems:
+        then = (record.get("versions") or {}).get("mujoco", "not recorded")
+        raise RecordMismatchError(
+            f"trial {rid!r}: replaying it now gives other numbers than the record (mujoco "
+            f"{mujoco.__version__} now, {then} in the run): {'; '.join(problems)}"
+        )
+    env = _replay_env(rid, loaded, config)
     try:
         episode = _rollout(env)
     finally:
@@ -317,6 +325,39 @@ def replay_record(
     return ReplayedEpisode(trial_id=rid, metadata=metadata, **episode)
 
 
+def _loaded(record: dict, root: str | Path | None) -> tuple[str, ReplayConfig, LoadedTrial]:
+    """The record's id, replay parameters and trial, loaded after checking its fields, inputs and model."""
+    rid = str(record.get("id", "?"))
+    if not isinstance(record.get("trial"), dict):
+        raise ExportError(f"trial {rid!r}: the record has no trial (the files to load)")
+    if not isinstance(record.get("summary"), dict):
+        raise ExportError(f"trial {rid!r}: the record has no summary to check a new replay against")
+    config = replay_config(record)
+    problems = input_problems(record, root)
+    if problems:
+        raise RecordMismatchError(f"trial {rid!r}: its inputs changed since the run: {'; '.join(problems)}")
+    try:
+        loaded = load_trial(record_trial(record, root), metrics=config.metrics)
+    except HandsimError as exc:
+        raise RecordMismatchError(f"trial {rid!r}: cannot be replayed any more: {exc}") from exc
+    _check_model(rid, record, loaded.scene.model_sha256)
+    return rid, config, loaded
+
+
+def _replay_env(rid: str, loaded: LoadedTrial, config: ReplayConfig) -> ReplayEnv:
+    """The trial's ``handsim/Replay-v0`` as the run replayed it (the whole recording, no drift limit)."""
+    try:
+        return ReplayEnv(
+            loaded.scene,
+            loaded.trajectory,
+            control_rate=config.control_rate,
+            release_delay=config.metrics.release_delay,
+            max_object_drift=None,
+        )
+    except HandsimError as exc:
+        raise RecordMismatchError(f"trial {rid!r}: cannot be replayed any more: {exc}") from exc
+
+
 def _check_model(rid: str, record: dict, model_sha256: str) -> None:
     recorded = record.get("model_sha256")
     if recorded and recorded != model_sha256:
@@ -327,7 +368,21 @@ def _check_model(rid: str, record: dict, model_sha256: str) -> None:
         )
 
 
-def _rollout(env) -> dict:
+def episode_layout(env: ReplayEnv) -> EpisodeLayout:
+    """The observation and action layout of a ``handsim/Replay-v0`` environment."""
+    slices = env.unwrapped.observation_slices
+    layout = env.unwrapped.scene.layout
+    return EpisodeLayout(
+        observation_names=tuple(env.unwrapped.observation_names),
+        observation_slices=tuple((g, s.start, s.stop) for g, s in slices.items()),
+        dof_names=tuple(layout.dof_names),
+        ctrl_range=tuple((float(lo), float(hi)) for lo, hi in layout.ctrl_range),
+        link_names=tuple(layout.link_names),
+        dt=float(env.unwrapped.dt),
+    )
+
+
+def _rollout(env: ReplayEnv) -> dict:
     """Step ``env`` with zero residuals until it ends; the episode's arrays (and qpos per row)."""
     data = env.unwrapped.data
     obs, info = env.reset(seed=RESET_SEED)
@@ -346,15 +401,6 @@ def _rollout(env) -> dict:
         qpos.append(data.qpos.copy())
         done = terminated or truncated
     slices = env.unwrapped.observation_slices
-    layout_scene = env.unwrapped.scene.layout
-    layout = EpisodeLayout(
-        observation_names=tuple(env.unwrapped.observation_names),
-        observation_slices=tuple((g, s.start, s.stop) for g, s in slices.items()),
-        dof_names=tuple(layout_scene.dof_names),
-        ctrl_range=tuple((float(lo), float(hi)) for lo, hi in layout_scene.ctrl_range),
-        link_names=tuple(layout_scene.link_names),
-        dt=float(env.unwrapped.dt),
-    )
     obs_array = np.asarray(observations, dtype=np.float64)
     force, pen = slices["contact_force"], slices["penetration"]
     info_arrays = {
@@ -373,7 +419,7 @@ def _rollout(env) -> dict:
         "terminations": np.asarray(terms, dtype=bool),
         "truncations": np.asarray(truncs, dtype=bool),
         "infos": info_arrays,
-        "layout": layout,
+        "layout": episode_layout(env),
         "qpos": np.asarray(qpos),
     }
 

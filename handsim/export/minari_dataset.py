@@ -4,7 +4,8 @@ Every selected record of ``OUT/records.jsonl`` is replayed again through ``hands
 residuals and checked against the record (:func:`handsim.export.episode.replay_record`); each becomes one
 episode. The dataset is written under Minari's datasets folder (``MINARI_DATASETS_PATH``, default
 ``~/.minari/datasets``) and loads with ``minari.load_dataset(dataset_id)``. See ``docs/minari.md`` for the
-layout.
+layout. It is built aside and moved into place when complete (:mod:`handsim.export.staging`), so a killed
+export leaves no part of a dataset and an interrupted ``--overwrite`` keeps the dataset it would replace.
 
 The environment cannot be recreated from an id alone (its scene is built from the trial's files), so the
 dataset has no ``env_spec``: :func:`recover_replay_env` rebuilds an episode's environment from the trial
@@ -15,22 +16,18 @@ from __future__ import annotations
 
 import json
 import math
-import shutil
-from collections.abc import Sequence
+import warnings
+from collections.abc import Callable, Iterable, Sequence
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from handsim.envs.replay_env import ReplayEnv
-from handsim.export.episode import ReplayedEpisode, replay_config
-from handsim.export.episode_replays import replayed_episodes
-from handsim.export.errors import (
-    DatasetExistsError,
-    ExportError,
-    MissingExtraError,
-    RecordMismatchError,
-)
-from handsim.export.minari_writer import MinariWriter
+from handsim.export.episode import EpisodeLayout, ReplayedEpisode, replay_config
+from handsim.export.episode_replays import EpisodeReplays, Outcome
+from handsim.export.errors import ExportError, MissingExtraError, RecordMismatchError
+from handsim.export.minari_writer import MinariWriter, check_layouts
 from handsim.export.run_records import read_run_records, select_records, skip_entry
+from handsim.export.staging import DatasetStage
 from handsim.runner.trial_record import sha256_file
 from handsim.trials import Trial, load_trial
 
@@ -94,14 +91,21 @@ def export_minari(
     author_email: str | None = None,
     code_permalink: str | None = None,
     progress: bool = False,
+    on_note: Callable[[str], None] | None = None,
+    command: Sequence[str] | None = None,
 ) -> minari.MinariDataset:
     """Write the replayed trials of a dataset run as a Minari dataset.
 
     Each exported trial is one episode, in the order of the trial ids: its observations are the
     environment's (``metadata["handsim"]["observation_names"]``), its actions the absolute joint targets
     applied (not the environment's residuals), its rewards and ``infos`` the environment's, its episode
-    metadata the trial and the record's plausibility numbers. Nothing is written unless every exported
-    trial reproduces its record (the partial dataset is removed, a replaced one restored).
+    metadata the trial and the record's plausibility numbers.
+
+    The dataset appears whole or not at all, even if the process is killed: it is built in a staging
+    folder and moved into place when complete (:mod:`handsim.export.staging`); a dataset it replaces stays
+    in place until then. Nothing is written unless every exported trial reproduces its record, and every
+    trial is loaded and its layout compared before any is replayed (when more than one is selected). One
+    export per dataset id runs at a time.
 
     Args:
         out_dir: The folder ``handsim report DATASET -o OUT`` wrote (with ``records.jsonl``).
@@ -118,7 +122,10 @@ def export_minari(
         author: Dataset author(s) for Minari's metadata (left out when None).
         author_email: Their contact (left out when None).
         code_permalink: Link to the code that made the data (left out when None; no link is invented).
-        progress: Show a progress bar.
+        progress: Show progress bars.
+        on_note: Called with each note on what the export found and put right (a killed export's
+            leftovers, a stale lock); default: a ``UserWarning``.
+        command: The command line naming this export in its lock (default ``sys.argv``).
 
     Returns:
         The dataset (also loadable with ``minari.load_dataset(dataset_id)``); its
@@ -129,6 +136,7 @@ def export_minari(
         ExportError: Malformed id, no records selected or nothing left to export, a record without what an
             episode needs.
         DatasetExistsError: The dataset exists and ``overwrite`` is False.
+        OutputBusyError: Another export of this dataset id runs (the message names it).
         RecordMismatchError: A trial no longer reproduces its record (and ``skip_mismatched`` is False).
         LayoutMismatchError: Trials with different observation layouts, hands or control rates.
         InputFileError: ``out_dir`` has no ``records.jsonl``.
@@ -147,26 +155,18 @@ def export_minari(
     if not todo:
         reasons = "; ".join(f"{s['id']}: {s['reason']}" for s in skipped[:5])
         raise ExportError(f"no trial to export: {len(skipped)} skipped ({reasons})")
-    path = Path(get_dataset_path(dataset_id))
-    if path.exists() and not overwrite:
-        raise DatasetExistsError(
-            f"Minari dataset {dataset_id!r} exists already ({path}): choose another id or version, or "
-            "replace it with --overwrite (overwrite=True)"
-        )
-    backup = path.with_name(f".{path.name}.replaced") if path.exists() else None
-    if backup is not None:
-        shutil.rmtree(backup, ignore_errors=True)
-        path.rename(backup)
-    writer = MinariWriter(minari, dataset_id, author, author_email, code_permalink)
-    outcomes = replayed_episodes(todo, root, workers, rtol, atol, progress)
-    try:
-        for record, outcome in zip(todo, outcomes, strict=True):
+    stage = DatasetStage(
+        Path(get_dataset_path()), dataset_id, overwrite=overwrite, on_note=on_note or _warn, command=command
+    )
+    with stage, EpisodeReplays(root, min(workers, len(todo)), rtol, atol, progress) as replays:
+        if len(todo) > 1:  # every trial loaded and checked before any is replayed
+            todo = _fitting(todo, replays.layouts(todo), skipped, skip_mismatched)
+        writer = MinariWriter(minari, dataset_id, author, author_email, code_permalink, stage.build_root)
+        for record, outcome in zip(todo, replays.episodes(todo), strict=True):
             if isinstance(outcome, ReplayedEpisode):
                 writer.add(outcome, record)
-            elif outcome[0] == "mismatch" and skip_mismatched:
-                skipped.append(skip_entry(record, f"mismatch: {outcome[1]}"))
             else:
-                raise (RecordMismatchError if outcome[0] == "mismatch" else ExportError)(outcome[1])
+                _skip_or_refuse(record, outcome, skipped, skip_mismatched)
         if writer.dataset is None:
             reasons = "; ".join(f"{s['id']}: {s['reason']}" for s in skipped[:5])
             raise ExportError(f"no trial could be exported: {reasons}")
@@ -180,15 +180,61 @@ def export_minari(
             skipped,
             {"rtol": rtol, "atol": atol},
         )
-    except BaseException:
-        outcomes.close()
-        shutil.rmtree(path, ignore_errors=True)
-        if backup is not None:
-            backup.rename(path)
-        raise
-    if backup is not None:
-        shutil.rmtree(backup, ignore_errors=True)
-    return writer.dataset
+        stage.commit(lambda: _register_namespace(dataset_id))
+    return minari.load_dataset(dataset_id)
+
+
+def _fitting(
+    todo: list[dict],
+    layouts: Iterable[EpisodeLayout | Outcome],
+    skipped: list[dict],
+    skip_mismatched: bool,
+) -> list[dict]:
+    """The records whose trial loads and checks, once every such trial is known to share one layout.
+
+    Raises:
+        LayoutMismatchError: Trials with different layouts (before anything is replayed).
+        RecordMismatchError: A trial that no longer loads as recorded (unless ``skip_mismatched``).
+        ExportError: A record without what an episode needs.
+    """
+    kept, found = [], []
+    for record, layout in zip(todo, layouts, strict=True):
+        if isinstance(layout, EpisodeLayout):
+            kept.append(record)
+            found.append((record["id"], layout))
+        else:
+            _skip_or_refuse(record, layout, skipped, skip_mismatched)
+    check_layouts(found)
+    return kept
+
+
+def _skip_or_refuse(record: dict, outcome: Outcome, skipped: list[dict], skip_mismatched: bool) -> None:
+    """Skip a record that no longer reproduces (``skip_mismatched``), or raise its error."""
+    kind, message = outcome
+    if kind == "mismatch" and skip_mismatched:
+        skipped.append(skip_entry(record, f"mismatch: {message}"))
+        return
+    raise (RecordMismatchError if kind == "mismatch" else ExportError)(message)
+
+
+def _register_namespace(dataset_id: str) -> None:
+    """Create the dataset's Minari namespace where it is missing (just before the dataset moves in)."""
+    # lazy: optional extra handsim[minari]
+    from minari.dataset.minari_dataset import parse_dataset_id
+    from minari.namespace import create_namespace, list_local_namespaces
+
+    namespace = parse_dataset_id(dataset_id)[0]
+    if namespace is None or namespace in list_local_namespaces():
+        return
+    try:
+        create_namespace(namespace)
+    except ValueError:  # created by another export meanwhile
+        if namespace not in list_local_namespaces():
+            raise
+
+
+def _warn(note: str) -> None:
+    warnings.warn(note, UserWarning, stacklevel=3)
 
 
 def recover_replay_env(dataset: minari.MinariDataset, episode_index: int, **kwargs: Any) -> ReplayEnv:

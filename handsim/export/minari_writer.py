@@ -7,14 +7,17 @@ they share its layout; :meth:`MinariWriter.finish` writes handsim's metadata (``
 from __future__ import annotations
 
 import warnings
+from collections.abc import Sequence
+from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 import mujoco
 import numpy as np
 from gymnasium import spaces
 
-from handsim.export.episode import ENV_ID, INFO_DOCS, RESET_SEED, ReplayedEpisode
+from handsim.export.episode import ENV_ID, INFO_DOCS, RESET_SEED, EpisodeLayout, ReplayedEpisode
 from handsim.export.errors import LayoutMismatchError
+from handsim.export.staging import minari_datasets_path
 from handsim.version import __version__
 
 if TYPE_CHECKING:
@@ -67,6 +70,8 @@ class MinariWriter:
         author: Dataset author(s), or None.
         author_email: Their contact, or None.
         code_permalink: Link to the code that made the data, or None.
+        datasets_root: The Minari datasets folder the dataset is created in (the export's staging folder,
+            :class:`~handsim.export.staging.DatasetStage`, not the user's: it is moved there when complete).
 
     Attributes:
         dataset: The dataset, once the first episode is added.
@@ -79,9 +84,11 @@ class MinariWriter:
         author: str | None,
         author_email: str | None,
         code_permalink: str | None,
+        datasets_root: Path,
     ) -> None:
         self._minari = minari
         self._id = dataset_id
+        self._root = datasets_root
         self._author, self._email, self._permalink = author, author_email, code_permalink
         self.dataset: minari.MinariDataset | None = None
         self._first: ReplayedEpisode | None = None
@@ -106,15 +113,10 @@ class MinariWriter:
         )
         if self._first is None:
             self._first = episode
-            self.dataset = self._create(episode, buffer)
+            with minari_datasets_path(self._root):
+                self.dataset = self._create(episode, buffer)
         else:
-            differences = self._first.layout.differences(episode.layout)
-            if differences:
-                raise LayoutMismatchError(
-                    f"trial {episode.trial_id!r} does not fit the dataset begun with trial "
-                    f"{self._first.trial_id!r}: {'; '.join(differences)}. A Minari dataset has one "
-                    "observation and action space: export such trials as separate datasets (--only)"
-                )
+            check_layouts([(self._first.trial_id, self._first.layout), (episode.trial_id, episode.layout)])
             self.dataset.update_dataset_from_buffer([buffer])
         index = len(self._exported)
         self.dataset.storage.update_episode_metadata([episode.metadata], [index])
@@ -179,6 +181,42 @@ class MinariWriter:
                 }
             }
         )
+
+
+def check_layouts(layouts: Sequence[tuple[str, EpisodeLayout]]) -> None:
+    """Check that trials share one layout (a Minari dataset has one observation and one action space).
+
+    Args:
+        layouts: ``(trial id, layout)`` of every trial, in export order; the first begins the dataset.
+
+    Raises:
+        LayoutMismatchError: Some differ: names the first that does not fit the first trial and what
+            differs, and (for more than two trials) how many trials have each layout.
+    """
+    if not layouts:
+        return
+    first_id, first = layouts[0]
+    groups: dict[EpisodeLayout, list[str]] = {}
+    for trial_id, layout in layouts:
+        groups.setdefault(layout, []).append(trial_id)
+    if len(groups) == 1:
+        return
+    other_id, other = next((t, lay) for t, lay in layouts if lay != first)
+    message = (
+        f"trial {other_id!r} does not fit the dataset begun with trial {first_id!r}: "
+        f"{'; '.join(first.differences(other))}."
+    )
+    if len(layouts) > 2:
+        kinds = ", ".join(
+            f"{len(ids)} like {ids[0]!r} ({len(layout.dof_names)} DoFs, {len(layout.observation_names)} "
+            "observations)"
+            for layout, ids in groups.items()
+        )
+        message += f" The {len(layouts)} trials have {len(groups)} layouts: {kinds}."
+    raise LayoutMismatchError(
+        f"{message} A Minari dataset has one observation and action space: export such trials as separate "
+        "datasets (--only)"
+    )
 
 
 def describe(layout: Any) -> str:

@@ -9,6 +9,8 @@
 * :mod:`handsim.runner.run_summary` — what a run did, counted from its records.
 * :mod:`handsim.runner.records` — ``OUT/records.jsonl`` and ``OUT/run.json`` (schema: ``docs/records.md``).
 * :mod:`handsim.runner.portable` — records whose paths are relative to the dataset root, and back.
+* :mod:`handsim.runner.output_lock` — one run per output at a time: a lock file naming its holder
+  (``OUT/.handsim.lock``; the Minari export locks each dataset id the same way).
 
 Importing this package imports neither MuJoCo nor the submodules.
 """

@@ -4,7 +4,8 @@
 restarted with the same command loses nothing and runs no trial twice), runs the others with the chosen
 backend, and appends each record as its trial finishes — written by this (the parent) process only, with
 the trial's rendered frames written first. A trial that fails is recorded with its error; the run goes
-on. Ctrl-C stops the workers and leaves complete lines only.
+on. Ctrl-C stops the workers and leaves complete lines only. One run at a time writes to an output folder
+(:mod:`handsim.runner.output_lock`: the lock file ``OUT/.handsim.lock`` names the run holding it).
 
 Backends (:data:`BACKENDS`): ``local`` (:mod:`handsim.runner.local_backend`: in this process with
 ``workers=1``, else a pool of spawned processes) and ``ray`` (:mod:`handsim.runner.ray_backend`). Each
@@ -24,6 +25,7 @@ from tqdm import tqdm
 
 from handsim.runner.errors import RunnerError
 from handsim.runner.local_backend import in_process_outcomes, pool_outcomes
+from handsim.runner.output_lock import LOCK_FILE, OutputLock
 from handsim.runner.portable import dataset_root, portable_record
 from handsim.runner.ray_backend import import_ray, ray_outcomes
 from handsim.runner.records import (
@@ -113,6 +115,9 @@ def run_dataset(
     Raises:
         RunnerError: An unknown backend, ``workers`` or ``frames`` out of range, Ray missing, ``OUT`` a
             file, or ``OUT`` holding records made with other parameters.
+        OutputBusyError: Another run writes to ``OUT`` (it holds ``OUT/.handsim.lock``; the message names
+            its pid, host, start time and command). The lock of a run that ended without releasing it is
+            taken over, with a note in the summary.
         RecordsError: ``OUT/records.jsonl`` has a malformed line other than a truncated last one.
         KeyboardInterrupt: Ctrl-C; the records written so far are complete lines (run again to resume).
     """
@@ -132,59 +137,60 @@ def run_dataset(
     if out.exists() and not out.is_dir():
         raise RunnerError(f"{out} exists and is not a folder; expected an output folder")
     out.mkdir(parents=True, exist_ok=True)
-    notes = list(repair_records(out))
-    parameters = run_parameters(config, frames)
-    existing = load_records(out).records
-    _check_parameters(existing, parameters, out)
-    recorded = {r["id"] for r in existing}
-    todo = [e for e in entries if e.id not in recorded]
-    write_run_info(
-        out,
-        {
-            "command": list(sys.argv if command is None else command),
-            "dataset": overview.get("root"),
-            "versions": versions(),
-            "discovery": overview,
-            "parameters": parameters,
-            "backend": backend,
-            "workers": workers,
-            "selected": [e.id for e in entries],
-        },
-    )
-    if backend == "ray":
-        outcomes = ray_outcomes(todo, trial_outcome, config, frames, workers, address)
-    elif workers == 1 or not todo:
-        outcomes = in_process_outcomes(todo, trial_outcome, config, frames)
-    else:  # a pool even for one trial: records must not depend on how many trials were left
-        outcomes = pool_outcomes(todo, trial_outcome, config, frames, min(workers, len(todo)))
-    ran: list[str] = []
-    bar = tqdm(total=len(todo), unit="trial", desc="trials", disable=not progress, dynamic_ncols=True)
-    status = {"ok": 0, "diverged": 0, "error": 0}
-    with contextlib.closing(outcomes), RecordWriter(out) as writer, bar:
-        if len(entries) > len(todo):
-            bar.write(
-                f"{len(entries) - len(todo)} of {len(entries)} trials already recorded in {out}: skipped"
-            )
-        for outcome in outcomes:
-            record = portable_record(outcome.record, overview.get("root"))
-            write_outcome_files(out, outcome)
-            writer.append(record)
-            ran.append(record["id"])
-            status[record["status"]] += 1
-            bar.set_postfix(status, refresh=False)
-            bar.update(1)
-            if on_record is not None:
-                on_record(record)
-    ids = {e.id for e in entries}
-    mine = [r for r in load_records(out).records if r["id"] in ids]
-    counts = status_counts(mine, ids)
-    return RunSummary(
-        failures=failure_counts(mine),
-        out=str(out),
-        trials=len(entries),
-        skipped=len(entries) - len(todo),
-        ran=tuple(ran),
-        notes=tuple(notes),
-        wall_s=time.perf_counter() - start,
-        **counts,
-    )
+    with OutputLock(out / LOCK_FILE, what=f"output folder {out}", command=command) as lock:
+        notes = [*lock.notes, *repair_records(out)]
+        parameters = run_parameters(config, frames)
+        existing = load_records(out).records
+        _check_parameters(existing, parameters, out)
+        recorded = {r["id"] for r in existing}
+        todo = [e for e in entries if e.id not in recorded]
+        write_run_info(
+            out,
+            {
+                "command": list(sys.argv if command is None else command),
+                "dataset": overview.get("root"),
+                "versions": versions(),
+                "discovery": overview,
+                "parameters": parameters,
+                "backend": backend,
+                "workers": workers,
+                "selected": [e.id for e in entries],
+            },
+        )
+        if backend == "ray":
+            outcomes = ray_outcomes(todo, trial_outcome, config, frames, workers, address)
+        elif workers == 1 or not todo:
+            outcomes = in_process_outcomes(todo, trial_outcome, config, frames)
+        else:  # a pool even for one trial: records must not depend on how many trials were left
+            outcomes = pool_outcomes(todo, trial_outcome, config, frames, min(workers, len(todo)))
+        ran: list[str] = []
+        bar = tqdm(total=len(todo), unit="trial", desc="trials", disable=not progress, dynamic_ncols=True)
+        status = {"ok": 0, "diverged": 0, "error": 0}
+        with contextlib.closing(outcomes), RecordWriter(out) as writer, bar:
+            if len(entries) > len(todo):
+                bar.write(
+                    f"{len(entries) - len(todo)} of {len(entries)} trials already recorded in {out}: skipped"
+                )
+            for outcome in outcomes:
+                record = portable_record(outcome.record, overview.get("root"))
+                write_outcome_files(out, outcome)
+                writer.append(record)
+                ran.append(record["id"])
+                status[record["status"]] += 1
+                bar.set_postfix(status, refresh=False)
+                bar.update(1)
+                if on_record is not None:
+                    on_record(record)
+        ids = {e.id for e in entries}
+        mine = [r for r in load_records(out).records if r["id"] in ids]
+        counts = status_counts(mine, ids)
+        return RunSummary(
+            failures=failure_counts(mine),
+            out=str(out),
+            trials=len(entries),
+            skipped=len(entries) - len(todo),
+            ran=tuple(ran),
+            notes=tuple(notes),
+            wall_s=time.perf_counter() - start,
+            **counts,
+        )
