@@ -3,9 +3,10 @@
 from __future__ import annotations
 
 import argparse
+import os
 from pathlib import Path
 
-from handsim.cli._common import Commands, output_file
+from handsim.cli._common import Commands, add_arctic_options, output_file
 
 
 def load_trajectory(path: str, skeleton_path: str | None, calibration_path: str | None):
@@ -45,9 +46,28 @@ def _inspect_arctic(args: argparse.Namespace) -> int:
             f"handsim inspect: {' and '.join(given)} {'does' if len(given) == 1 else 'do'} not apply to an "
             "ARCTIC sequence (its hands are MANO's: their joint angles need the MANO models)"
         )
-    for line in describe_arctic(read_arctic_sequence(args.trajectory)).lines():
+    sequence = read_arctic_sequence(args.trajectory)
+    for line in describe_arctic(sequence, _arctic_sides(sequence, args)).lines():
         print(line)
     return 0
+
+
+def _arctic_sides(sequence, args: argparse.Namespace):
+    """The side check's verdict (a swapped one is a flag), or why it was not run: it needs the MANO files."""
+    # lazy: the MANO models, the object and the check, only for ARCTIC sequences
+    from handsim.errors import InputFileError
+    from handsim.io.arctic.mano import MANO_DIR_ENV
+    from handsim.trials.arctic import sequence_side_check
+
+    if args.mano_dir is None and not os.environ.get(MANO_DIR_ENV):
+        return (
+            "not checked: the side check drives both MANO models (--mano-dir DIR with your MANO_RIGHT.pkl "
+            "and MANO_LEFT.pkl, or HANDSIM_MANO_DIR)"
+        )
+    try:
+        return sequence_side_check(sequence, args.mano_dir, args.templates)
+    except InputFileError as exc:  # a missing MANO file or object template: the rest is still shown
+        return f"not checked: {exc}"
 
 
 def _inspect(args: argparse.Namespace) -> int:
@@ -56,19 +76,33 @@ def _inspect(args: argparse.Namespace) -> int:
 
     if args.trajectory.endswith(".mano.npy"):
         return _inspect_arctic(args)
+    arctic = [
+        flag for flag, value in (("--mano-dir", args.mano_dir), ("--templates", args.templates)) if value
+    ]
+    if arctic:
+        raise SystemExit(
+            f"handsim inspect: {' and '.join(arctic)} apply to ARCTIC sequences (<seq>.mano.npy) only"
+        )
     trajectory, skeleton, checks = load_trajectory(args.trajectory, args.skeleton, args.calibration)
     for line in describe(trajectory, skeleton).lines():
         print(line)
+    segmentation = None
     if checks is not None:
+        # lazy: the grasp segmentation, only for glove recordings
+        from handsim.glove.segmentation import segment_grasps
+
         print(f"annotation {checks.annotation.note}")
         print(f"spikes     {checks.spike_text()}")
         for spike in checks.spikes:
             print(f"spike      {spike.describe()}")
+        segmentation = segment_grasps(trajectory)
+        for line in segmentation.lines():
+            print(line)
     if args.plot:
         # lazy: matplotlib (an optional extra), only with --plot
         from handsim.viz.plotting import plot_trajectory
 
-        print(f"plot       {plot_trajectory(trajectory, args.plot, skeleton)}")
+        print(f"plot       {plot_trajectory(trajectory, args.plot, skeleton, segmentation)}")
     return 0
 
 
@@ -98,16 +132,25 @@ def register(commands: Commands) -> None:
         description="Read a recording (GraspDB14 CyberGlove rad file, or raw with --calibration; a "
         "Tzionas Model_Hand_*.MOTION with its sequence's objects) and print its duration and rate, the "
         "largest interval between samples, channels, phases (from the _annot- file beside it), gaps, and "
-        "with --skeleton (a .MOTION's own .SKEL by default) the samples outside the joint limits. An ARCTIC "
+        "with --skeleton (a .MOTION's own .SKEL by default) the samples outside the joint limits; for a "
+        "glove recording also its grasp episodes (frames and times, hold, peak flexion, truncated or "
+        "complete, found from the annotation or automatically from the summed finger flexion; a calibration "
+        "sequence is named as such). An ARCTIC "
         "raw_seqs/sXX/<seq>.mano.npy: frames, both hands (wrist travel, fitting error) and the object of "
-        "the <seq>.object.npy beside it with its articulation range.",
+        "the <seq>.object.npy beside it with its articulation range; with your MANO files (--mano-dir or "
+        "HANDSIM_MANO_DIR) also whether 'right' and 'left' look swapped (the flag hands_swapped).",
     )
     inspect.add_argument("trajectory", metavar="TRAJECTORY")
     inspect.add_argument("--skeleton", metavar="SKELETON_FILE", help="hand skeleton: columns and limits")
     inspect.add_argument("--calibration", metavar="JSON", help="glove calibration for a raw-count file")
     inspect.add_argument(
-        "--plot", type=output_file, metavar="PNG", help="write a plot of every DoF over time"
+        "--plot",
+        type=output_file,
+        metavar="PNG",
+        help="write a plot of every DoF over time (a glove recording's with its summed finger flexion and "
+        "grasp episodes on top)",
     )
+    add_arctic_options(inspect)
     inspect.set_defaults(func=_inspect)
 
     calibrate = commands.add_parser(

@@ -33,6 +33,11 @@ phase annotation files are read, found beside a recording and matched to its fra
 Spikes (:mod:`handsim.glove.spikes`): :func:`find_spikes`, :func:`remove_spikes` (single-sample jumps beyond
 :data:`MAX_JOINT_SPEED` that revert, marked invalid and filled); :mod:`handsim.glove.checks` runs the
 annotation and spike checks on a recording.
+
+Grasp episodes (:mod:`handsim.glove.segmentation`): :func:`segment_grasps` turns a recording into
+:class:`GraspEpisode` s (approach, closure, hold, release; truncated or not; from the annotation or found
+automatically on the summed finger flexion), :class:`GraspSegmentation`; a calibration sequence is
+recognised by :func:`recognise_calibration_sequence` (:mod:`handsim.glove.calibration_sequence`) and has none.
 """
 
 from __future__ import annotations
@@ -46,6 +51,7 @@ from handsim.glove.calibration import (
     apply_calibration,
 )
 from handsim.glove.calibration_estimation import CALIBRATION_PROTOCOL, ReferencePose, estimate_calibration
+from handsim.glove.calibration_sequence import CalibrationSequence, recognise_calibration_sequence
 from handsim.glove.coupling import CYBERGLOVE, DIP_PIP_RATIO, couple_dip, cyberglove_dip
 from handsim.glove.gaps import GAP_METHODS, fill_gaps, find_gaps
 from handsim.glove.phases import (
@@ -56,6 +62,7 @@ from handsim.glove.phases import (
     switch_segments,
     with_phases,
 )
+from handsim.glove.segmentation import GraspEpisode, GraspSegmentation, segment_grasps
 from handsim.glove.sensors import (
     SENSOR_NAMES,
     SENSORS,
@@ -81,8 +88,11 @@ __all__ = [
     "AbductionCoupling",
     "AnnotationMatch",
     "CalibrationError",
+    "CalibrationSequence",
     "GloveCalibration",
     "GloveSensor",
+    "GraspEpisode",
+    "GraspSegmentation",
     "PhaseAnnotation",
     "ReferencePose",
     "Spike",
@@ -98,7 +108,9 @@ __all__ = [
     "fill_gaps",
     "find_gaps",
     "find_spikes",
+    "recognise_calibration_sequence",
     "remove_spikes",
+    "segment_grasps",
     "split_by_switch",
     "switch_segments",
     "thumb_rest_note",

@@ -9,6 +9,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -17,6 +18,9 @@ from handsim.datatypes.trajectory import Trajectory
 from handsim.datatypes.trajectory_ops import LimitReport, limit_violations
 from handsim.glove.gaps import find_gaps
 from handsim.io.arctic.sequence import ArcticSequence
+
+if TYPE_CHECKING:
+    from handsim.trials.arctic_hands import SideCheck
 
 
 @dataclass(frozen=True)
@@ -144,9 +148,12 @@ class ArcticReport:
 
     Attributes:
         sequence: The sequence described.
+        sides: Whether ``right`` and ``left`` hold those hands: the side check's verdict
+            (:func:`handsim.trials.arctic_hands.hand_side_check`), or why it was not run.
     """
 
     sequence: ArcticSequence
+    sides: SideCheck | str = "not checked"
 
     def lines(self) -> list[str]:
         """Human-readable lines (lengths in mm, speeds in m/s, angles in degrees and radians)."""
@@ -186,16 +193,24 @@ class ArcticReport:
         out.append(f"sha256     {s.object_sha256} (object)")
         notes = (*s.notes, *s.right.notes, *s.left.notes)
         out.extend(f"note       {n}" for n in notes)
+        if isinstance(self.sides, str):
+            out.append(f"sides      {self.sides}")
+        elif self.sides.flags:  # as the replay reports it
+            out.extend(f"flag       {flag.line()}" for flag in self.sides.flags)
+        else:
+            out.append(f"sides      {self.sides.message}")
         return out
 
 
-def describe_arctic(sequence: ArcticSequence) -> ArcticReport:
-    """Frames, both hands (wrist travel, fitting error), the object and its articulation range.
+def describe_arctic(sequence: ArcticSequence, sides: SideCheck | str = "not checked") -> ArcticReport:
+    """Frames, both hands (wrist travel, fitting error), the object and its articulation range, the sides.
 
     Args:
         sequence: The sequence (:func:`handsim.io.arctic.sequence.read_arctic_sequence`).
+        sides: The side check's verdict (:func:`handsim.trials.arctic.sequence_side_check`: a swapped one is
+            shown as the replay's ``hands_swapped`` flag), or why it was not run.
 
     Returns:
         The report.
     """
-    return ArcticReport(sequence)
+    return ArcticReport(sequence, sides)
