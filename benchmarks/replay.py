@@ -65,7 +65,9 @@ Where the remaining time goes (measured with cProfile and per-part CPU timers on
 Prints steps per second, the real-time factor and the ratios, with the load average beside them (the
 machine is shared); the last lines are ``replay_vs_raw=<ratio>`` (worst one-hand scene),
 ``env_vs_raw=<ratio>``, ``vector_env_scaling=<ratio>`` (the native vector environment's env-steps/s over
-one environment's, worst N) and ``arctic_replay_vs_raw=<ratio>`` (the ARCTIC-shaped scene).
+one environment's, worst N), ``arctic_replay_vs_raw=<ratio>`` (the ARCTIC-shaped scene) and
+``arctic_checks_vs_replay=<ratio>`` (the CPU time the ARCTIC scene's checks before the run take, over one
+``replay()`` of it: the scene built with its checks less the scene built without them).
 """
 
 from __future__ import annotations
@@ -184,8 +186,26 @@ def arctic_case():
     )  # fmt: skip
     with tempfile.TemporaryDirectory() as folder:
         model = arctic_object(_box_template(Path(folder)), articulation=track.articulation)
-        scene = arctic_scene(hands, trajectory, build_object(model), "box")
-    return "ARCTIC-shaped: two MANO hands + box and lid", scene, trajectory
+        box = build_object(model)
+    scene = arctic_scene(hands, trajectory, box, "box")
+    return "ARCTIC-shaped: two MANO hands + box and lid", scene, trajectory, (hands, box)
+
+
+def arctic_check_seconds(hands, trajectory, box, repeats: int) -> tuple[float, float]:
+    """CPU seconds of building the ARCTIC-shaped scene with and without its checks before the run.
+
+    The difference is what the checks cost (the hands' recorded paths against the stand and the floor, the
+    lid's settled start, the hands' starting penetration, and a second compile where they change the world).
+    """
+    with_checks, without = [], []
+    for _ in range(repeats):
+        start = CLOCK()
+        arctic_scene(hands, trajectory, box, "box")
+        with_checks.append(CLOCK() - start)
+        start = CLOCK()
+        arctic_scene(hands, trajectory, box, "box", checks=False)
+        without.append(CLOCK() - start)
+    return BEST(with_checks), BEST(without)
 
 
 def driver_at_start(scene, schedule, own_model: bool) -> ScheduleDriver:
@@ -314,9 +334,9 @@ def main() -> None:
     parser.add_argument("--repeats", type=int, default=15)
     args = parser.parse_args()
     print(f"start: {_load()}")
-    worst_replay, arctic = np.inf, np.nan
+    worst_replay, arctic, checks_ratio = np.inf, np.nan, np.nan
     for build in (tzionas_case, glove_case, arctic_case):
-        name, scene, trajectory = build()
+        name, scene, trajectory, *inputs = build()
         schedule = control_schedule(scene, trajectory, 100.0)
         steps = (schedule.frames - 1) * schedule.substeps
         raw, loop, full = [], [], []
@@ -343,6 +363,15 @@ def main() -> None:
         print(f"  ({_load()})")
         if build is arctic_case:
             arctic = raw_s / full_s
+            hands, box = inputs[0]
+            checked, unchecked = arctic_check_seconds(hands, trajectory, box, args.repeats)
+            checks_ratio = (checked - unchecked) / full_s
+            cost = checked - unchecked
+            print(
+                f"  scene with its checks before the run {checked * 1000:.1f} ms, without "
+                f"{unchecked * 1000:.1f} ms: the checks cost {cost * 1000:.1f} ms = {checks_ratio:.3f} of "
+                "one replay()"
+            )
         else:
             worst_replay = min(worst_replay, raw_s / full_s)
     env = env_ratio(args.repeats)
@@ -364,6 +393,7 @@ def main() -> None:
     print(f"env_vs_raw={env[2]:.3f}" if env is not None else "env_vs_raw=nan")
     print(f"vector_env_scaling={min(native[n] / one for n in VECTOR_WORLDS):.3f}")
     print(f"arctic_replay_vs_raw={arctic:.3f}")
+    print(f"arctic_checks_vs_replay={checks_ratio:.3f}")
 
 
 if __name__ == "__main__":

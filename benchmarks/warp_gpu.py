@@ -76,7 +76,7 @@ def export(folder: Path) -> None:
     folder.mkdir(parents=True, exist_ok=True)
     index = {}
     for key, build in (("glove", glove_case), ("tzionas", tzionas_case), ("arctic", arctic_case)):
-        name, scene, trajectory = build()
+        name, scene, trajectory, *_ = build()
         schedule = control_schedule(scene, trajectory, CONTROL_RATE)
         driver = driver_at_start(scene, schedule, own_model=True)
         switches, inputs = driver.switches, ReplayInputs.from_driver(driver)

@@ -7,6 +7,7 @@ the converted targets and root pose, equal an independent numpy MANO forward kin
 
 from __future__ import annotations
 
+import math
 from dataclasses import replace
 
 import mujoco
@@ -15,9 +16,10 @@ import pytest
 import trimesh
 from scipy.spatial.transform import Rotation
 
-from handsim.builders.mano_hand import build_mano_hands
+from handsim.builders.mano_hand import HINGE_LIMITS, build_mano_hands
 from handsim.datatypes.mesh import validate_mesh
 from handsim.datatypes.object_model import Hinge, ObjectModel, ObjectPart
+from handsim.datatypes.trajectory_ops import resample
 from handsim.errors import InputFileError, ModelError, TrajectoryError
 from handsim.io.arctic.mano import MANO_JOINT_NAMES, find_mano_files
 from handsim.io.arctic.sequence import HANDS, read_arctic_sequence
@@ -33,6 +35,7 @@ from tests.mano_fixtures import (
     write_arctic_object_npy,
     write_synthetic_mano_pkl,
 )
+from tests.test_zyx_continuity import TOLERANCE, angle_between, euler_matrices, hinge_steps, step_bound
 
 
 @pytest.fixture(scope="module")
@@ -98,6 +101,100 @@ def test_left_hand_mirrors_the_right_one_in_x(mano_dir):
     np.testing.assert_allclose(left, right * [-1.0, 1.0, 1.0], rtol=0, atol=1e-15)
     mean_r, mean_l = hands["right"].model.hands_mean, hands["left"].model.hands_mean
     np.testing.assert_allclose(mean_l.reshape(15, 3), mean_r.reshape(15, 3) * [1.0, -1.0, -1.0])
+
+
+# --------------------------------------------------------------------------------------------------
+# Continuous joint targets
+
+
+def recorded_rotations(sequence, side, model):
+    """Each MANO joint's recorded rotation, ``exp(pose + hands_mean)`` by scipy, shape (N, 15, 3, 3)."""
+    full = np.asarray(sequence.hand(side).pose, dtype=float) + model.hands_mean
+    return Rotation.from_rotvec(full.reshape(-1, 3)).as_matrix().reshape(sequence.nframes, 15, 3, 3)
+
+
+def target_angles(trajectory):
+    """The hinge targets as (z, y, x) per MANO joint, shape (N, 15, 3)."""
+    column = {name: k for k, name in enumerate(trajectory.dof_names)}
+    order = [[column[f"{j}_{ax}"] for ax in "zyx"] for j in MANO_JOINT_NAMES[1:]]
+    return trajectory.targets[:, np.array(order)]
+
+
+def thumb_through_180(folder, arrays, n=61):
+    """A sequence whose right thumb2 turns from Z·Y·X (170°, 80°, −30°) to (190°, 100°, 10°): z crosses
+    ±180° and y passes 90° (exactly at frame 30); every other joint and the left hand as in ARCTIC's files."""
+    path, params = write_sequence(folder, n=n, name="ketchup_grab_01")
+    full = np.radians(np.linspace([170.0, 80.0, -30.0], [190.0, 100.0, 10.0], n))
+    thumb2 = MANO_JOINT_NAMES.index("thumb2") - 1
+    pose = params["right"]["pose"].astype(float).reshape(n, 15, 3)
+    mean = arrays["right"]["hands_mean"].reshape(15, 3)
+    pose[:, thumb2] = Rotation.from_euler("ZYX", full).as_rotvec() - mean[thumb2]
+    params["right"]["pose"] = pose.reshape(n, 45)  # float64: the rotations exactly as constructed
+    write_arctic_mano_npy(path, params["right"], params["left"])
+    return read_arctic_sequence(path), full
+
+
+@pytest.mark.parametrize("side", HANDS)
+@pytest.mark.parametrize("motion", ["random frames", "grasp", "thumb through 180°"])
+def test_arctic_targets_are_the_recorded_rotations_and_never_step_beyond_the_bound(
+    mano_dir, tmp_path, side, motion
+):
+    folder, arrays = mano_dir
+    if motion == "random frames":  # ARCTIC's layout, each frame's pose drawn anew (large steps)
+        sequence = read_arctic_sequence(write_sequence(tmp_path, n=40)[0])
+    elif motion == "grasp":  # both hands close around balls and open again, smoothly
+        sequence, _ = ball_grasp(tmp_path, arrays, 1)
+    else:
+        sequence, _ = thumb_through_180(tmp_path, arrays)
+    hand = build_mano_hands(folder, {side: sequence.hand(side).shape})[side]
+    trajectory = arctic_hand_trajectory(sequence, side, hand.skeleton, hand.model)
+    recorded = recorded_rotations(sequence, side, hand.model)
+    angles = target_angles(trajectory)
+    assert angle_between(euler_matrices(angles), recorded).max() <= TOLERANCE
+    assert np.all(hinge_steps(angles) <= step_bound(recorded) + TOLERANCE)
+    for k, ax in enumerate("zyx"):
+        low, high = HINGE_LIMITS[ax]
+        assert low <= angles[..., k].min() and angles[..., k].max() <= high
+    assert not any("moved by whole turns" in note for note in trajectory.notes)
+
+
+def test_a_thumb_crossing_180_and_y_90_moves_at_its_own_pace_also_at_the_control_rate(mano_dir, tmp_path):
+    folder, arrays = mano_dir
+    sequence, full = thumb_through_180(tmp_path, arrays)
+    hand = build_mano_hands(folder, {"right": sequence.right.shape})["right"]
+    trajectory = arctic_hand_trajectory(sequence, "right", hand.skeleton, hand.model)
+    thumb2 = target_angles(trajectory)[:, MANO_JOINT_NAMES.index("thumb2") - 1]
+    assert hinge_steps(thumb2).max() <= hinge_steps(full).max() + TOLERANCE  # 0.67° per frame
+    control = resample(trajectory, 100.0).trajectory  # what a replay drives, at 100 Hz
+    column = [trajectory.dof_names.index(f"thumb2_{ax}") for ax in "zyx"]
+    steps = np.abs(np.diff(control.targets[:, column], axis=0)).max()
+    assert steps <= hinge_steps(full).max() * 30.0 / 100.0 + TOLERANCE  # no sweep round between frames
+    z = control.targets[:, column[0]]
+    assert np.ptp(z) <= math.radians(20.0) + TOLERANCE  # z passes ±180° without turning back round
+
+
+def test_a_joint_turning_round_three_times_is_moved_into_its_range_with_a_note(mano_dir, tmp_path):
+    folder, arrays = mano_dir
+    n = 91
+    path, params = write_sequence(tmp_path, n=n)
+    pose = params["right"]["pose"].astype(float).reshape(n, 15, 3)
+    pose[:, 0] = np.column_stack([np.zeros(n), np.zeros(n), np.linspace(0.0, 6 * np.pi, n)])
+    pose[:, 0] -= arrays["right"]["hands_mean"][:3]  # index1: three whole turns about z
+    params["right"]["pose"] = pose.reshape(n, 45)
+    write_arctic_mano_npy(path, params["right"], params["left"])
+    sequence = read_arctic_sequence(path)
+    hand = build_mano_hands(folder, {"right": sequence.right.shape})["right"]
+    trajectory = arctic_hand_trajectory(sequence, "right", hand.skeleton, hand.model)
+    angles = target_angles(trajectory)
+    assert angle_between(euler_matrices(angles), recorded_rotations(sequence, "right", hand.model)).max() <= (
+        TOLERANCE
+    )
+    low, high = HINGE_LIMITS["z"]
+    assert low <= angles[:, 0, 0].min() and angles[:, 0, 0].max() <= high
+    (note,) = [n for n in trajectory.notes if "moved by whole turns" in n]
+    assert note.startswith("61 hinge targets of 1 DoF (index1_z) moved by whole turns into the hinge ranges")
+    assert note.endswith("the servo sweeps a turn at 1 frame (61)")  # 1080° in a 720° range: one at least
+    assert np.flatnonzero(hinge_steps(angles[:, :1]) > math.pi).tolist() == [60]
 
 
 # --------------------------------------------------------------------------------------------------
@@ -169,8 +266,11 @@ BALLS = {"right": np.array([0.0, -0.12, 1.05]), "left": np.array([0.0, 0.12, 1.0
 """Each hand closes around a ball of its own (the object's two parts), 24 cm apart, about 1 m up."""
 
 
-def ball_grasp(folder, arrays, seed, *, swap=False, offset=(0.0, 0.0, 0.0)):
+def ball_grasp(folder, arrays, seed, *, swap=False, offset=(0.0, 0.0, 0.0), name="balls_grab"):
     """A sequence in which each hand closes around a ball; ``swap`` stores each hand under the other's key.
+
+    The files are ``folder/<name>_<seed>.mano.npy`` and ``.object.npy`` (the object's name is ``name``'s first
+    word, as in ARCTIC's sequence names).
 
     Where the balls go comes from the independent numpy MANO kinematics of the fixture's arrays: the ball's
     centre is the centroid of the hand's 15 finger joints at full closure, its radius 3 mm less than the
@@ -195,13 +295,13 @@ def ball_grasp(folder, arrays, seed, *, swap=False, offset=(0.0, 0.0, 0.0)):
         ball = trimesh.creation.icosphere(subdivisions=3, radius=radius)
         ball.apply_translation(BALLS[side] - origin)
         parts.append(ObjectPart(part, validate_mesh(ball.vertices, ball.faces, f"{part} ball")))
-    obj = ObjectModel("balls", tuple(parts), density=300.0, hinge=Hinge(axis=(0.0, 0.0, -1.0)))
-    path = folder / f"balls_grab_{seed:02d}.mano.npy"
+    obj = ObjectModel(name.split("_")[0], tuple(parts), density=300.0, hinge=Hinge(axis=(0.0, 0.0, -1.0)))
+    path = folder / f"{name}_{seed:02d}.mano.npy"
     stored = (params["left"], params["right"]) if swap else (params["right"], params["left"])
     write_arctic_mano_npy(path, *stored)
     values = np.zeros((N_GRASP, 7), dtype=np.float32)
     values[:, 4:] = (origin + np.asarray(offset)) * 1000.0
-    write_arctic_object_npy(path.with_name(f"balls_grab_{seed:02d}.object.npy"), values)
+    write_arctic_object_npy(path.with_name(f"{name}_{seed:02d}.object.npy"), values)
     return read_arctic_sequence(path), obj
 
 

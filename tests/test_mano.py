@@ -163,7 +163,7 @@ def test_mano_joints_are_regressed_from_shaped_vertices(mano_pkl):
         mano_joints(model, np.zeros(11))
 
 
-def test_mano_skeleton_has_45_hinges_in_mano_order_with_euler_range_limits():
+def test_mano_skeleton_has_45_hinges_in_mano_order_with_ranges_for_continuous_angles():
     skeleton = mano_skeleton(mano_mean_joints())
     assert skeleton.name == "mano_right"
     assert skeleton.ndof == 45
@@ -172,9 +172,9 @@ def test_mano_skeleton_has_45_hinges_in_mano_order_with_euler_range_limits():
     assert skeleton.fingertips == ("thumb_tip", "index_tip", "middle_tip", "ring_tip", "pinky_tip")
     assert all(np.array_equal(j.frame, np.eye(3)) for j in skeleton.joints)
     limits = skeleton.limits.reshape(15, 3, 2)
-    np.testing.assert_allclose(limits[:, 0], [[-np.pi, np.pi]] * 15)
-    np.testing.assert_allclose(limits[:, 1], [[-np.pi / 2, np.pi / 2]] * 15)
-    np.testing.assert_allclose(limits[:, 2], [[-np.pi, np.pi]] * 15)
+    np.testing.assert_allclose(limits[:, 0], [[-2 * np.pi, 2 * np.pi]] * 15)
+    np.testing.assert_allclose(limits[:, 1], [[-2 * np.pi, 2 * np.pi]] * 15)
+    np.testing.assert_allclose(limits[:, 2], [[-2 * np.pi, 2 * np.pi]] * 15)
 
 
 def test_fingertips_are_the_mano_tip_vertices_when_a_model_is_given(mano_pkl):

@@ -8,6 +8,7 @@ given. Cameras: ``hand_cam`` looks at the hand from the front-right and above, `
 
 from __future__ import annotations
 
+import math
 from collections.abc import Sequence
 from dataclasses import dataclass
 
@@ -34,6 +35,10 @@ SUPPORT_SOLREF = (0.005, 1.0)
 """Support weld: stiff (2.5 steps of 2 ms), so a held object sags well under a millimetre."""
 HAND_WELD_SOLREF = (0.01, 1.0)
 """Weld time constant (s) and damping ratio: the root follows its target within ~10 ms; contacts push back."""
+FLOOR = "floor"
+"""Name of the floor plane (:func:`add_floor`)."""
+STAND = "stand"
+"""Name of a stand under an object (:func:`add_stand`) and of its mesh."""
 TABLE_RGBA = (0.62, 0.52, 0.42, 1.0)
 FLOOR_RGBA = (0.35, 0.37, 0.40, 1.0)
 
@@ -151,11 +156,7 @@ def build_scene(
             rgba=list(TABLE_RGBA), friction=ENVIRONMENT.friction, priority=ENVIRONMENT.priority,
             condim=CONTACT_CONDIM,
         )  # fmt: skip
-        world.add_geom(
-            name="floor", type=mujoco.mjtGeom.mjGEOM_PLANE, size=[0, 0, 0.05], pos=[0, 0, -table_height],
-            rgba=list(FLOOR_RGBA), friction=ENVIRONMENT.friction, priority=ENVIRONMENT.priority,
-            condim=CONTACT_CONDIM,
-        )  # fmt: skip
+        add_floor(spec, -table_height)
     world.add_light(name="key", pos=[0.4, -0.4, 1.2], dir=[-0.35, 0.35, -1.0], castshadow=True)
     world.add_light(name="fill", pos=[-0.5, 0.3, 1.0], dir=[0.5, -0.3, -1.0], castshadow=False)
 
@@ -178,6 +179,58 @@ def build_scene(
     _add_look_at_camera(spec, "hand_cam", target, eye=target + np.array([0.35, -0.35, 0.25]))
     _add_look_at_camera(spec, "overview", np.zeros(3), eye=np.array([0.0, -0.9, 0.6]))
     return spec
+
+
+def add_floor(spec: mujoco.MjSpec, height: float) -> None:
+    """Add the floor: the plane z = ``height`` (m), named :data:`FLOOR`, with the environment's surface.
+
+    Args:
+        spec: The scene (changed in place).
+        height: The floor's height in the world, m.
+    """
+    spec.worldbody.add_geom(
+        name=FLOOR, type=mujoco.mjtGeom.mjGEOM_PLANE, size=[0, 0, 0.05], pos=[0, 0, float(height)],
+        rgba=list(FLOOR_RGBA), friction=ENVIRONMENT.friction, priority=ENVIRONMENT.priority,
+        condim=CONTACT_CONDIM,
+    )  # fmt: skip
+
+
+def add_stand(spec: mujoco.MjSpec, outline: npt.ArrayLike, bottom: float, name: str = STAND) -> None:
+    """Add a stand: a vertical prism whose top is the convex polygon ``outline`` at z = 0, down to ``bottom``.
+
+    The stand stands for whatever an object rested on during a capture (a small table or pedestal): a
+    column from the support plane (the table top's plane, z = 0) down to the floor, with the environment's
+    surface, collided as the convex mesh it is.
+
+    Args:
+        spec: The scene (changed in place).
+        outline: The top's corners (x, y), m, shape (k, 3 ≤ k), counter-clockwise, convex.
+        bottom: Height of the stand's foot, m (< 0).
+        name: The geom's (and its mesh's) name.
+
+    Raises:
+        ModelError: The outline is not at least three finite (x, y) corners, or ``bottom`` is not below 0.
+    """
+    corners = np.asarray(outline, dtype=float)
+    if corners.ndim != 2 or corners.shape[0] < 3 or corners.shape[1] != 2 or not np.isfinite(corners).all():
+        raise ModelError(
+            f"a stand's outline must be at least 3 finite (x, y) corners, got shape {corners.shape}"
+        )
+    if not (math.isfinite(bottom) and bottom < 0.0):
+        raise ModelError(f"a stand's foot must lie below its top (z = 0), got {bottom}")
+    k = corners.shape[0]
+    top, foot = np.column_stack([corners, np.zeros(k)]), np.column_stack([corners, np.full(k, bottom)])
+    vertices = np.vstack([top, foot])
+    faces = [[0, i, i + 1] for i in range(1, k - 1)]  # top (counter-clockwise seen from above)
+    faces += [[k, k + i + 1, k + i] for i in range(1, k - 1)]  # foot (facing down)
+    for i in range(k):  # sides, facing out
+        j = (i + 1) % k
+        faces += [[i, k + i, k + j], [i, k + j, j]]
+    spec.add_mesh(name=name, uservert=vertices.ravel().tolist(), userface=np.ravel(faces).tolist())
+    spec.worldbody.add_geom(
+        name=name, type=mujoco.mjtGeom.mjGEOM_MESH, meshname=name, rgba=list(TABLE_RGBA),
+        friction=ENVIRONMENT.friction, priority=ENVIRONMENT.priority, condim=CONTACT_CONDIM,
+    )  # fmt: skip
 
 
 def hand_prefix(name: str = "") -> str:

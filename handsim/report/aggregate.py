@@ -27,15 +27,21 @@ DISTRIBUTIONS: dict[str, str] = {
     "mean_tracking_error_deg": "Mean tracking error per trial (deg)",
 }
 RANKING = (
-    "Errors first, then diverged runs, then trials flagged not valid, then glove trials whose object was "
-    "not held, then glove trials whose hold could not be judged, then every other trial; within each of "
-    "these tiers by max penetration (deepest first), then by max drift (largest first), then by trial id."
+    "Errors first, then diverged runs, then trials flagged not valid, then trials whose object was lost "
+    "(glove trials not held, recorded trials whose object left its track), then trials whose hold or track "
+    "could not be judged, then every other trial; within each of these tiers by max penetration (deepest "
+    "first), then by max drift (largest first), then by trial id."
 )
 _TIERS = ("error", "diverged", "flagged", "not held", "not judged", "ok")
-OUTCOMES: tuple[str, ...] = ("held", "not held", "not judged", "ran", "flagged", "diverged", "error")
-"""How a trial ended: its object held or not (glove trials), its hold not judged (with the reason: too short
-a window after release, an infeasible placement …), ran without a hold test, ran but flagged not valid (a
-plausibility flag: its numbers judge nothing), diverged, failed."""
+OUTCOMES: tuple[str, ...] = (
+    "held", "not held", "followed", "lost", "not judged", "ran", "flagged", "diverged", "error",
+)  # fmt: skip
+"""How a trial ended: its object held or not (glove trials), followed or lost (recorded-object trials: the
+verdict on its track), its hold or track not judged (with the reason: too short a window after release, an
+infeasible placement, no manipulated frames …), ran without a hold or track verdict, ran but flagged not
+valid (a plausibility flag: its numbers judge nothing), diverged, failed."""
+TRACK_OUTCOMES = ("followed", "lost", "not judged")
+"""The verdicts on a recorded object's track (the summary's ``track``)."""
 ROBUST = 0.8
 """A held trial counts as robustly held when at least this fraction of its robustness ensemble held."""
 
@@ -59,6 +65,21 @@ def held(record: dict) -> bool | None:
     if value is None:
         value = (record.get("hold") or {}).get("held")
     return value if isinstance(value, bool) else None
+
+
+def track(record: dict) -> str | None:
+    """The verdict on a recorded object's track (:data:`TRACK_OUTCOMES`), or None.
+
+    None: no verdict (a glove or hand-only trial, or a record written before the verdict existed).
+    """
+    value = (record.get("summary") or {}).get("track")
+    return value if value in TRACK_OUTCOMES else None
+
+
+def followed(record: dict) -> bool | None:
+    """Whether the recorded object followed its track: True, False (lost), or None (not judged, none)."""
+    value = track(record)
+    return None if value in (None, "not judged") else value == "followed"
 
 
 def hold_judged(record: dict) -> bool:
@@ -113,7 +134,7 @@ def outcome(record: dict) -> str:
         return "flagged"
     value = held(record)
     if value is None:
-        return "not judged" if has_hold(record) else "ran"
+        return "not judged" if has_hold(record) else track(record) or "ran"
     return "held" if value else "not held"
 
 
@@ -164,6 +185,9 @@ def trial_row(record: dict) -> dict:
         "duration_s": summary_value(record, "duration_s"),
         "held": held(record),
         "hold_reason": (record.get("hold") or {}).get("reason"),
+        "track": track(record),
+        "track_reason": (record.get("summary") or {}).get("track_reason") if track(record) else None,
+        "track_followed_fraction": summary_value(record, "track_followed_fraction"),
         "hold_robustness": summary_value(record, "hold_robustness"),
         "fit_fraction": summary_value(record, "fit_fraction"),
         "self_penetration_at_closure_mm": summary_value(record, "self_penetration_at_closure_mm"),
@@ -194,9 +218,10 @@ def group_stats(records: Sequence[dict]) -> dict:
         ``trials`` and counts per status, and ``flagged`` (trials flagged not valid, of any status: left out
         of everything below but the totals); ``held`` of ``hold_judged`` (valid glove trials whose hold was
         judged: those not judged are counted in ``not_judged`` and left out of the rates) and
-        ``hold_rate``; ``robust_held`` (held, with at least :data:`ROBUST` of the robustness ensemble held)
-        and ``robustness_mean`` (over judged trials with an ensemble); ``slip_median_mm``/``slip_max_mm``
-        over each trial's max slip;
+        ``hold_rate``; ``followed`` of ``track_judged`` (valid recorded-object trials whose track was judged;
+        those not judged are counted in ``not_judged`` too) and ``follow_rate``; ``robust_held`` (held, with
+        at least :data:`ROBUST` of the robustness ensemble held) and ``robustness_mean`` (over judged trials
+        with an ensemble); ``slip_median_mm``/``slip_max_mm`` over each trial's max slip;
         ``penetration_p50_mm``/``_p95_mm``/``_max_mm`` over each trial's max penetration;
         ``drift_mean_mm`` (mean of each trial's mean drift) and ``drift_max_mm``; totals of
         ``limit_violations`` and ``gaps_filled`` over every trial (None if no trial reports them).
@@ -205,6 +230,7 @@ def group_stats(records: Sequence[dict]) -> dict:
     valid = [r for r in records if record_valid(r)]
     holds = [h for h in map(held, valid) if h is not None]
     judged = [r for r in valid if hold_judged(r)]
+    follows = [f for f in map(followed, valid) if f is not None]
     robustness = _present(summary_value(r, "hold_robustness") for r in judged)
     slip = _present(summary_value(r, "max_slip_mm") for r in valid)
     penetration = _present(summary_value(r, "max_penetration_mm") for r in valid)
@@ -219,7 +245,12 @@ def group_stats(records: Sequence[dict]) -> dict:
         "held": sum(holds),
         "hold_judged": len(holds),
         "hold_rate": sum(holds) / len(holds) if holds else None,
-        "not_judged": sum(1 for r in valid if has_hold(r) and not hold_judged(r)),
+        "followed": sum(follows),
+        "track_judged": len(follows),
+        "follow_rate": sum(follows) / len(follows) if follows else None,
+        "not_judged": sum(
+            1 for r in valid if (has_hold(r) and not hold_judged(r)) or track(r) == "not judged"
+        ),
         "robust_held": sum(
             1 for r in judged if held(r) and (summary_value(r, "hold_robustness") or 0.0) >= ROBUST
         ),
@@ -279,9 +310,9 @@ def _tier(record: dict) -> int:
     if not record_valid(record):
         return 2
     value = held(record)
-    if value is False:
+    if value is False or followed(record) is False:
         return 3
-    return 4 if value is None and has_hold(record) else 5
+    return 4 if value is None and (has_hold(record) or track(record) == "not judged") else 5
 
 
 def _reason(record: dict) -> str:
@@ -297,11 +328,14 @@ def _reason(record: dict) -> str:
     if tier == 2:
         return "not valid: " + ("; ".join(invalid_reasons(record)) or "flagged")
     parts = []
-    if tier == 3:
+    verdict = (record.get("summary") or {}).get("track_reason") if track(record) else None
+    if tier == 3 and has_hold(record):
         reason = (record.get("hold") or {}).get("reason")
         parts.append(f"object lost: {reason}" if reason else "object not held")
+    elif tier == 3:
+        parts.append(f"object {verdict}" if verdict else "object lost")
     if tier == 4:
-        parts.append(str((record.get("hold") or {}).get("reason") or "hold not judged"))
+        parts.append(str((record.get("hold") or {}).get("reason") or verdict or "hold not judged"))
     no_object = (record.get("summary") or {}).get("hold_reason") if not has_hold(record) else None
     if no_object:  # a hand-only trial: why its hold and drift are not judged
         parts.append(str(no_object))

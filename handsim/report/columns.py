@@ -51,10 +51,16 @@ GROUP_COLUMNS: tuple[Column, ...] = (
         "winner moved ±2 mm and turned ±5°) held, of those judged",
     ),
     Column(
+        "follow rate",
+        lambda r: fmt.rate(r["followed"], r["track_judged"]),
+        help="recorded-object trials whose object followed its recorded track (within 2 cm, 30°, hinge 30°) "
+        "over every manipulated frame, of those judged",
+    ),
+    Column(
         "not judged",
         lambda r: str(r["not_judged"]),
-        help="glove trials whose hold could not be judged (too short a window after release, no feasible "
-        "placement …): left out of the rates",
+        help="trials whose hold or track could not be judged (too short a window after release, no feasible "
+        "placement, no manipulated frames …): left out of the rates",
     ),
     Column("slip p50 mm", lambda r: fmt.num(r["slip_median_mm"], 1), help="median of each trial's max slip"),
     Column("slip max mm", lambda r: fmt.num(r["slip_max_mm"], 1), help="largest max slip"),
@@ -133,8 +139,15 @@ TRIAL_COLUMNS: tuple[Column, ...] = (
         "outcome",
         lambda r: r["outcome"],
         numeric=False,
-        help="held, not held, not judged (why: in the trial's section), ran (no hold test), flagged (not "
-        "valid: out of the rates), diverged, error",
+        help="held, not held (glove trials), followed, lost (recorded objects: the verdict on the track), "
+        "not judged (why: in the trial's section), ran (no hold test or track verdict), flagged (not valid: "
+        "out of the rates), diverged, error",
+    ),
+    Column(
+        "on track",
+        lambda r: fmt.num(r["track_followed_fraction"]),
+        help="recorded-object trials: fraction of the manipulated frames (the recording moves the object "
+        "beyond the tolerance from its start) in which the object is within 2 cm, 30°, hinge 30° of it",
     ),
     Column(
         "robustness",

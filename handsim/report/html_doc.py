@@ -53,6 +53,7 @@ def _overview(run: RunRecords, summary: dict) -> str:
         ("errors", str(o["by_status"]["error"]), "error"),
         ("flagged not valid", str(total["flagged"]), ""),
         ("hold rate", fmt.rate(total["held"], total["hold_judged"]), ""),
+        ("follow rate", fmt.rate(total["followed"], total["track_judged"]), ""),
         ("max penetration mm", fmt.num(total["penetration_max_mm"]), ""),
     ]
     cards_html = (
@@ -92,9 +93,11 @@ def _groups(run: RunRecords, summary: dict) -> str:
     parts = [
         '<section class="block" id="groups"><h2>Groups</h2>',
         '<p class="note">Hold rate: glove trials whose object stayed in hand through the hold window, of '
-        "those judged. Slip and penetration statistics are over each trial's maximum; drift mean is the mean "
-        "of each trial's mean drift. Trials flagged not valid (a plausibility flag) are counted but left out "
-        "of the rate and the statistics. Limit violations and gaps filled are totals over the group's "
+        "those judged. Follow rate: recorded-object trials whose object stayed within the tolerance of its "
+        "recorded track over every frame the recording moves it, of those judged. Slip and penetration "
+        "statistics are over each trial's maximum; drift mean is the mean of each trial's mean drift. "
+        "Trials flagged not valid (a plausibility flag) are counted but left out of the rates and the "
+        "statistics. Limit violations and gaps filled are totals over the group's "
         "recordings. Hover a header for its meaning.</p>",
     ]
     for key in GROUP_KEYS:

@@ -5,7 +5,7 @@ from __future__ import annotations
 import json
 from collections.abc import Sequence
 
-from handsim.datatypes.fingers import FINGER_GROUPS
+from handsim.datatypes.fingers import groups_by_hand
 from handsim.report import fmt
 from handsim.report.aggregate import number
 from handsim.report.charts import Markers, Series, area_chart, line_chart
@@ -137,6 +137,9 @@ def _curves(record: dict) -> str:
         events.append((float(hold["released_at"]), "release"))
     if number(hold.get("lost_at")) is not None:
         events.append((float(hold["lost_at"]), "lost"))
+    track_lost = number((record.get("summary") or {}).get("track_lost_at_s"))
+    if track_lost is not None:
+        events.append((track_lost, "object lost"))
     diverged_at = number((record.get("diverged") or {}).get("frame"))
     if diverged_at is not None and t:
         stride = max(1, int(number(curves.get("stride")) or 1))  # curves keep every stride-th frame
@@ -163,18 +166,18 @@ def _curves(record: dict) -> str:
         )
     ]
     per_finger = curves.get("contacts_per_finger") or {}
-    names = [f for f in FINGER_GROUPS if f in per_finger] + sorted(set(per_finger) - set(FINGER_GROUPS))
-    if names or not self_penetration:
-        charts.append(
-            area_chart(
-                t,
-                [(name, per_finger[name]) for name in names],
-                title="Contacts per finger (stacked)",
-                x_label=time,
-                y_label="contacts",
-                markers=marks,
+    for hand, names in (groups_by_hand(per_finger) or {"": []}).items():  # one chart per hand
+        if names or not self_penetration:
+            charts.append(
+                area_chart(
+                    t,
+                    [(name[len(hand) + 1 :] if hand else name, per_finger[name]) for name in names],
+                    title="Contacts per finger (stacked)" + (f", {hand} hand" if hand else ""),
+                    x_label=time,
+                    y_label="contacts",
+                    markers=marks,
+                )
             )
-        )
     drift = curves.get("drift_mm")
     metrics = ((record.get("parameters") or {}).get("replay") or {}).get("metrics") or {}
     tolerance = number(metrics.get("drift_tolerance"))
@@ -262,6 +265,31 @@ def _hold(record: dict) -> str:
         ),
     ]
     return "<h4>Hold outcome</h4>" + numbers(items) + _closure(record.get("summary") or {})
+
+
+def _track(record: dict) -> str:
+    """The verdict on a recorded object's track, and what the checks before the run found."""
+    summary = record.get("summary") or {}
+    if summary.get("track") is None:
+        return ""
+    starts = {
+        k.removesuffix("start_penetration_mm").rstrip("/") or "hand": v
+        for k, v in summary.items()
+        if k.endswith("start_penetration_mm")
+    }
+    untouched = summary.get("track_untouched_hands") or []
+    items = [
+        ("verdict", fmt.text(summary.get("track"))),
+        ("reason", fmt.text(summary.get("track_reason"))),
+        ("lost at s", fmt.num(number(summary.get("track_lost_at_s")), 2)),
+        ("where it went", fmt.text(summary.get("track_lost_how"))),
+        ("manipulated frames", fmt.integer(number(summary.get("track_manipulated_frames")))),
+        ("of them within tolerance", fmt.num(number(summary.get("track_followed_fraction")))),
+        ("hands that never touch it", ", ".join(h or "hand" for h in untouched) or "none"),
+        ("ends on the floor", ", ".join(summary.get("track_on_floor") or []) or "no"),
+        *((f"{hand} starts inside the object mm", fmt.num(number(v), 1)) for hand, v in starts.items()),
+    ]
+    return "<h4>Object track</h4>" + numbers(items)
 
 
 def _closure(summary: dict) -> str:
@@ -383,7 +411,7 @@ def trial_section(record: dict, row: dict, images: Sequence[FrameImage], trials:
     tier_class = {"error": "error", "diverged": "diverged"}.get(record["status"], "")
     reason = (
         f'<div class="reason {tier_class}">{esc(row["reason"])}</div>'
-        if row["outcome"] in ("not held", "not judged", "flagged", "diverged")
+        if row["outcome"] in ("not held", "lost", "not judged", "flagged", "diverged")
         else ""
     )
     diverged = record.get("diverged") or {}
@@ -406,6 +434,7 @@ def trial_section(record: dict, row: dict, images: Sequence[FrameImage], trials:
         _curves(record),
         _frames(images),
         _hold(record),
+        _track(record),
         _stability(record),
         _warnings(record),
         ('<h4>Notes</h4><ul class="plain">' + "".join(f"<li>{esc(n)}</li>" for n in notes) + "</ul>")

@@ -6,6 +6,8 @@ STATUS_COLOURS: dict[str, str] = {
     "held": "#2f8f5b",
     "ok": "#2f8f5b",
     "not held": "#e0a030",
+    "followed": "#3a9e6e",
+    "lost": "#d4862a",
     "not judged": "#8c96a3",
     "ran": "#6b8fc7",
     "flagged": "#7a7f87",
@@ -65,7 +67,8 @@ table.data td.t:last-child:not(:first-child) { white-space: normal; min-width: 2
   color: #fff; line-height: 18px; }
 .badge.ok, .badge.held { background: var(--ok); } .badge.diverged { background: var(--div); }
 .badge.error { background: var(--bad); } .badge.not-held { background: var(--warn); color: #3a2a00; }
-.badge.ran { background: #6b8fc7; }
+.badge.ran { background: #6b8fc7; } .badge.followed { background: var(--ok); }
+.badge.lost { background: var(--warn); color: #3a2a00; }
 .grid2 { display: grid; grid-template-columns: repeat(auto-fit, minmax(430px, 1fr)); gap: 12px 18px; }
 .grid2 > div, .grid2 > figure { min-width: 0; }
 svg.chart { max-width: 100%; height: auto; display: block; background: #fff; }

@@ -8,6 +8,7 @@ the release delay), and the root's mocap target of ``t_k+1``. The joint targets 
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import mujoco
@@ -128,8 +129,10 @@ class ScheduleDriver:
     def reset(self, frame: int = 0) -> None:
         """Put the scene in the recorded state of ``frame``, with the switches as they are then.
 
-        The hand at its targets, its root at its recorded pose, recorded objects at their recorded poses;
-        velocities zero; warnings cleared.
+        The hand at its targets, its root at its recorded pose, recorded objects at their recorded poses
+        (at frame 0 an articulated object's hinge at the scene's settled start angle, where it has one:
+        :attr:`~handsim.sim.scene.compiled.SceneSetup.start_articulation`); velocities zero; warnings
+        cleared.
         """
         stepper, schedule, data = self.stepper, self.schedule, self._data
         layout = stepper.scene.layout
@@ -143,11 +146,14 @@ class ScheduleDriver:
             data.mocap_quat[self.targets.mocap] = self.targets.root_quat[frame]
             for h, adr in enumerate(self.targets.root_qpos):
                 data.qpos[adr : adr + 7] = schedule.root_poses[frame, h]
+        start = stepper.scene.setup.start_articulation
         for index, track in schedule.objects.items():
             obj = layout.objects[index]
             data.qpos[obj.free_qpos : obj.free_qpos + 7] = track.pose[frame]
             if track.articulation is not None and obj.hinge_qpos >= 0:
-                data.qpos[obj.hinge_qpos] = self._in_range(obj.hinge_qpos, track.articulation[frame])
+                settled = start[index] if frame == 0 and index < len(start) else math.nan
+                angle = track.articulation[frame] if math.isnan(settled) else settled
+                data.qpos[obj.hinge_qpos] = self._in_range(obj.hinge_qpos, angle)
         release = self.switches.release_frame
         data.eq_active[self.targets.supports] = 0 if 0 <= release < frame else 1
         self._set_contacts(frame >= self.switches.contact_frame)

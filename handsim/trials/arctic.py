@@ -11,15 +11,16 @@ the two-part object free at its recorded pose and articulation, in ARCTIC's z-up
 from __future__ import annotations
 
 import os
+from dataclasses import replace
 from pathlib import Path, PurePosixPath
 from typing import TYPE_CHECKING
 
 from handsim.builders.arctic_objects import arctic_object
 from handsim.builders.mano_hand import build_mano_hands
 from handsim.io.arctic.mano import MANO_DIR_ENV, find_mano_files
-from handsim.io.arctic.sequence import HANDS, read_arctic_sequence
+from handsim.io.arctic.sequence import HANDS, ArcticSequence, read_arctic_sequence
 from handsim.sim.arctic_scene import arctic_scene
-from handsim.trials.arctic_hands import arctic_trajectory, hand_side_check
+from handsim.trials.arctic_hands import SideCheck, arctic_trajectory, hand_side_check
 from handsim.trials.base import (
     LoadedTrial,
     Trial,
@@ -105,16 +106,41 @@ def _load(trial: Trial, metrics: MetricSpec | None, progress: bool) -> LoadedTri
     return LoadedTrial(
         trial=trial,
         scene=scene,
-        trajectory=trajectory,
+        trajectory=replace(trajectory, flags=(*trajectory.flags, *sides.flags)),  # swapped: a flag
         hand=f"MANO right + left ({Path(hands['right'].model.source).parent}, the subject's betas, "
         f"{trial.collision})",
         objects=objects,
         notes=(
             *trial.notes,
             *notes,
-            sides.message,
+            *(() if sides.flags else (sides.message,)),
         ),
     )
+
+
+def sequence_side_check(
+    sequence: ArcticSequence, mano_dir: str | Path | None = None, templates: str | Path | None = None
+) -> SideCheck:
+    """The side check of an ARCTIC sequence, as a replay of it runs it (for ``handsim inspect``).
+
+    Args:
+        sequence: The sequence (:func:`~handsim.io.arctic.sequence.read_arctic_sequence`); its object template
+            is found as the trial kind finds it.
+        mano_dir: The folder with the user's MANO files; None: ``$HANDSIM_MANO_DIR``.
+        templates: ARCTIC object templates folder instead of the root's ``meta/object_vtemplates/``.
+
+    Returns:
+        The verdict with both entries' evidence (:func:`hand_side_check`).
+
+    Raises:
+        InputFileError: The MANO files or the object template are missing (the message says where to put
+            or point to them).
+        HandsimError: A file is malformed (the readers' errors).
+    """
+    _, _, template = _sequence(Path(sequence.mano_path), templates)
+    hands = build_mano_hands(mano_dir, {side: sequence.hand(side).shape for side in HANDS})
+    model = arctic_object(template, articulation=sequence.object.articulation)
+    return hand_side_check(sequence, {side: (h.skeleton, h.model) for side, h in hands.items()}, model)
 
 
 def _template_files(template: Path) -> list[Path]:

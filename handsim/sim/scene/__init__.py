@@ -4,5 +4,10 @@
 * :mod:`~handsim.sim.scene.layout` — the ids, addresses and sensor slots of a compiled scene;
 * :mod:`~handsim.sim.scene.compiled` — :class:`~handsim.sim.scene.compiled.SimScene`, a compiled scene with
   its
-  layout, ready to step.
+  layout, ready to step;
+* :mod:`~handsim.sim.scene.clearance` — where a recording puts the hands, and how deep they pass into the
+  static bodies;
+* :mod:`~handsim.sim.scene.support` — an object's stand: its footprint, cut back out of the hands' way;
+* :mod:`~handsim.sim.scene.settle` — start states without overlap: an articulated object's parts, the hands'
+  starting depth.
 """
