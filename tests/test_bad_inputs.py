@@ -106,7 +106,7 @@ def test_replay_config_refuses_a_control_rate_below_the_minimum():
 def test_a_glove_replay_at_the_minimum_control_rate_judges_the_hold(capsys):
     code, first, out = cli(["replay", str(SCRIPTED), "--rate", "20"], capsys)
     assert (code, first) == (0, "")
-    assert "frames      66 at 20 Hz (25 steps of 2 ms)" in out
+    assert "frames      36 at 20 Hz (25 steps of 2 ms)" in out  # its one grasp episode
     assert "held        yes" in out
 
 
@@ -202,7 +202,7 @@ def test_replay_refuses_a_stability_time_after_the_recording(capsys):
     code, first, _ = cli(["replay", str(SCRIPTED), "--stability", "99"], capsys)
     assert (code, first) == (
         2,
-        "handsim replay: error: --stability 99 s is after the recording's end (3.283 s)",
+        "handsim replay: error: --stability 99 s is after the grasp episode 1's end (1.783 s)",
     )
 
 

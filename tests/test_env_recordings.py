@@ -87,7 +87,7 @@ def test_an_unknown_keyword_is_refused_naming_the_trial_options():
         match=re.escape(
             "ReplayEnv: unknown keyword(s) ['sequence']; besides its own, it takes the trial options "
             "['skeleton', 'obj', 'calibration', 'units', 'density', 'mass', 'hand_length', 'collision', "
-            "'thumb_rest', 'force', 'mano_dir', 'templates'] (handsim.trials.find_trial)"
+            "'thumb_rest', 'force', 'mano_dir', 'templates', 'grasp'] (handsim.trials.find_trial)"
         ),
     ):
         gym.make(REPLAY, sequence=SEQ20)

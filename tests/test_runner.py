@@ -55,16 +55,17 @@ CONFIG = ReplayConfig(stability_at="grasp")
 FRAMES = 4
 RECORD_KEYS = [
     "schema", "id", "kind", "status", "meta", "trial", "inputs", "parameters", "metric_spec_version",
-    "versions", "model_sha256", "scenario", "summary", "hold", "robustness", "release_stability", "stability",
-    "warnings", "diverged", "flags", "notes",
+    "versions", "model_sha256", "scenario", "summary", "episode", "hold", "grip", "robustness",
+    "release_stability", "stability", "warnings", "diverged", "flags", "notes",
     "trajectory_quality", "curves", "renders", "error", "timing",
 ]  # fmt: skip
-GRASPDB_IDS = [
-    "graspdb14/01_ex01-rad-002-grasp-su01.txt",
-    "graspdb14/04_ex01-rad-045-grasp-su03.txt",
-    "graspdb14/r_01_11_ex03-rad-004-grasp-su04.txt",
+GRASPDB_IDS = [  # each trial holds one grasp episode
+    "graspdb14/01_ex01-rad-002-grasp-su01.txt#1",
+    "graspdb14/04_ex01-rad-045-grasp-su03.txt#1",
+    "graspdb14/r_01_11_ex03-rad-004-grasp-su04.txt#1",
 ]
-SESSION_ID = "graspdb14/sessions/01_11_ex03-rad-004-grasp-su04.txt"  # a whole glove session
+SESSION = "graspdb14/sessions/01_11_ex03-rad-004-grasp-su04.txt"  # a whole glove session: 51 grasp episodes
+SESSION_IDS = [f"{SESSION}#{k}" for k in range(1, 52)]
 TZIONAS_ID = "tzionas_ijcv16/Models/20"
 FAST_IDS = [GRASPDB_IDS[0], TZIONAS_ID]  # the two quickest to load (no long placement search)
 
@@ -249,7 +250,7 @@ def test_png_encoding_raises_error_for_a_float_image():
 def test_discovery_of_the_graspdb_sample_accounts_for_every_file(graspdb_dir):
     discovery = discover(graspdb_dir)
     assert [e.id for e in discovery.entries] == [
-        i.removeprefix("graspdb14/") for i in [*GRASPDB_IDS, SESSION_ID]
+        i.removeprefix("graspdb14/") for i in [*GRASPDB_IDS, *SESSION_IDS]
     ]
     assert discovery.unknown == ()
     assert _accounted(discovery) == _files(graspdb_dir)
@@ -666,11 +667,11 @@ def real_run(tmp_path_factory):
 @pytest.mark.slow
 def test_the_real_data_run_records_every_trial(real_run):
     discovery, out, summary, records = real_run
-    assert sorted(r["id"] for r in records) == [*GRASPDB_IDS, SESSION_ID, TZIONAS_ID]
-    assert [summary[k] for k in ("trials", "skipped", "failed", "hold_trials")] == [5, 0, 0, 3]
+    assert sorted(r["id"] for r in records) == sorted([*GRASPDB_IDS, *SESSION_IDS, TZIONAS_ID])
+    assert [summary[k] for k in ("trials", "skipped", "failed", "hold_trials")] == [55, 0, 0, 29]
     assert [u.path for u in discovery.unknown] == ["mano/mano_right_mean_joints.json"]
     run = json.loads((out / "run.json").read_text())
-    assert run["discovery"]["trials"] == 5 and run["parameters"] == run_parameters(CONFIG, FRAMES)
+    assert run["discovery"]["trials"] == 55 and run["parameters"] == run_parameters(CONFIG, FRAMES)
     for record in records:
         assert list(record) == RECORD_KEYS
         assert record["status"] in ("ok", "diverged") and record["error"] is None
@@ -692,8 +693,12 @@ def test_the_real_data_run_records_every_trial(real_run):
         quality = record["trajectory_quality"]
         # the whole session has dropped samples (SOURCES.md); the single trials have none
         assert quality["limit_violations"] >= 0 and quality["gaps_filled"] == (
-            19 if record["id"] == SESSION_ID else 0
+            (record["id"] in SESSION_IDS) * (record["trajectory_quality"]["gaps_filled"] > 0)
         )
+    for record in records:  # no hold stands on a link deeper in the object than the grip's limit
+        if record["summary"].get("held") is True:
+            grip = record["grip"]
+            assert grip["max_depth_mm"] <= grip["depth_limit_mm"] and grip["opposition"] >= 0.5
     by_id = {r["id"]: r for r in records}
     glove, recorded = by_id[GRASPDB_IDS[2]], by_id[TZIONAS_ID]
     assert glove["meta"]["grasp"] == "Power sphere" and glove["scenario"] == "glove"

@@ -148,10 +148,11 @@ def test_find_trial_raises_error_if_object_is_not_in_the_catalogue(tmp_path):
 def test_discovery_lists_the_bundled_scripted_grasps_as_scripted_trials():
     found = discover(DEMO_DIR)
     assert [(e.id, e.kind, e.meta["object"], e.meta["grasp"]) for e in found.entries] == [
-        ("cube.grasp.json", "scripted", "cube", "scripted"),
-        ("cylinder_25mm.grasp.json", "scripted", "cylinder_25mm", "scripted"),
-        ("tennis_ball.grasp.json", "scripted", "tennis_ball", "scripted"),
+        ("cube.grasp.json#1", "scripted", "cube", "scripted"),  # each holds one grasp episode
+        ("cylinder_25mm.grasp.json#1", "scripted", "cylinder_25mm", "scripted"),
+        ("tennis_ball.grasp.json#1", "scripted", "tennis_ball", "scripted"),
     ]
+    assert [e.trial.grasp for e in found.entries] == [1, 1, 1]
     assert all(e.meta["synthetic"] and e.meta["actor"] is None for e in found.entries)
     assert [c.path for c in found.companions] == ["README.md"] and not found.unknown
 

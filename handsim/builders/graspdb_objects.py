@@ -210,7 +210,11 @@ GRASPDB_OBJECTS: tuple[GraspDBObject, ...] = (
         mass_kg=0.0016,
         size_note="85 × 55 × 0.4 mm (typical, chosen: the common European card size on 350 g/m² board)",
         primitives=_CARD,
-        notes=("lies flat; 1.6 g = 350 g/m² × 85 mm × 55 mm",),
+        notes=(
+            "lies flat; 1.6 g = 350 g/m² × 85 mm × 55 mm",
+            "thinner (0.4 mm) than one finger pad's compression at 1 N (1.5 mm): a pinch presses a pad past "
+            "its far face, so a hold of it is not judged (docs/objects.md, Thin walls)",
+        ),
     ),
     GraspDBObject(
         name="oval_jar",

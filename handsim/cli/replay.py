@@ -9,9 +9,11 @@ Exit codes: 0 replayed; 1 a handsim error (bad file, trajectory that does not fi
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import json
 import math
 import sys
+from typing import TYPE_CHECKING
 
 from handsim.cli._common import (
     Commands,
@@ -26,9 +28,32 @@ from handsim.cli._common import (
 )
 from handsim.runner.records import json_ready
 
+if TYPE_CHECKING:
+    from handsim.sim.grip_check import GripCheck
+
 EXIT_DIVERGED = 3
 EXIT_NOT_VALID = 4
 LABEL = 12  # width of the label column
+
+
+def _print_grip(grip: GripCheck, limits: dict) -> None:
+    """The grip check's lines: what touched, what opposed, the deepest link, the force against the servos."""
+    pair = " against ".join(grip.opposing_links) if grip.opposing_links else "no opposing pair"
+    share = "—" if grip.opposition is None else f"{grip.opposition:.0%}"
+    _line(
+        "grip check",
+        f"{', '.join(grip.links) or 'no link'} touching over {grip.window[0]:.2f}–{grip.window[1]:.2f} s; "
+        f"opposition in {share} of {grip.frames} frames ({pair}; at least "
+        f"{limits['min_opposition']:.0%} needed)",
+    )
+    deepest = "no link inside the object"
+    if grip.deepest_link is not None:
+        deepest = f"{grip.deepest_link} {grip.max_depth * 1000:.1f} mm inside at {grip.deepest_at:.2f} s"
+    _line(
+        "",
+        f"deepest: {deepest} (at most {grip.depth_limit * 1000:.3g} mm); grip force {grip.grip_force:.1f} N "
+        f"against the servos' {grip.force_limit:.1f} N + weight {grip.weight:.2f} N",
+    )
 
 
 def _line(label: str, text: str) -> None:
@@ -50,6 +75,7 @@ def _print_trial(loaded) -> None:
 
 
 PHASE_SOURCES = {
+    "episode": "its grasp episode: closed where the hold starts, held to the hold's end",
     "phase": "the annotated 'grasp' phase",
     "peak flexion": "the finger flexion (no annotation used: the frames around peak flexion)",
 }
@@ -66,6 +92,14 @@ def _print_checks(loaded) -> None:
         _line("annotation", loaded.checks.annotation.note)
     if found["phase_source"] is not None:
         _line("phases", f"grasp from {PHASE_SOURCES.get(found['phase_source'], found['phase_source'])}")
+    episode = loaded.episode
+    if episode is not None:
+        origin = "the annotated 'grasp' phase" if episode.source == "annotation" else "the finger flexion"
+        _line(
+            "episode",
+            f"{episode.index}: frames {episode.start}–{episode.stop - 1} of the recording, its hold from "
+            f"{origin}; times below are the episode's own, from its first frame",
+        )
     if loaded.checks is not None:
         _line("spikes", loaded.checks.spike_text())
 
@@ -103,7 +137,7 @@ def _print_summary(result) -> None:
     invalid = [f.code for f in result.flags if f.invalid]
     _line("valid", f"no ({', '.join(invalid)}): the numbers below judge nothing" if invalid else "yes")
     for flag in result.flags:
-        _line("flag", f"{flag.code}{'' if flag.invalid else ' (a note)'}: {flag.reason}")
+        _line("flag", flag.line())
     if s["max_penetration_mm"] is None:
         _line("penetration", s.get("hold_reason") or "not judged: no object")
     else:
@@ -142,10 +176,12 @@ def _print_summary(result) -> None:
             else f"contact {h['contact_frames']} frames (up to {h['max_contact_links']} links, "
             f"{h['max_total_normal_force_n']:.2f} N); penetration max {h['max_penetration_mm']:.2f} mm; "
         )
+        start = s.get(f"{hand}/start_penetration_mm")
         _line(
             hand,
             f"{touch}tracking mean {_num(h['mean_tracking_error_deg'])}°; "
-            f"tips mean {_num(h['mean_tip_error_mm'], '.1f')} mm",
+            f"tips mean {_num(h['mean_tip_error_mm'], '.1f')} mm"
+            + ("" if start is None else f"; starts {start:.1f} mm inside the object"),
         )
     if "mean_drift_mm" in s:
         tolerance = result.config["metrics"]["drift_tolerance"] * 100
@@ -163,6 +199,8 @@ def _print_summary(result) -> None:
             mean, final = s["mean_articulation_drift_deg"], s["final_articulation_drift_deg"]
             rotation += f", mean {mean:.1f}°, final {final:.1f}°"
         _line("rotation", rotation)
+    if "track" in s:
+        _print_track(s)
     placement = scene.get("placement") or {}
     if placement:
         links = placement.get("links", [])
@@ -209,15 +247,24 @@ def _print_summary(result) -> None:
             _line("held", f"{verdict}; held {hold.time_held:.2f} s")
             _line("slip", f"max {hold.max_slip * 1000:.1f} mm relative to the hand")
             _line("drop", f"{hold.drop * 1000:.1f} mm (object origin, release to the window's end)")
+    if result.grip is not None:
+        _print_grip(result.grip, result.config["metrics"]["grip"])
     robustness = result.robustness
     if robustness is not None:
         lost = [m.label for m in robustness.members if m.held is False]
+        unjudged = [m for m in robustness.members if m.held is None]
+        factors = "; ".join(
+            f"{factor} {counts['held']} of {counts['judged']}"
+            for factor, counts in robustness.factors().items()
+        )
         _line(
             "robustness",
-            f"{_num(robustness.fraction)}: {robustness.held} of {robustness.judged} placements held "
-            "(the winner, the next best, the winner moved ±2 mm and turned ±5°)"
-            + (f"; lost: {', '.join(lost)}" if lost else ""),
+            f"{_num(robustness.fraction)}: {robustness.held} of {robustness.judged} ensemble members held "
+            f"({factors}: the winner, the next best placements, the winner moved ±2 mm and turned ±5°, the "
+            "undriven DoFs turned and the sensors offset)" + (f"; lost: {', '.join(lost)}" if lost else ""),
         )
+        for member in unjudged:
+            _line("", f"{member.label}: {(member.reason or 'not judged').removeprefix('not judged: ')}")
     if result.release_stability is not None:
         directions = result.release_stability.directions
         held = [d.direction for d in directions if d.success]
@@ -241,6 +288,15 @@ def _print_summary(result) -> None:
             f"{'stable' if stability.success else 'not stable'} ({passed} of {len(stability.directions)} "
             f"gravity directions held); ObMan displacement {_num(moved, '.1f')} mm",
         )
+
+
+def _print_track(s: dict) -> None:
+    """The verdict on a recorded object's track: followed, lost at t (how), or not judged (why)."""
+    line = s["track_reason"]
+    fraction, frames = s.get("track_followed_fraction"), s.get("track_manipulated_frames")
+    if fraction is not None:
+        line += f" [within tolerance in {fraction * 100:.1f}% of {frames} manipulated frames]"
+    _line("track", line)
 
 
 def _thumb_rest(text: str) -> tuple[float, float]:
@@ -275,6 +331,16 @@ def _print_self_penetration(s: dict) -> None:
     )
 
 
+def _grasp_index(text: str) -> int:
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a grasp episode number (1, 2 …), got {text!r}") from None
+    if value < 1:
+        raise argparse.ArgumentTypeError(f"expected a grasp episode number ≥ 1, got {value}")
+    return value
+
+
 def _stability_at(text: str) -> float | str:
     if text == "grasp":
         return text
@@ -294,15 +360,15 @@ def _replay(args: argparse.Namespace) -> int:
 
         check_video(args.video, *args.size)  # before the replay: a missing encoder is known at once
     # lazy: the simulation stack (MuJoCo, trimesh), only when replaying
-    from handsim.sim.replay import ReplayConfig, replay
-    from handsim.trials import TrialError, load_trial
+    from handsim.sim.replay import ReplayConfig
+    from handsim.trials import TrialError
+    from handsim.trials.registry import find_trial
 
     config = ReplayConfig(control_rate=args.rate, keep_states=bool(args.video), stability_at=args.stability)
     try:
-        loaded = load_trial(
+        trial = find_trial(
             args.trajectory,
-            metrics=config.metrics,
-            progress=True,
+            grasp=args.grasp,
             skeleton=args.skeleton,
             obj=args.object,
             calibration=args.calibration,
@@ -316,17 +382,121 @@ def _replay(args: argparse.Namespace) -> int:
             mano_dir=args.mano_dir,
             templates=args.templates,
         )
+        if args.grasp is None:
+            trial, segmentation = _episodes(trial)
+            if segmentation is not None and len(segmentation.complete) > 1:
+                return _replay_episodes(args, trial, segmentation, config)
+        return _replay_trial(args, trial, config)
     except TrialError as exc:
         return usage_error("replay", str(exc))
+
+
+def _episodes(trial):
+    """A glove trial's segmentation, and the trial of its one complete episode when it has exactly one.
+
+    With none, the trial stays the whole recording: its replay measures the hand, and its hold is not
+    judged, with the reason.
+    """
+    # lazy: the trial registry's readers, only when replaying
+    from handsim.trials.registry import grasp_episodes, kind_named
+
+    if kind_named(trial.kind).read is None:
+        return trial, None
+    segmentation = grasp_episodes(trial)
+    if len(segmentation.complete) == 1:
+        return dataclasses.replace(trial, grasp=segmentation.complete[0].index), segmentation
+    return trial, segmentation
+
+
+def _replay_episodes(args: argparse.Namespace, trial, segmentation, config) -> int:
+    """Judge every complete grasp episode of a glove recording: one line each and a total."""
+    # lazy: the simulation stack, only when replaying
+    from handsim.report.aggregate import ROBUST
+    from handsim.sim.replay import replay
+    from handsim.trials import load_trial
+
+    _line("trial", f"{trial.kind}  {trial.trajectory_path}")
+    for text in segmentation.lines():
+        label, _, rest = text.partition(" ")
+        _line(label if label != "episode" else "", text if label == "episode" else rest.strip())
+    complete = segmentation.complete
+    if args.plot or args.video or args.stability is not None:
+        return usage_error(
+            "replay", f"the recording holds {len(complete)} grasp episodes: choose one with --grasp K for "
+            "--plot, --video or --stability",
+        )  # fmt: skip
+    records, outcomes = [], []
+    for episode in complete:
+        loaded = load_trial(
+            dataclasses.replace(trial, grasp=episode.index), metrics=config.metrics, progress=True
+        )
+        result = replay(loaded.scene, loaded.trajectory, config)
+        outcomes.append(result)
+        _line(f"episode {episode.index}", _episode_line(result))
+        if args.json:
+            records.append(
+                {**result.to_dict(), "trial": loaded.trial.to_dict(), "episode": episode.to_dict()}
+            )
+    held = sum(r.summary.get("held") is True for r in outcomes)
+    lost = sum(r.summary.get("held") is False for r in outcomes)
+    robust = sum(
+        r.summary.get("held") is True and (r.summary.get("hold_robustness") or 0) >= ROBUST for r in outcomes
+    )
+    _line(
+        "total",
+        f"{len(complete)} complete episodes judged of {len(segmentation.episodes)}: held {held} ({robust} "
+        f"with robustness ≥ {ROBUST:g}), not held {lost}, not judged {len(complete) - held - lost}; "
+        "details of one: --grasp K",
+    )
+    if args.json:
+        text = json.dumps(
+            json_ready({"segmentation": segmentation.to_dict(), "episodes": records}),
+            indent=1,
+            allow_nan=False,
+        )
+        _line("wrote", str(write_text(args.json, text + "\n")))
+    diverged = any(r.diverged is not None for r in outcomes)
+    return EXIT_DIVERGED if diverged else 0
+
+
+def _episode_line(result) -> str:
+    """One episode's verdict in a line: held or why not, robustness, the grip's check."""
+    s = result.summary
+    hold = result.hold
+    if hold is None or hold.held is None:
+        verdict = (hold.reason if hold is not None else s.get("hold_reason")) or "not judged"
+    elif hold.held:
+        verdict = f"held {hold.time_held:.2f} s, robustness {_num(s.get('hold_robustness'))}"
+    else:
+        verdict = f"not held: lost at {hold.lost_at:.2f} s ({hold.reason})"
+    grip = result.grip
+    if grip is not None and hold is not None and hold.held is not None:
+        pair = " against ".join(grip.opposing_links) if grip.opposing_links else "no opposing pair"
+        verdict += (
+            f"; grip {pair} in {grip.opposition or 0:.0%} of the window, deepest "
+            f"{grip.max_depth * 1000:.1f} mm, {grip.grip_force:.1f} N of ≤ {grip.force_limit:.0f} N"
+        )
+    return verdict
+
+
+def _replay_trial(args: argparse.Namespace, trial, config) -> int:
+    """Replay one trial (a glove recording's one episode) and print everything about it."""
+    # lazy: the simulation stack, only when replaying
+    from handsim.sim.replay import replay
+    from handsim.trials import load_trial
+
+    loaded = load_trial(trial, metrics=config.metrics, progress=True)
     _print_trial(loaded)
     if args.stability is not None and len(loaded.scene.layout.hands) > 1:
         return usage_error("replay", "--stability tests hold one hand; this trial has two (ARCTIC)")
     if args.stability == "grasp" and loaded.scene.setup.hold_window is None:
         return usage_error("replay", "--stability grasp is for glove trials; give a time in s")
     end = float(loaded.trajectory.times[-1])
+    what = "recording" if loaded.episode is None else f"grasp episode {loaded.episode.index}"
     if isinstance(args.stability, float) and args.stability > end:
         return usage_error(
-            "replay", f"--stability {args.stability:g} s is after the recording's end ({end:.3f} s)"
+            "replay",
+            f"--stability {args.stability:g} s is after the {what}'s end ({end:.3f} s)",
         )
     result = replay(loaded.scene, loaded.trajectory, config)
     _print_summary(result)
@@ -346,6 +516,8 @@ def _replay(args: argparse.Namespace) -> int:
             "recording": recording_checks(loaded.checks, loaded.scene),
             "curves": replay_curves(result).to_dict(),
         }
+        if loaded.episode is not None:
+            record["episode"] = loaded.episode.to_dict()
         text = json.dumps(json_ready(record), indent=1, allow_nan=False)
         _line("wrote", str(write_text(args.json, text + "\n")))
     if args.plot:
@@ -396,7 +568,7 @@ def register(commands: Commands) -> None:
     replay.add_argument(
         "trajectory",
         metavar="TRAJECTORY",
-        help="GraspDB14 .txt, Tzionas Model_Hand_*.MOTION or ARCTIC <seq>.mano.npy",
+        help="GraspDB14 .txt, Tzionas Model_Hand_*.MOTION, ARCTIC <seq>.mano.npy or a NAME.corrected.npz",
     )
     replay.add_argument("--skeleton", metavar="SKELETON_FILE", help="GraspDB14: the hand (.xmlskel or .SKEL)")
     replay.add_argument(
@@ -420,6 +592,11 @@ def register(commands: Commands) -> None:
         "--thumb-rest", type=_thumb_rest, metavar="ABD,FLEX",
         help="GraspDB14: hold the thumb TMC DoFs no glove sensor drives (th_tmc_abd, th_tmc_flex) at these "
         "angles in degrees (default: 0,0 as the GraspDB14 tools; see docs/cyberglove.md)",
+    )  # fmt: skip
+    replay.add_argument(
+        "--grasp", type=_grasp_index, metavar="K",
+        help="glove recordings: replay grasp episode K only, with every detail (1-based, as `handsim "
+        "inspect` lists them; default: judge every complete episode, one line each)",
     )  # fmt: skip
     add_arctic_options(replay)
     add_control_rate(replay)

@@ -85,11 +85,11 @@ def curves(result: ReplayResult) -> dict:
 
     Returns:
         ``time_s``; ``penetration_mm`` (None without objects: not judged); ``contacts_per_finger`` (thumb,
-        index, middle, ring, little, palm: how many of the group's links touch an object; empty without
-        objects); ``drift_mm`` (recorded scenario: the largest object
-        position error over the objects, else None); ``tracking_error_deg`` (RMS over the hand's DoFs of
-        achieved minus target angle); ``self_penetration_mm`` (without objects: the simulated hand through
-        itself, else None); ``stride`` (frames per point).
+        index, middle, ring, little, palm: how many of the group's links touch an object; per hand,
+        ``right/thumb`` …, in a two-hand scene; empty without objects); ``drift_mm`` (recorded scenario: the
+        largest object position error over the objects, else None); ``tracking_error_deg`` (RMS over the
+        hand's DoFs of achieved minus target angle); ``self_penetration_mm`` (without objects: the simulated
+        hand through itself, else None); ``stride`` (frames per point).
     """
     f = result.frames
     n = f.times.shape[0]

@@ -107,7 +107,9 @@ def base_record(entry: TrialEntry, config: ReplayConfig, frames: int) -> dict:
         "model_sha256": None,
         "scenario": None,
         "summary": None,
+        "episode": None,
         "hold": None,
+        "grip": None,
         "robustness": None,
         "release_stability": None,
         "stability": None,
@@ -186,7 +188,9 @@ def trial_outcome(entry: TrialEntry, config: ReplayConfig, frames: int = 4) -> T
         record.update(
             status="diverged" if result.diverged is not None else "ok",
             summary=result.summary,
+            episode=None if loaded.episode is None else loaded.episode.to_dict(),
             hold=None if result.hold is None else result.hold.to_dict(),
+            grip=None if result.grip is None else result.grip.to_dict(),
             robustness=None if result.robustness is None else result.robustness.to_dict(),
             release_stability=None
             if result.release_stability is None

@@ -18,6 +18,7 @@ import numpy as np
 from handsim.datatypes.poses import compose, inverse
 from handsim.datatypes.rotations import quat_angle
 from handsim.sim.control import ControlSchedule
+from handsim.sim.scene.clearance import site_positions
 from handsim.sim.scene.compiled import SimScene
 from handsim.sim.scene.layout import _SLOT, CONTACT_SLOTS
 from handsim.sim.self_contact import self_penetration_track
@@ -119,6 +120,24 @@ def _contact_counts(scene: SimScene, sensors: np.ndarray) -> np.ndarray:
     return sensors[:, adr].astype(np.int32)  # every slot repeats the total count
 
 
+def contact_slot_values(scene: SimScene, sensors: np.ndarray, offset: int) -> np.ndarray:
+    """One field of every used slot of the link × part contact sensors, 0 in unused slots.
+
+    Args:
+        scene: The scene.
+        sensors: Sensor rows (N, nsensordata).
+        offset: The field's offset in a slot: 1 the normal force, N (≥ 0); 4 the distance, m (< 0 inside).
+
+    Returns:
+        (N, links, parts, :data:`~handsim.sim.scene.layout.CONTACT_SLOTS`).
+    """
+    adr = scene.layout.contact_adr
+    found = sensors[:, adr]  # every slot repeats the count
+    slots = adr[..., None] + _SLOT * np.arange(CONTACT_SLOTS) + offset
+    used = np.arange(CONTACT_SLOTS) < np.minimum(found, CONTACT_SLOTS)[..., None]
+    return np.where(used, sensors[:, slots], 0.0)
+
+
 def _contacts(scene: SimScene, sensors: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     adr = scene.layout.contact_adr
     n = sensors.shape[0]
@@ -150,21 +169,12 @@ def _kinematic_targets(scene: SimScene, schedule: ControlSchedule, qpos: np.ndar
 
 
 def _target_tips(scene: SimScene, qpos: np.ndarray, scratch: mujoco.MjData | None = None) -> np.ndarray:
-    """Fingertip site positions (N, tips, 3) for each qpos row (kinematics only).
+    """Fingertip site positions (N, tips, 3) for each qpos row (kinematics only; in ``scratch`` when given).
 
-    One ``mj_kinematics`` per row, in ``scratch`` when given (else a new ``MjData``: 0.5 ms with a scene's
-    15 MB arena); the loop body is the least Python around it (every site copied, the tips picked once at
-    the end).
+    :func:`~handsim.sim.scene.clearance.site_positions` copies every site each row; the tips are picked once
+    at the end.
     """
-    model = scene.model
-    data = mujoco.MjData(model) if scratch is None else scratch
-    sites = np.empty((qpos.shape[0], model.nsite, 3))
-    state, site_xpos, kinematics = data.qpos, data.site_xpos, mujoco.mj_kinematics
-    for k, row in enumerate(qpos):
-        state[:] = row
-        kinematics(model, data)
-        sites[k] = site_xpos
-    return sites[:, scene.layout.tip_sites]
+    return site_positions(scene.model, qpos, scratch)[:, scene.layout.tip_sites]
 
 
 def _poses(sensors: np.ndarray, pos_adr: int, quat_adr: int) -> np.ndarray:

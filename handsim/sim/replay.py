@@ -9,16 +9,17 @@ from __future__ import annotations
 
 from collections.abc import Callable, Sequence
 from concurrent.futures import Future, ThreadPoolExecutor
-from dataclasses import asdict, dataclass, field
+from dataclasses import asdict, dataclass, field, replace
 
 import numpy as np
 
 from handsim.datatypes.trajectory import Trajectory
 from handsim.sim.control import DEFAULT_CONTROL_RATE, ControlSchedule, control_schedule
 from handsim.sim.drive import ScenarioSwitches, ScheduleDriver, scenario_switches
+from handsim.sim.grip_check import GripCheck, check_grip
 from handsim.sim.metrics import FrameMetrics, HoldTracks, frame_metrics, hold_tracks
 from handsim.sim.parallel import sim_threads
-from handsim.sim.placement.robustness import HoldRobustness, Outcome, hold_robustness, member_outcomes
+from handsim.sim.placement.robustness import HoldRobustness, Judge, Outcome, hold_robustness, member_outcomes
 from handsim.sim.plausibility import Flag, check_control_rate, is_valid, replay_flags
 from handsim.sim.scene.compiled import SimScene
 from handsim.sim.specs import MetricSpec
@@ -32,6 +33,7 @@ from handsim.sim.summary import (
     summarize,
     window_long_enough,
 )
+from handsim.sim.track import start_summary, track_flags, track_verdict
 
 MEMBER_FIRST_LOOK = 0.1
 """Seconds after the release at which a robustness-ensemble member's run is first looked at for a loss
@@ -98,6 +100,8 @@ class ReplayResult:
         warnings: MuJoCo warnings with the step they happened at.
         diverged: The divergence that stopped the run, or None.
         hold: Glove scenario: the hold outcome, else None.
+        grip: Glove scenario with a judged hold: what the grip looked like over the hold window (its links,
+            opposition, deepest link, force against the servos' bound), else None.
         robustness: Glove scenario with ``config.ensemble``: the hold over the robustness ensemble, else None.
         release_stability: Glove scenario with ``config.ensemble``: the stability tests on the state at the
             release (six gravity directions: the verdict does not rest on one), else None.
@@ -131,6 +135,7 @@ class ReplayResult:
     trajectory: dict
     notes: tuple[str, ...]
     flags: tuple[Flag, ...] = ()
+    grip: GripCheck | None = None
 
     def to_dict(self) -> dict:
         """JSON-ready result without per-frame arrays (those are in ``frames``)."""
@@ -139,6 +144,7 @@ class ReplayResult:
             "diverged": None if self.diverged is None else asdict(self.diverged),
             "warnings": [asdict(w) for w in self.warnings],
             "hold": None if self.hold is None else self.hold.to_dict(),
+            "grip": None if self.grip is None else self.grip.to_dict(),
             "robustness": None if self.robustness is None else self.robustness.to_dict(),
             "release_stability": None if self.release_stability is None else self.release_stability.to_dict(),
             "stability": None if self.stability is None else self.stability.to_dict(),
@@ -229,8 +235,8 @@ def replay(scene: SimScene, trajectory: Trajectory, config: ReplayConfig | None 
     setup = scene.setup
     release = switches.release_frame
 
-    def judge(variant: SimScene) -> Outcome:  # an ensemble member's verdict
-        return member_verdict(variant, schedule, spec)
+    def judge(variant: SimScene, controls: ControlSchedule) -> Outcome:  # an ensemble member's verdict
+        return member_verdict(variant, controls, spec)
 
     ahead = _members_ahead(scene, schedule, release, config, judge)
     try:
@@ -241,21 +247,30 @@ def replay(scene: SimScene, trajectory: Trajectory, config: ReplayConfig | None 
             summary.update(hand_only_summary(frames, scene.layout.link_names))
         summary["diverged"] = diverged is not None
         summary["warnings"] = len(warnings)
-        flags = replay_flags(scene, trajectory, schedule, switches, frames)
+        verdict = track_verdict(
+            scene, schedule, frames, qpos, diverged is not None, scratch=driver.stepper.data
+        )
+        if verdict is not None:
+            summary.update(verdict.summary(), **start_summary(scene))
+        flags = (
+            *replay_flags(scene, trajectory, schedule, switches, frames),
+            *track_flags(scene, frames, verdict),
+        )
         summary["valid"] = is_valid(flags)
-        hold = robustness = release_stability = None
+        hold = grip = robustness = release_stability = None
         if _judges_hold(scene, release):
-            hold = _hold(scene, schedule, frames, qpos, release, spec)
+            hold, grip = _hold(scene, schedule, frames, qpos, sensors, release, spec)
             summary.update(
                 held=hold.held,
                 hold_reason=hold.reason,
                 time_held_s=hold.time_held,
                 max_slip_mm=hold.max_slip * 1000.0,
                 drop_mm=hold.drop * 1000.0,
+                **grip_summary(grip),
             )
             if config.ensemble and hold.judged:
                 if ahead is None:
-                    robustness = hold_robustness(scene, hold, judge)
+                    robustness = hold_robustness(scene, schedule, spec, hold, judge)
                     release_stability = _release_stability(scene, schedule, qpos, release, spec)
                 else:  # the release test while the members finish; their error first, as without threads
                     try:
@@ -263,11 +278,12 @@ def replay(scene: SimScene, trajectory: Trajectory, config: ReplayConfig | None 
                     except Exception:
                         ahead.result()
                         raise
-                    robustness = hold_robustness(scene, hold, judge, ahead.result())
+                    robustness = hold_robustness(scene, schedule, spec, hold, judge, ahead.result())
                     ahead = None
             summary.update(_closure(setup.placement))
             summary.update(
                 hold_robustness=None if robustness is None else robustness.fraction,
+                hold_robustness_factors=None if robustness is None else robustness.factors(),
                 release_directions_held=None
                 if release_stability is None
                 else sum(d.success for d in release_stability.directions),
@@ -314,6 +330,7 @@ def replay(scene: SimScene, trajectory: Trajectory, config: ReplayConfig | None 
         },
         notes=notes,
         flags=flags,
+        grip=grip,
     )
 
 
@@ -322,8 +339,8 @@ def _members_ahead(
     schedule: ControlSchedule,
     release: int,
     config: ReplayConfig,
-    judge: Callable[[SimScene], Outcome],
-) -> Future[list[tuple[str, Outcome]]] | None:
+    judge: Judge,
+) -> Future[list[tuple[str, str, Outcome]]] | None:
     """The robustness ensemble's members judged beside the winner's run, when threads are to spare.
 
     The members do not depend on the winner's run, only on whether its hold is judged; that is known before
@@ -343,7 +360,7 @@ def _members_ahead(
         return None
     pool = ThreadPoolExecutor(max_workers=1, thread_name_prefix="handsim-sim")
     try:
-        return pool.submit(member_outcomes, scene, judge)
+        return pool.submit(member_outcomes, scene, schedule, spec, judge)
     finally:
         pool.shutdown(wait=False)  # its one thread ends with the task
 
@@ -382,21 +399,68 @@ def _hold(
     schedule: ControlSchedule,
     frames: FrameMetrics | HoldTracks,
     qpos: np.ndarray,
+    sensors: np.ndarray,
     release: int,
     spec: MetricSpec,
-) -> HoldOutcome:
-    """The hold outcome of a glove replay, or not judged when the placement was infeasible."""
+) -> tuple[HoldOutcome, GripCheck | None]:
+    """The hold outcome of a glove replay and its grip, or not judged when the placement was infeasible.
+
+    A judged outcome stands only where the grip does (:mod:`handsim.sim.grip_check`): no hand link deeper in
+    the object than the grip limit from the contact frame until the object is lost or the window ends, and a
+    held object pressed from opposing sides with forces the servos can make over the hold window. Else the
+    outcome is not judged, with the check's reason.
+    """
     window = scene.setup.hold_window
     released = float(schedule.times[release])
     if not _placed(scene):
-        return not_judged(
-            released,
-            window,
+        reason = (
             "not judged: the object could not be placed without penetrating the hand "
-            "(the placement note says how deep)",
+            "(the placement note says how deep)"
         )
+        return not_judged(released, window, reason), None
+    if scene.setup.unjudged is not None:
+        return not_judged(released, window, scene.setup.unjudged), None
     obj = scene.layout.objects[0]
-    return hold_outcome(frames, qpos[:, obj.free_qpos + 2], released, window, spec)
+    outcome = hold_outcome(frames, qpos[:, obj.free_qpos + 2], released, window, spec)
+    if not outcome.judged:
+        return outcome, None
+    end = outcome.window[1] if outcome.lost_at is None else outcome.lost_at
+    since = min(float(scene.setup.contact_time), outcome.window[0])
+    window = (outcome.window[0], end)
+    grip = check_grip(
+        scene, qpos, sensors, schedule.times, window, spec.grip, since, grip=outcome.held is True
+    )
+    reason = grip.depth_failure(spec.grip) or (grip.grip_failure(spec.grip) if outcome.held else None)
+    if reason is not None:
+        outcome = replace(outcome, held=None, reason=reason)
+    return outcome, grip
+
+
+def grip_summary(grip: GripCheck | None) -> dict:
+    """The grip's numbers in a replay summary (None when no hold was judged)."""
+    if grip is None:
+        return dict.fromkeys(GRIP_KEYS)
+    return {
+        "grip_links": list(grip.links),
+        "grip_opposition": grip.opposition,
+        "grip_opposing_links": None if grip.opposing_links is None else list(grip.opposing_links),
+        "deepest_link": grip.deepest_link,
+        "deepest_link_mm": grip.max_depth * 1000.0,
+        "grip_force_n": grip.grip_force,
+        "grip_force_limit_n": grip.force_limit,
+    }
+
+
+GRIP_KEYS = (
+    "grip_links",
+    "grip_opposition",
+    "grip_opposing_links",
+    "deepest_link",
+    "deepest_link_mm",
+    "grip_force_n",
+    "grip_force_limit_n",
+)
+"""The summary's grip keys (:func:`grip_summary`)."""
 
 
 def member_verdict(scene: SimScene, schedule: ControlSchedule, spec: MetricSpec) -> Outcome:
@@ -433,13 +497,18 @@ def member_verdict(scene: SimScene, schedule: ControlSchedule, spec: MetricSpec)
         looks.append(int(np.searchsorted(times, times[release] + after - 1e-9)))
         after *= 2.0
 
-    def verdict(qpos: np.ndarray, sensors: np.ndarray) -> HoldOutcome:
-        return _hold(scene, schedule, hold_tracks(scene, schedule, sensors), qpos, release, spec)
+    def lost(qpos: np.ndarray, sensors: np.ndarray) -> bool:  # a loss so far is the loss of the whole run
+        obj = scene.layout.objects[0]
+        tracks = hold_tracks(scene, schedule, sensors)
+        released = float(times[release])
+        window = scene.setup.hold_window
+        return (
+            _placed(scene)
+            and hold_outcome(tracks, qpos[:, obj.free_qpos + 2], released, window, spec).held is False
+        )
 
-    qpos, sensors, _, _ = run_schedule(
-        driver, frames=last, until=lambda q, s: verdict(q, s).held is False, checks=looks
-    )
-    outcome = verdict(qpos, sensors)
+    qpos, sensors, _, _ = run_schedule(driver, frames=last, until=lost, checks=looks)
+    outcome, _ = _hold(scene, schedule, hold_tracks(scene, schedule, sensors), qpos, sensors, release, spec)
     return outcome.held, outcome.reason
 
 

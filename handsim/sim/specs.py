@@ -183,7 +183,46 @@ class PlacementSpec:
         return cls(**values)
 
 
-METRIC_SPEC_VERSION = "2"
+GRIP_SPEC_VERSION = "1"
+
+
+@dataclass(frozen=True)
+class GripSpec:
+    """What a glove hold needs to count as a grip (:func:`handsim.sim.grip_check.check_grip`).
+
+    Attributes:
+        version: Changes whenever a definition or default below changes.
+        max_depth: Deepest a hand link may be inside the object over the hold window, m: the pad's modelled
+            compliance (its impedance reaches full stiffness over the 3 mm width of
+            :data:`~handsim.builders.surfaces.PAD_SOLIMP`) plus the placement's 2 mm penetration tolerance
+            (:attr:`PlacementSpec.penetration`). Deeper, the outcome is not judged.
+        min_opposition: Share of the examined window frames in which the thumb and a finger, or fingers and
+            the palm, must press on the object from opposing sides (two contacts in force closure) for a
+            hold to count.
+        frames: Frames of the window examined for opposition and force (evenly spaced; every frame when the
+            window has fewer): one every 50 ms or less over a 1 s hold, each costing a collision query and the
+            closure test (about 0.5 ms).
+    """
+
+    version: str = GRIP_SPEC_VERSION
+    max_depth: float = 0.005
+    min_opposition: float = 0.5
+    frames: int = 20
+
+    def __post_init__(self) -> None:
+        check_version(self.version, GRIP_SPEC_VERSION, "grip")
+        check_positive(self, ("max_depth",), label="grip ")
+        if not 0.0 <= self.min_opposition <= 1.0:
+            raise ValueError(f"grip min_opposition must be a fraction in [0, 1], got {self.min_opposition}")
+        if self.frames < 1:
+            raise ValueError(f"grip frames must be ≥ 1, got {self.frames}")
+
+    def to_dict(self) -> dict:
+        """JSON-ready parameters."""
+        return asdict(self)
+
+
+METRIC_SPEC_VERSION = "3"
 HOLD_ORIENTATIONS = ("grip", "palm down")
 """How the glove scenario orients the hand for the hold (:attr:`MetricSpec.hold_orientation`)."""
 
@@ -207,12 +246,17 @@ class MetricSpec:
         robustness_shift: Glove scenario: the hold-robustness ensemble moves the placed object by this much
             along each axis of the scene, m.
         robustness_turn_deg: … and turns it by this much about each axis, degrees.
+        robustness_undriven_deg: Glove scenario: the ensemble turns each undriven thumb DoF, and the other
+            DoFs no glove sensor drives together, by ± this much, degrees (0: no such members).
+        robustness_sensor_deg: … and offsets every sensor-driven DoF together by ± this much, degrees: the
+            CyberGlove's repeatability between wearings (0: no such members).
         hold_orientation: Glove scenario: ``"grip"`` — the hand is palm down (GraspDB14's objects are picked
             up from a table) when its grip resists gravity that way, else turned so that gravity pulls along
             the axis direction its grip resists best (a hand on its side, fingers down), never into the palm
             (an object lying on an open hand is no grasp); ``"palm down"`` — always palm down.
         placement: The glove placement search's parameters (:class:`PlacementSpec`).
         stability: The grasp stability tests' parameters (:class:`StabilitySpec`).
+        grip: What a glove hold needs to count as a grip (:class:`GripSpec`).
     """
 
     version: str = METRIC_SPEC_VERSION
@@ -223,9 +267,12 @@ class MetricSpec:
     min_hold_window: float = 0.3
     robustness_shift: float = 0.002
     robustness_turn_deg: float = 5.0
+    robustness_undriven_deg: float = 5.0
+    robustness_sensor_deg: float = 3.0
     hold_orientation: str = "grip"
     placement: PlacementSpec = field(default_factory=PlacementSpec)
     stability: StabilitySpec = field(default_factory=StabilitySpec)
+    grip: GripSpec = field(default_factory=GripSpec)
 
     def __post_init__(self) -> None:
         check_version(self.version, METRIC_SPEC_VERSION, "metric")
@@ -235,13 +282,23 @@ class MetricSpec:
                 f"unknown hold_orientation {self.hold_orientation!r}; "
                 f"expected one of {list(HOLD_ORIENTATIONS)}"
             )
-        check_nonnegative(self, ("release_delay", "robustness_shift", "robustness_turn_deg"))
+        check_nonnegative(
+            self,
+            (
+                "release_delay",
+                "robustness_shift",
+                "robustness_turn_deg",
+                "robustness_undriven_deg",
+                "robustness_sensor_deg",
+            ),
+        )
 
     def to_dict(self) -> dict:
         """JSON-ready parameters."""
         result = asdict(self)
         result["placement"] = self.placement.to_dict()
         result["stability"] = self.stability.to_dict()
+        result["grip"] = self.grip.to_dict()
         return result
 
     @classmethod
@@ -260,4 +317,48 @@ class MetricSpec:
         stability["obman_direction"] = tuple(stability["obman_direction"])
         values["stability"] = StabilitySpec(**stability)
         values["placement"] = PlacementSpec.from_dict(values["placement"])
+        values["grip"] = GripSpec(**values["grip"])
         return cls(**values)
+
+
+TRACK_SPEC_VERSION = "1"
+"""Version of :class:`TrackSpec`: bumped whenever a tolerance's meaning or a default changes."""
+
+
+@dataclass(frozen=True)
+class TrackSpec:
+    """The tolerances of the verdict on a recorded object's track and of its flags (sources: docs/physics.md).
+
+    The verdict is :func:`handsim.sim.track.track_verdict`: a recorded object is *followed* while its
+    simulated pose stays within these tolerances of its recording; the frames judged are those in which the
+    recording has moved it beyond them from where it started (an object left where it was would not follow).
+
+    Attributes:
+        version: :data:`TRACK_SPEC_VERSION`.
+        position: Largest distance of the object's origin from its recording, m. ManipTrans's (Li et al.,
+            CVPR 2025) object-tracking failure threshold at the end of its curriculum: 2 cm.
+        rotation_deg: Largest rotation from the recorded orientation, degrees (ManipTrans: 30°).
+        articulation_deg: Largest hinge angle from the recorded articulation, degrees: a lid is a rigid part,
+            so ManipTrans's rotation threshold applies to its angle too.
+        floor_clearance: An object whose lowest point ends within this of the floor lies on the floor, m.
+        max_penetration: A hand deeper than this inside an object at any frame passes through it, m: more
+            than a finger's half thickness (MANO's joints lie 6–10 mm under the skin), two and a half times
+            the 4 mm at which a finger pad carries 15–26 N (docs/physics.md, "Finger pad calibration").
+    """
+
+    version: str = TRACK_SPEC_VERSION
+    position: float = 0.02
+    rotation_deg: float = 30.0
+    articulation_deg: float = 30.0
+    floor_clearance: float = 0.01
+    max_penetration: float = 0.01
+
+    def __post_init__(self) -> None:
+        check_version(self.version, TRACK_SPEC_VERSION, "track")
+        check_positive(
+            self, ("position", "rotation_deg", "articulation_deg", "floor_clearance", "max_penetration")
+        )
+
+    def to_dict(self) -> dict:
+        """The tolerances, JSON-ready."""
+        return asdict(self)

@@ -32,6 +32,7 @@ if TYPE_CHECKING:
     from handsim.datatypes.object_model import ObjectModel
     from handsim.datatypes.trajectory import Trajectory
     from handsim.glove.checks import RecordingChecks
+    from handsim.glove.segmentation import GraspEpisode
     from handsim.sim.scene.compiled import SimScene
 
 HAND_COLLISIONS = ("capsules", "mesh")
@@ -85,6 +86,10 @@ class Trial:
             (:mod:`handsim.datatypes.physical_ranges`).
         notes: Decisions made while finding the files.
         mano_dir: The folder with the user's ``MANO_RIGHT.pkl`` / ``MANO_LEFT.pkl`` (ARCTIC), or None.
+        grasp: Glove recordings: the grasp episode replayed (1-based, in the order
+            :func:`handsim.glove.segmentation.segment_grasps` lists them; ``handsim inspect`` prints them):
+            the recording cut to it (:mod:`handsim.trials.episodes`). None: the whole recording, its grasp
+            window around the highest flexion (or its annotated grasp phase).
     """
 
     kind: str
@@ -102,6 +107,7 @@ class Trial:
     force: bool = False
     notes: tuple[str, ...] = ()
     mano_dir: str | None = None
+    grasp: int | None = None
 
     def to_dict(self) -> dict:
         """JSON-ready fields (:meth:`from_dict` gives the trial back)."""
@@ -166,6 +172,7 @@ class LoadedTrial:
         checks: What the recording's checks found and did (phase annotation used, spikes filled:
             :class:`~handsim.glove.checks.RecordingChecks`), or None for a kind whose recordings are not
             checked.
+        episode: The grasp episode replayed (:attr:`Trial.grasp`), its frames the recording's, or None.
     """
 
     trial: Trial
@@ -175,6 +182,7 @@ class LoadedTrial:
     objects: tuple[LoadedObject, ...]
     notes: tuple[str, ...] = field(default=())
     checks: RecordingChecks | None = None
+    episode: GraspEpisode | None = None
 
 
 @dataclass(frozen=True)

@@ -41,7 +41,7 @@ class Discovery:
 
     Attributes:
         root: The folder the ids and paths are relative to (absolute).
-        entries: The trials, sorted by id.
+        entries: The trials, sorted by id (a recording's grasp episodes ``<path>#<k>`` in episode order).
         companions: Known files that are not replayed, sorted by path.
         unknown: Files of no known kind, sorted by path.
     """
@@ -156,8 +156,11 @@ def discover_with(
     _rest(sorting, kinds)
     return Discovery(
         root=str(base),
-        entries=tuple(sorted(sorting.entries, key=lambda e: e.id)),
-        companions=tuple(CompanionFile(p, r) for p, r in sorted(sorting.companions.items())),
+        entries=tuple(sorted(sorting.entries, key=lambda e: _episode_order(e.id))),
+        companions=tuple(
+            CompanionFile(p, r)
+            for p, r in sorted(sorting.companions.items(), key=lambda c: _episode_order(c[0]))
+        ),
         unknown=tuple(UnknownFile(p, r) for p, r in sorted(sorting.unknown.items())),
     )
 
@@ -183,3 +186,9 @@ def select(
         raise ValueError(f"limit must be ≥ 0, got {limit}")
     chosen = tuple(e for e in entries if only is None or fnmatchcase(e.id, only))
     return chosen if limit is None else chosen[:limit]
+
+
+def _episode_order(item: str) -> tuple[str, int]:
+    """Sort key: the path, then a grasp episode's number (``#2`` before ``#10``); 0 for a whole file."""
+    path, sep, number = item.rpartition("#")
+    return (path, int(number)) if sep and number.isdigit() else (item, 0)

@@ -6,11 +6,13 @@ by :func:`handsim.sim.scenarios.glove_scene`.
 
 from __future__ import annotations
 
+import dataclasses
 from typing import TYPE_CHECKING
 
 from handsim.builders import default_hand, default_skeleton
 from handsim.sim.scenarios import glove_scene
 from handsim.trials.base import LoadedTrial, Trial, build_objects
+from handsim.trials.episodes import episode_note, episode_trajectory, whole_recording_verdict
 
 if TYPE_CHECKING:
     import mujoco
@@ -49,9 +51,22 @@ def glove_loaded(
         progress: Show a progress bar while an uncached convex decomposition runs.
         notes: Notes of the hand's reader (and of the recording's checks).
         checks: What the recording's checks found (GraspDB14 recordings), or None when not checked.
+
+    With :attr:`Trial.grasp` set, the recording is cut to that grasp episode first
+    (:func:`~handsim.trials.episodes.episode_trajectory`). Without, the whole recording is replayed, and its
+    hold is not judged when it holds no complete grasp episode
+    (:func:`~handsim.trials.episodes.whole_recording_verdict`).
     """
+    episode = unjudged = None
+    if trial.grasp is not None:
+        trajectory, episode, segmentation = episode_trajectory(trajectory, trial.grasp)
+        notes = (*notes, episode_note(episode, segmentation))
+    else:
+        unjudged = whole_recording_verdict(trajectory)
     specs, objects, object_notes = build_objects(trial, progress)
     scene = glove_scene(hand, trajectory, specs[0], spec=metrics)
+    if unjudged is not None:
+        scene = dataclasses.replace(scene, setup=dataclasses.replace(scene.setup, unjudged=unjudged))
     return LoadedTrial(
         trial=trial,
         scene=scene,
@@ -60,4 +75,5 @@ def glove_loaded(
         objects=objects,
         notes=(*trial.notes, *notes, *object_notes),
         checks=checks,
+        episode=episode,
     )

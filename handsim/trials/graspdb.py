@@ -14,7 +14,7 @@ from __future__ import annotations
 from pathlib import Path, PurePosixPath
 from typing import TYPE_CHECKING
 
-from handsim.builders import build_hand
+from handsim.builders import build_hand, default_skeleton
 from handsim.builders.graspdb_objects import GRASPDB_OBJECTS, graspdb_object
 from handsim.errors import HandsimError
 from handsim.glove import apply_thumb_rest, thumb_rest_note
@@ -34,12 +34,16 @@ from handsim.trials.base import (
     TrialOptions,
     UnsupportedTrialError,
 )
+from handsim.trials.episodes import add_episodes
 from handsim.trials.glove import glove_loaded, parametric_hand
 from handsim.trials.graspdb_names import graspdb_meta
 from handsim.trials.kind import TrialKind
 from handsim.trials.sorting import Sorting, TrialEntry, TrialInput, trial_input
 
 if TYPE_CHECKING:
+    from handsim.datatypes.skeleton import Skeleton
+    from handsim.datatypes.trajectory import Trajectory
+    from handsim.glove.checks import RecordingChecks
     from handsim.sim.specs import MetricSpec
 
 _NAME_HELP = "spec 003 §4.1.2: <objID>[_<graspID>|_<actionID>]_ex<NN>-rad|raw-<trialID>-grasp-su<actorID>.txt"
@@ -123,6 +127,21 @@ def _load(trial: Trial, metrics: MetricSpec | None, progress: bool) -> LoadedTri
         skeleton = read_skeleton(trial.skeleton_path)
         hand = build_hand(skeleton, collision=trial.collision)
         hand_text = f"{Path(trial.skeleton_path).name} ({skeleton.ndof} DoFs, {trial.collision})"
+    trajectory, notes, checks = _recording(trial, skeleton)
+    return glove_loaded(trial, hand, hand_text, trajectory, metrics, progress, tuple(notes), checks)
+
+
+def _read(trial: Trial) -> Trajectory:
+    """The recording as the trial replays it, without building its scene (its grasp episodes' source)."""
+    if trial.skeleton_path is None:
+        skeleton = default_skeleton(trial.hand_length)
+    else:
+        skeleton = read_skeleton(trial.skeleton_path)
+    return _recording(trial, skeleton)[0]
+
+
+def _recording(trial: Trial, skeleton: Skeleton) -> tuple[Trajectory, list[str], RecordingChecks]:
+    """The recording as joint targets of ``skeleton``, checked, with its phases; the notes; the checks."""
     calibration = None if trial.calibration_path is None else load_calibration(trial.calibration_path)
     trajectory = read_trajectory(trial.trajectory_path, skeleton=skeleton, calibration=calibration)
     if trial.annotation_path is None:
@@ -138,7 +157,7 @@ def _load(trial: Trial, metrics: MetricSpec | None, progress: bool) -> LoadedTri
     if trial.thumb_rest is not None:
         trajectory = apply_thumb_rest(trajectory, skeleton, *trial.thumb_rest)
         notes.append(thumb_rest_note(*trial.thumb_rest))
-    return glove_loaded(trial, hand, hand_text, trajectory, metrics, progress, tuple(notes), checks)
+    return trajectory, notes, checks
 
 
 def _no_annotation(trial: Trial, frames: int) -> AnnotationMatch:
@@ -211,7 +230,7 @@ def _sort_files(sorting: Sorting) -> None:
             sorting.unknown[f] = f"a GraspDB14 recording name, but not a trial: {exc}"
             continue
         meta = graspdb_meta(parsed, names.get(parsed.object_id))
-        sorting.add(TrialEntry(f, trial, meta, _inputs(trial, sorting.base)))
+        add_episodes(sorting, TrialEntry(f, trial, meta, _inputs(trial, sorting.base)), _read)
     for f in annotations:
         if f in sorting.claimed:
             continue
@@ -290,5 +309,6 @@ KIND = TrialKind(
     load=_load,
     sort_files=_sort_files,
     explain_unknown=_explain_unknown,
+    read=_read,
 )
 """The ``graspdb`` kind of trial."""

@@ -11,6 +11,7 @@ from handsim.trials.base import LoadedTrial, Trial, TrialOptions
 from handsim.trials.sorting import Sorting
 
 if TYPE_CHECKING:  # an annotation only: the trial registry loads without MuJoCo (start-up time)
+    from handsim.datatypes.trajectory import Trajectory
     from handsim.sim.specs import MetricSpec
 
 
@@ -34,6 +35,9 @@ class TrialKind:
         bulk_folder: Discovery: what a folder listed whole (not searched) is, or None.
         explain_unknown: Discovery: why a file no kind claimed, whose name looks like this kind's, is not
             a trial (or None to leave the general reason).
+        read: Glove kinds: the recording as a trial of this kind replays it (joint targets of its hand,
+            checked, with its annotated phases), without building a scene: what its grasp episodes are
+            found in. None: the kind's recordings are not segmented into grasp episodes.
     """
 
     name: str
@@ -47,3 +51,4 @@ class TrialKind:
     sort_files: Callable[[Sorting], None]
     bulk_folder: Callable[[Path, str], str | None] | None = None
     explain_unknown: Callable[[PurePosixPath], str | None] | None = None
+    read: Callable[[Trial], Trajectory] | None = None

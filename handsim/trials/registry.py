@@ -78,6 +78,7 @@ def find_trial(
     force: bool = False,
     mano_dir: str | Path | None = None,
     templates: str | Path | None = None,
+    grasp: int | None = None,
 ) -> Trial:
     """Find the files of a trial from its recording.
 
@@ -103,6 +104,9 @@ def find_trial(
         thumb_rest: GraspDB14: ``(abduction, flexion)`` in degrees at which to hold the thumb TMC DoFs no
             glove sensor drives (default: left at 0, as the GraspDB14 tools do).
         force: Accept an object density or mass outside its documented range (every kind's objects).
+        grasp: Glove recordings (GraspDB14, scripted grasps): replay this grasp episode (1-based, as
+            :func:`grasp_episodes` and ``handsim inspect`` list them), the recording cut to it; None: the
+            whole recording.
 
     Returns:
         The trial.
@@ -137,8 +141,38 @@ def find_trial(
             raise TrialError(
                 f"{path}: {OPTION_LABELS[option.name]} does not apply to {kind.label}; {kind.brings}"
             )
+    if grasp is not None and kind.read is None:
+        raise TrialError(
+            f"{path}: a grasp episode does not apply to {kind.label}: only glove recordings hold them"
+        )
+    if grasp is not None and (isinstance(grasp, bool) or not isinstance(grasp, int) or grasp < 1):
+        raise TrialError(
+            f"{path}: a grasp episode is a whole number ≥ 1 (as `handsim inspect` lists them), got {grasp!r}"
+        )
     trial = kind.find(Path(path), options)
+    if grasp is not None:
+        trial = dataclasses.replace(trial, grasp=grasp)
     return dataclasses.replace(trial, force=True) if force else trial
+
+
+def grasp_episodes(trial: Trial) -> GraspSegmentation:
+    """The grasp episodes of a glove trial's recording (read and checked as the trial replays it).
+
+    Args:
+        trial: A trial of a glove kind (GraspDB14, scripted grasp).
+
+    Raises:
+        TrialError: The trial's kind holds no grasp episodes (Tzionas, ARCTIC: one sequence each).
+        HandsimError: The recording cannot be read (the subclass and message say why).
+    """
+    kind = kind_named(trial.kind)
+    if kind.read is None:
+        raise TrialError(
+            f"{trial.trajectory_path}: {kind.label} is one sequence, not a glove recording of grasps"
+        )
+    from handsim.glove.segmentation import segment_grasps  # numpy only, but not at the CLI's start-up
+
+    return segment_grasps(kind.read(trial))
 
 
 def load_trial(

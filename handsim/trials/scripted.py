@@ -10,16 +10,18 @@ from __future__ import annotations
 from pathlib import Path
 from typing import TYPE_CHECKING
 
-from handsim.builders import catalog
+from handsim.builders import catalog, default_skeleton
 from handsim.builders.graspdb_objects import UnknownObjectError
 from handsim.errors import HandsimError
 from handsim.io.scripted import SYNTHETIC_NOTE, is_scripted_grasp, read_scripted_grasp, scripted_grasp_fields
 from handsim.trials.base import LoadedTrial, Trial, TrialObject, TrialOptions
+from handsim.trials.episodes import add_episodes
 from handsim.trials.glove import glove_loaded, parametric_hand
 from handsim.trials.kind import TrialKind
 from handsim.trials.sorting import Sorting, TrialEntry, group_fields, trial_input
 
 if TYPE_CHECKING:
+    from handsim.datatypes.trajectory import Trajectory
     from handsim.sim.specs import MetricSpec
 
 
@@ -68,6 +70,11 @@ def _load(trial: Trial, metrics: MetricSpec | None, progress: bool) -> LoadedTri
     return glove_loaded(trial, hand, hand_text, trajectory, metrics, progress)
 
 
+def _read(trial: Trial) -> Trajectory:
+    """The scripted grasp as the trial replays it, without building its scene."""
+    return read_scripted_grasp(trial.trajectory_path, skeleton=default_skeleton(trial.hand_length))
+
+
 def _sort_files(sorting: Sorting) -> None:
     for f in sorting.open_files():
         if not is_scripted_grasp(f):
@@ -82,7 +89,8 @@ def _sort_files(sorting: Sorting) -> None:
         meta = group_fields(
             object=trial.objects[0].what, grasp="scripted", synthetic=True, closure=fields["closure"]
         )
-        sorting.add(TrialEntry(f, trial, meta, (trial_input("trajectory", path, sorting.base),)))
+        entry = TrialEntry(f, trial, meta, (trial_input("trajectory", path, sorting.base),))
+        add_episodes(sorting, entry, _read)
 
 
 KIND = TrialKind(
@@ -95,5 +103,6 @@ KIND = TrialKind(
     find=_find,
     load=_load,
     sort_files=_sort_files,
+    read=_read,
 )
 """The ``scripted`` kind of trial."""

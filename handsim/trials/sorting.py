@@ -37,7 +37,8 @@ class TrialEntry:
     """One trial of a dataset (picklable: a worker process or Ray task gets it whole).
 
     Attributes:
-        id: Dataset-relative POSIX path of the recording (a Tzionas sequence: its ``Models/NN`` folder).
+        id: Dataset-relative POSIX path of the recording (a Tzionas sequence: its ``Models/NN`` folder; a
+            glove recording's grasp episode: the path, ``#`` and the episode's number).
         trial: What :func:`handsim.trials.load_trial` takes.
         meta: Group-by fields: ``object``, ``grasp``, ``grasp_id``, ``action``, ``scenario``, ``actor``,
             ``sequence`` (None where not applicable), and kind-specific extras.

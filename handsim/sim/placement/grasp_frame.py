@@ -11,8 +11,10 @@ the sum of the flexion targets (every DoF named ``…flex…`` except the wrist'
   (F(closed) − F(open))``: 0 at the open hand, 1 at the closed grasp. The placement search looks for the
   object at the ramp frames of given fractions (:func:`closing_frames`).
 
-The hold window is the annotated ``grasp`` phase, or without one the frames above :data:`PEAK_WINDOW` of
-the flexion range around its peak.
+The hold window is, in order of preference: the annotated ``grasp`` phase, a grasp episode's closure and
+hold (a recording cut to one episode by :func:`handsim.trials.episodes.episode_trajectory`, whose phases
+``closure`` and ``hold`` the segmentation found; closed where the hold starts), or the frames above
+:data:`PEAK_WINDOW` of the flexion range around its peak.
 """
 
 from __future__ import annotations
@@ -25,6 +27,8 @@ from handsim.datatypes.trajectory import Trajectory
 from handsim.errors import TrajectoryError
 
 GRASP_PHASE = "grasp"
+EPISODE_PHASES = ("closure", "hold")
+"""The phases of a grasp episode (:data:`handsim.glove.segmentation.PHASE_NAMES`) the window is read from."""
 PEAK_WINDOW = 0.8
 """Without a ``grasp`` phase, the hold window is the frames around peak flexion above this fraction of
 the flexion range."""
@@ -46,7 +50,8 @@ class GraspFrame:
         frame: Trajectory frame index where the grasp phase starts (first contact in the annotation).
         closed: Frame at which the grasp has closed: the object's support is released from there.
         window: First and last frame of the hold window (inclusive).
-        source: ``"phase"`` (the annotated ``grasp`` phase) or ``"peak flexion"``.
+        source: ``"episode"`` (a grasp episode's closure and hold), ``"phase"`` (the annotated ``grasp``
+            phase) or ``"peak flexion"``.
         note: For people.
         open: The most open frame of the reach before ``closed`` (start of the closing ramp).
     """
@@ -88,7 +93,10 @@ def grasp_frame(trajectory: Trajectory) -> GraspFrame:
     """The grasp frame, the closing ramp and the hold window of a glove recording.
 
     With an annotated ``grasp`` phase: its first frame (the hand reaches the object), closed at
-    :data:`CLOSED_FRACTION` of the flexion rise within the phase; the window is the phase. Without one:
+    :data:`CLOSED_FRACTION` of the flexion rise within the phase; the window is the phase. Else a grasp
+    episode (phases ``closure`` and ``hold``): the grasp frame is the closure's first, closed at the hold's
+    first; the window runs from the closure to the hold's last frame, so a long hold is judged whole.
+    Without either:
     the frames above :data:`PEAK_WINDOW` of the flexion range around the peak; the grasp frame is their
     first, closed at the same fraction of the rise to the peak. The open frame is the least flexed frame
     within :data:`OPEN_SEARCH_S` before the closed frame.
@@ -103,6 +111,16 @@ def grasp_frame(trajectory: Trajectory) -> GraspFrame:
             lo, hi = phase.start, phase.stop - 1
             why = f"grasp frame {lo} = start of the annotated 'grasp' phase (frames {lo}–{hi}, 0-based)"
             return _grasp_frame(flex, times, lo, hi, "phase", why)
+    named = {p.name: p for p in trajectory.phases if p.stop > p.start}
+    if all(name in named for name in EPISODE_PHASES):
+        closure, hold = (named[name] for name in EPISODE_PHASES)
+        lo, closed, hi = closure.start, hold.start, hold.stop - 1
+        opened = _open(flex, times, closed)
+        note = (
+            f"grasp episode: closure from frame {lo}, hold frames {closed}–{hi} (0-based); closing from "
+            f"frame {opened}, closed at frame {closed}"
+        )
+        return GraspFrame(frame=lo, closed=closed, window=(lo, hi), source="episode", note=note, open=opened)
     peak = int(np.argmax(flex))
     level = flex.min() + PEAK_WINDOW * (flex[peak] - flex.min())
     lo = peak

@@ -39,6 +39,14 @@ class SceneSetup:
         grasp_time: Trajectory time (s) of the grasp frame the object was placed for, or None.
         placement: Summary of the object placement search (glove scenario), JSON-ready.
         notes: Decisions made while building, for the user to see.
+        start_articulation: Per scene object (layout order), the hinge angle a replay from frame 0 starts it
+            at, rad (NaN: the recorded one, clamped into the hinge's range); empty: every object recorded.
+            A scenario sets it where the recorded angle would start the parts inside each other
+            (:func:`handsim.sim.scene.settle.settle_hinge`).
+        checks: What the scenario's checks before the run found (the world against the recorded hands, the
+            parts' and hands' overlap at the start), JSON-ready; empty where none ran.
+        unjudged: Why the hold is not judged whatever the run shows (``not judged: …``: a glove recording
+            whose only grasp episodes are cut off by the file), or None.
     """
 
     scenario: str = "free"
@@ -50,6 +58,9 @@ class SceneSetup:
     grasp_time: float | None = None
     placement: dict = field(default_factory=dict)
     notes: tuple[str, ...] = ()
+    start_articulation: tuple[float, ...] = ()
+    checks: dict = field(default_factory=dict)
+    unjudged: str | None = None
 
     def __post_init__(self) -> None:
         if self.scenario not in SCENARIOS:
