@@ -264,7 +264,60 @@ def _hold(record: dict) -> str:
             fmt.integer(number((record.get("summary") or {}).get("release_directions_held"))),
         ),
     ]
-    return "<h4>Hold outcome</h4>" + numbers(items) + _closure(record.get("summary") or {})
+    summary = record.get("summary") or {}
+    factors = summary.get("hold_robustness_factors") or {}
+    if factors:
+        items.insert(
+            6,
+            (
+                "robustness by factor (held of judged)",
+                "; ".join(f"{name} {f.get('held')} of {f.get('judged')}" for name, f in factors.items()),
+            ),
+        )
+    return (
+        "<h4>Hold outcome</h4>"
+        + _episode(record.get("episode"))
+        + numbers(items)
+        + _grip(record.get("grip"))
+        + _closure(summary)
+    )
+
+
+def _episode(episode: dict | None) -> str:
+    """Which grasp episode of its recording a glove trial replays (frames of the recording)."""
+    if not episode:
+        return ""
+    phases = ", ".join(
+        f"{name} {start}–{stop - 1}" for name, (start, stop) in (episode.get("phases") or {}).items()
+    )
+    source = "the annotated grasp phase" if episode.get("source") == "annotation" else "the finger flexion"
+    span = f"{episode.get('start')}–{episode.get('stop', 1) - 1}"
+    text = (
+        f"Grasp episode {episode.get('index')}: frames {span} of the recording ({phases}), found from "
+        f"{source}; times are the episode's own."
+    )
+    return f'<p class="note">{esc(text)}</p>'
+
+
+def _grip(grip: dict | None) -> str:
+    """The grip check beside the verdict: what touched, what opposed, the deepest link, the forces."""
+    if not grip:
+        return ""
+    pair = grip.get("opposing_links")
+    window = grip.get("window") or [None, None]
+    items = [
+        ("links touching", ", ".join(grip.get("links") or []) or "none"),
+        ("opposition (share of frames in force closure)", fmt.num(number(grip.get("opposition")))),
+        ("opposing links", " against ".join(pair) if pair else "none"),
+        ("examined", f"{fmt.integer(number(grip.get('frames')))} frames, {fmt.num(number(window[0]), 2)} – "
+         f"{fmt.num(number(window[1]), 2)} s"),
+        ("deepest link", fmt.text(grip.get("deepest_link"))),
+        ("its depth mm (limit)", f"{fmt.num(number(grip.get('max_depth_mm')), 1)} "
+         f"({fmt.num(number(grip.get('depth_limit_mm')), 1)})"),
+        ("grip force N (what the servos can press with)", f"{fmt.num(number(grip.get('grip_force')), 1)} "
+         f"({fmt.num(number(grip.get('force_limit')), 1)} + weight {fmt.num(number(grip.get('weight')))})"),
+    ]  # fmt: skip
+    return "<h4>Grip check</h4>" + numbers(items)
 
 
 def _track(record: dict) -> str:
