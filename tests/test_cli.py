@@ -37,6 +37,9 @@ def test_demo_checks_the_default_hand_and_reports_on_the_bundled_tzionas_sample(
     for record in (r for r in records if r["kind"] == "scripted"):  # a verdict, or why there is none
         summary = record["summary"]
         assert isinstance(summary["held"], bool) or summary["hold_reason"].startswith("not judged: ")
+        if summary["held"] is True:  # never on a link deeper than the grip's limit, always in force closure
+            grip = record["grip"]
+            assert grip["max_depth_mm"] <= grip["depth_limit_mm"] and grip["opposition"] >= 0.5
     for name in ("report.html", "report.md", "summary.json"):
         assert (out_dir / name).is_file() and str(out_dir / name) in out
 

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import json
 import re
 from pathlib import Path
 
@@ -14,6 +15,7 @@ from handsim.assets import ASSETS_DIR
 from handsim.sim.grip_check import GripCheck, check_grip
 from handsim.sim.replay import ReplayConfig, replay
 from handsim.sim.specs import GripSpec, MetricSpec
+from handsim.trials import TrialError
 from handsim.trials.registry import load_trial
 
 DEMO = ASSETS_DIR / "demo"
@@ -165,3 +167,28 @@ def test_a_hand_closing_on_a_thin_wall_is_never_held(tmp_path):
     assert result.hold.held is not True
     if result.hold.held is None:
         assert result.hold.reason.startswith(GRIP_REASONS)
+
+
+def _cut_off(tmp_path: Path) -> Path:
+    """The demo ball's scripted grasp ending while the hand still holds: its one episode is truncated."""
+    fields = json.loads((DEMO / "tennis_ball.grasp.json").read_text(encoding="utf-8"))
+    fields["open_s"] = 0.0
+    path = tmp_path / "cut.grasp.json"
+    path.write_text(json.dumps(fields), encoding="utf-8")
+    return path
+
+
+def test_a_truncated_episode_is_never_judged(tmp_path):
+    path = _cut_off(tmp_path)
+    with pytest.raises(
+        TrialError, match=r"grasp episode 1 is truncated \(the annotated grasp ends at the last"
+    ):
+        load_trial(path, grasp=1)
+    loaded = load_trial(path)  # the whole recording: the hand is measured, its hold not judged
+    result = replay(loaded.scene, loaded.trajectory, ReplayConfig(ensemble=False))
+    assert result.hold.held is None and result.summary["held"] is None
+    assert result.summary["hold_reason"] == (
+        "not judged: the recording holds no complete grasp episode (episode 1: the annotated grasp ends at "
+        "the last frame)"
+    )
+    assert result.grip is None and result.summary["grip_opposition"] is None
