@@ -31,10 +31,11 @@ TREE = Path(__file__).resolve().parents[1]
 SESSION = TREE.parent / "shared" / "data" / "graspdb14" / "sessions" / "01_11_ex03-rad-004-grasp-su04.txt"
 _RUN = """
 import sys, time
-from handsim.runner import run_dataset
-from handsim.trials import discover
 start = time.perf_counter()
-run_dataset(discover(sys.argv[1]), sys.argv[2], workers=int(sys.argv[3]), frames=0, progress=False)
+from handsim.trials import discover
+from handsim.runner.execute import run_dataset
+run_dataset(discover(sys.argv[1]), sys.argv[2], workers=int(sys.argv[3]), frames=0, progress=False,
+            command=["benchmark"])
 print(time.perf_counter() - start)
 """
 

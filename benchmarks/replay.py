@@ -28,39 +28,13 @@ seconds of this process (:data:`CLOCK`):
   environment (:class:`handsim.envs.replay_vector_env.ReplayVectorEnv`, N worlds on MuJoCo's threads) and
   of ``gymnasium.vector.AsyncVectorEnv`` (N processes) at N = 2, 4, 8.
 
-Where the remaining time goes (measured with cProfile and per-part CPU timers on this 2-core machine):
-
-* ``replay()``: the stepping loop is at the raw loop (its Python is ~1 µs per frame: one method call, a
-  bytes comparison of the warning counters, two row copies; 1.1 ms over the glove's 469 frames). Outside
-  it, per replay: the control schedule (resampling the recording to the control rate, slerp of root and
-  object poses: 0.5 ms glove, 1.7 ms Tzionas, 4 ms ARCTIC), a fresh ``MjData`` (its 15 MB arena, 0.5 ms)
-  with the model copy the glove's contact switch needs (0.3 ms) and the reset's first ``mj_forward``, the
-  fingertips' kinematic targets (one ``mj_kinematics`` per frame in the finished run's own ``MjData``,
-  which saves allocating another; ~1.5 µs of MuJoCo plus ~2 µs of Python each: 1.4 ms glove, 2.3 ms
-  Tzionas, 5 ms ARCTIC; a numpy forward kinematics over all frames at once was tried and is no faster
-  at these sizes — its 3×3 products per joint cost what MuJoCo's whole pass does), the other per-frame
-  metrics (~0.6 ms: contact slots, poses, tracking) and the summary and plausibility flags (~0.7 ms). On
-  the glove scene (73–78 ms of stepping) these ~6 ms are the 6–9 % between ``replay()`` and raw.
-* ``env.step``: ~20 numpy calls on preallocated buffers (action check, controls, mocap targets, two state
-  gathers, the contact-force product, references, reward terms) and the ``info`` dict: 31–52 µs per step
-  against 260–293 µs of ``mj_step × 5`` on the Tzionas scene (2026-11-28 evening, load below 1, three
-  runs of this benchmark's env part, least of 9 each): 0.95 would need ≤ 15 µs.
-* the vector environment: ``Batch.step`` runs the worlds on the threads; the main thread adds the
-  vectorised controls and gathers and a short per-world loop for the observation features and reward
-  terms (the single environment's own code, so the results are the same bitwise). Measured on this
-  2-core machine (2026-11-28, least of 7 interleaved runs of 200 steps from frame 0 of the Tzionas
-  scene): one environment 353 µs per step (``mj_step`` 312 µs); the vector environment per step 414 µs
-  at N = 1 (``Batch.step`` 328 µs), 579 µs at N = 2 (``Batch.step`` 437 µs) and 1727 µs at N = 8
-  (``Batch.step`` 1443 µs): ~50 µs of Python per step and ~35 µs per world. MuJoCo's own two threads
-  step two worlds in 437 µs against one world's 328 µs (1.50×), so N = 2 could reach at most 2 × 353 /
-  437 = 1.62× one environment on this machine with no Python at all; at N = 8 the threads reach 1.82×
-  and the Python is a sixth of the step. That cap is the machine's, not MuJoCo's: the same measurement
-  on another 2-core VM of the same kind (2026-11-28 evening, load below 1) gave ``Batch.step`` 305 µs
-  for one world and 339 µs for two (1.80×, a cap of 1.91× at N = 2) against one environment's 323 µs,
-  with 77 µs of Python per vector step at N = 1, 104 µs at N = 2 and 191 µs at N = 8: there N = 2 scaled
-  1.50–1.52× and N = 4 and 8 reached 1.72–1.94×, and N = 2 at 1.7× would need the 104 µs cut to ≤ 41 µs,
-  less than the two worlds' observation (41 µs) and rewards (10 µs) alone take while they stay the single
-  environment's own code, world by world (bitwise the same).
+Where the time goes, measured run by run with cProfile and per-part timers, is in
+``docs/measurements.md`` ("Replay against raw mj_step", "Environments"): the stepping loop is at the raw
+loop, and ``replay()`` adds a fixed few ms per replay (schedule, a fresh ``MjData``, fingertip targets,
+metrics, summary); ``env.step`` adds about 20 numpy calls on preallocated buffers; the vector environment
+adds a fixed cost per step and a short per-world loop (the single environment's own code, so its results
+are the same bitwise), and its two-world speed-up is capped by how well the machine runs MuJoCo's two
+threads.
 
 Prints steps per second, the real-time factor and the ratios, with the load average beside them (the
 machine is shared); the last lines are ``replay_vs_raw=<ratio>`` (worst one-hand scene),

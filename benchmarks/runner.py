@@ -27,26 +27,22 @@ Ray: a local cluster of 2 CPUs (``ray start --head --block``, token authenticati
 enables it) runs the same dataset through ``run_dataset(backend="ray", address=…)`` from a fresh process;
 its throughput over the 2-worker pool's, timed back to back, is one ratio (1.0: the same; ≥ 0.9: within
 10 %), and its records must equal the pool's bitwise (``timing`` aside). One pair of runs moves by ±8 %
-on this 2-core machine (0.879–1.044 for one code at 18 trials), so ``--ray-rounds`` pairs are timed (the
+on a shared 2-core machine, so ``--ray-rounds`` pairs are timed (the
 first pool run is the 2-worker run above; each further pair a fresh pool run, then a fresh Ray run, each
 on a fresh cluster) and ``ray_vs_pool`` is the median of their ratios, every ratio printed. Only that
 cluster is stopped after each run (not every Ray of the machine, as ``ray stop`` would).
 
-Run length (``--copies``, default 12: 36 trials, ~40 s per 2-worker run). A Ray run pays ~2 s that a
-pool run does not, whatever its length (the driver's ``import ray`` and connection, the cluster's daemons
-beside two busy workers, the disconnection), and its workers' trials take a few per cent longer than the
-pool's in the same runs (the same trial alone on one CPU takes the same time in both, 3.35–3.63 s for the
-mug). Measured on 2026-11-28 evening: Ray's runs were 0.2–3.7 s longer than the pool's at 18 trials
-(``ray_vs_pool`` 0.886 and 0.884, medians of three pairs) and 2.2–3.3 s longer at 36 trials (0.928 and
-0.950); the 2-worker scaling, which pays the pool's start once per run, was 1.82 and 1.88 at 18 trials
-and 1.90 and 1.96 at 36. A GraspDB-sized run lasts ~45 min, where such fixed seconds vanish: the longer
-runs are the closer measure of it (and take ~6 min in all).
+Run length (``--copies``, default 12: 36 trials, ~40 s per 2-worker run; ~6 min for all the runs). A Ray
+run pays ~2 s that a pool run does not, whatever its length (the driver's ``import ray`` and connection,
+the cluster's daemons beside two busy workers, the disconnection): at 18 trials that fixed cost alone moved
+``ray_vs_pool`` below 0.9. A GraspDB-sized run lasts ~45 min, where such seconds vanish, so the longer runs
+are the closer measure of it. Measured runs: ``docs/measurements.md`` ("Dataset runs").
 
 Projection (``graspdb_projection_min``): 2,200 glove trials of 300 frames on 2 cores = 2,200 × the
 1-worker wall time per trial (overheads included), with its replay part scaled from these recordings'
 mean frame count to 300 frames, ÷ the measured 2-vs-1-worker scaling. The machine's load average
 (``os.getloadavg``) is printed before and after: on a shared machine the figures are only as good as it
-was quiet.
+is quiet.
 """
 
 from __future__ import annotations

@@ -19,12 +19,9 @@ split into convex pieces. :func:`decompose` does that:
 - Every hull returned is recomputed by qhull (consistent outward faces) and has at least 4
   non-coplanar vertices, as MuJoCo requires; flat pieces from CoACD are dropped with a note.
 
-Costs measured on the 2-core development machine (Python 3.11, coacd 1.0.14, other jobs running):
-starting the child and exchanging the ``.npz`` files adds about 0.2 s per decomposition, because the
-child is started by file path and imports only NumPy and CoACD (``python -m
-handsim.builders._coacd_worker`` would import the package and MuJoCo first: about 0.9 s). The test
-annulus (128 vertices; resolution 500, preprocess resolution 30, 60 MCTS iterations) gives 8 hulls in
-about 1 s of wall time (0.6 to 0.8 s of it CoACD itself); a cache hit for it takes about 5 ms.
+The child is started by file path and imports only NumPy and CoACD, so starting it and exchanging the
+``.npz`` files adds about 0.2 s per decomposition (``python -m handsim.builders._coacd_worker`` would
+import the package and MuJoCo first: about 0.9 s; measured costs in ``docs/measurements.md``).
 
 The settings and result types are in :mod:`handsim.builders.decomposition_types`.
 """
@@ -44,7 +41,7 @@ from handsim.builders.decomposition_types import (
     DecompositionParams,
 )
 from handsim.builders.hull_cache import bundled_entry, cache_key, read_entry, write_entry
-from handsim.cache import CorruptEntryError, default_cache_dir
+from handsim.cache import CorruptEntryError, default_cache_dir, write_failed
 from handsim.datatypes.mesh import FLATNESS_TOL, Mesh
 
 CONVEX_RTOL = 1e-3  # within 0.1 % of its hull's volume a mesh counts as convex (tessellation dents)
@@ -102,7 +99,7 @@ def decompose(
         try:
             write_entry(path, hulls, seconds, tuple(dropped))
         except OSError as e:
-            notes.append(f"could not write cache entry {path}: {e}")
+            notes.append(write_failed(root, path, e, "hull"))
     return Decomposition(
         hulls=hulls,
         key=key,

@@ -90,7 +90,7 @@ def _ray_trial(
     """One trial in a Ray worker, with the driver's choices for the worker's environment set first.
 
     The variables come with the task rather than as a Ray ``runtime_env``: a runtime environment of its
-    own makes Ray start new worker processes for the run (0.8 s before the first task on the 2-core
+    own makes Ray start new worker processes for the run (0.8 s before the first task on a 2-core
     machine), where without one the cluster's already started workers take the tasks at once (0.14 s).
     Set here, after MuJoCo may have been imported, ``MUJOCO_GL`` still decides each renderer's backend
     (:func:`handsim.viz.headless.offscreen_renderer` reads it when it renders), and ``OMP_NUM_THREADS``

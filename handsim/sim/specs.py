@@ -234,7 +234,7 @@ class MetricSpec:
     Attributes:
         version: Changes whenever a definition or default below changes.
         drift_tolerance: Recorded objects: a frame is "on track" when the object's position is within this
-            distance of the recording, m (the issue's 1 cm).
+            distance of the recording, m.
         release_delay: Glove scenario: the support is switched off this long after the grasp has closed, s
             (lets the fingers reach the grasp the recording reached; ~3 servo time constants).
         slip_limit: Glove scenario: the object is lost once it moved this far relative to the hand root
