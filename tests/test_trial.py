@@ -197,7 +197,8 @@ def test_load_trial_raises_error_for_an_unknown_kind():
     trial = Trial(kind="vicon", trajectory_path="x", skeleton_path=None, objects=())
     with pytest.raises(
         TrialError,
-        match=r"unknown trial kind 'vicon'; expected one of \['tzionas', 'arctic', 'scripted', 'graspdb'\]",
+        match=r"unknown trial kind 'vicon'; expected one of "
+        r"\['tzionas', 'arctic', 'scripted', 'graspdb', 'corrected'\]",
     ):
         load_trial(trial)
 

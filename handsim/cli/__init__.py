@@ -17,7 +17,7 @@ import sys
 import threading
 from collections.abc import Sequence
 
-from handsim.cli import build, catalog, demo, export, replay, report, trajectory
+from handsim.cli import build, catalog, correct, demo, export, replay, report, trajectory
 from handsim.cli._common import EXIT_INTERRUPTED, Parser, range_problem
 from handsim.errors import HandsimError
 from handsim.thread_setting import threads_setting
@@ -40,7 +40,7 @@ def build_parser() -> argparse.ArgumentParser:
     )
     parser.add_argument("--version", action="version", version=f"handsim {__version__}")
     commands = parser.add_subparsers(dest="command", metavar="COMMAND")
-    for module in (demo, build, catalog, trajectory, replay, report, export):
+    for module in (demo, build, catalog, trajectory, replay, correct, report, export):
         module.register(commands)
     return parser
 

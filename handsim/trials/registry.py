@@ -11,7 +11,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING
 
 from handsim.errors import InputFileError
-from handsim.trials import arctic, graspdb, scripted, tzionas
+from handsim.trials import arctic, corrected, graspdb, scripted, tzionas
 from handsim.trials.base import (
     HAND_COLLISIONS,
     OPTION_LABELS,
@@ -25,9 +25,22 @@ from handsim.trials.discovery import Discovery, discover_with
 from handsim.trials.kind import TrialKind
 
 if TYPE_CHECKING:
+    from handsim.glove.segmentation import GraspSegmentation
     from handsim.sim.specs import MetricSpec
 
-KINDS: tuple[TrialKind, ...] = (tzionas.KIND, arctic.KIND, scripted.KIND, graspdb.KIND)
+
+def _load_source(trial: Trial, metrics: MetricSpec | None, progress: bool) -> LoadedTrial:
+    """Load the trial a corrected trial was made from, by its own kind."""
+    return kind_named(trial.kind).load(trial, metrics, progress)
+
+
+KINDS: tuple[TrialKind, ...] = (
+    tzionas.KIND,
+    arctic.KIND,
+    scripted.KIND,
+    graspdb.KIND,
+    corrected.corrected_kind(_load_source),
+)
 """Every kind of trial, in the order discovery lets them claim a dataset's files."""
 TRIAL_KINDS: dict[str, str] = {k.name: k.files for k in KINDS}
 """Kinds of trial and the files that make them."""

@@ -1,0 +1,132 @@
+"""Benchmark: the correction's rollouts against raw ``mj_step``, and a whole correction of sequence 20.
+
+Run from the repository root: ``PYTHONPATH=. python benchmarks/correct.py [--repeats N] [--threads N]``
+(``--no-full`` skips the whole correction, which takes minutes).
+
+Two numbers, in one run, on the bundled Tzionas sequence 20 (right hand + 53 mm cube, 617 frames at 100 Hz):
+
+* ``rollout_vs_raw_1thread=``: simulated steps per second (wall clock) of one planning step's rollouts as the
+  correction runs them (:class:`handsim.correct.backend.CpuRollout` on ``--threads`` threads, default 2:
+  ``samples`` residual sequences of ``horizon`` frames of 5 steps, from the committed state at frame 460,
+  where the cube is in the hand and the correction works hardest), over raw single-thread ``mj_step`` on the
+  same model from the same state with the same controls (set once per frame, ``nstep = 5`` per call: the
+  floor any stepping loop can reach). The machine's limit is the number of threads (2.0 on 2 cores);
+  ``mujoco.rollout`` runs the rollouts in native threads, so only the hand-over between them costs.
+  Interleaved, the least time of ``--repeats`` for each side (``BEST``: the machine is shared, other work
+  only ever adds time).
+* ``correct_seconds_per_recorded_second=``: the wall time of ``handsim.correct.correct`` on the whole
+  sequence with the default (``standard``) parameters on ``--threads`` threads, over the recording's 6.16 s
+  (the before and after replays included; loading the trial not).
+
+The load average is printed beside them: on a machine shared with other work the wall-clock numbers are
+what the machine gave this run.
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import time
+
+import mujoco
+import numpy as np
+
+from handsim.assets import TZIONAS_DIR
+from handsim.correct import CorrectionConfig, correct
+from handsim.correct.backend import STATE, CpuRollout, start_of
+from handsim.correct.planner import committed_driver
+from handsim.correct.reference import build_reference
+from handsim.correct.sampler import AnnealedSampler
+from handsim.sim.stepper import Stepper
+from handsim.trials import load_trial
+
+BEST = min
+"""The statistic of the repeats: the least time (other work on a shared machine only adds time)."""
+START = 460
+"""The frame the rollouts start from: the cube in the hand, just before pure replay lets it slip."""
+
+
+def _load() -> str:
+    one, five, _ = os.getloadavg()
+    return f"load average {one:.2f} (1 min), {five:.2f} (5 min) on {os.cpu_count()} cores"
+
+
+def rollout_ratio(loaded, config: CorrectionConfig, threads: int, repeats: int) -> float:
+    """Rollout steps/s on ``threads`` threads over raw single-thread ``mj_step``'s (module docstring)."""
+    reference = build_reference(loaded.scene, loaded.trajectory, config)
+    stepper = Stepper(loaded.scene, reference.schedule.substeps)
+    driver = committed_driver(reference, config, np.zeros((reference.frames, reference.size)), stepper)
+    driver.reset()
+    for k in range(START):
+        driver.advance(driver.schedule.ctrl[k + 1])
+    model, substeps = stepper.model, reference.schedule.substeps
+    begin = start_of(model, stepper.data)
+    frames = START + 1 + np.arange(config.horizon)
+    rng = np.random.default_rng(0)
+    residual = rng.normal(0.0, 0.01, (config.samples, config.horizon, reference.size))
+    backend = CpuRollout(threads)
+    sampler = AnnealedSampler(reference, config, backend, model, rng)
+    controls = sampler.controls(residual, frames, begin.mocap)
+    nu = model.nu
+    steps = controls.shape[0] * controls.shape[1]
+    raw_data = mujoco.MjData(model)
+    rollout_times, raw_times = [], []
+    backend.rollout(
+        model, begin.state, begin.warmstart, controls
+    )  # warm up: the thread pool and the per-thread data
+    for _ in range(repeats):
+        start = time.perf_counter()
+        backend.rollout(model, begin.state, begin.warmstart, controls)
+        rollout_times.append(time.perf_counter() - start)
+        start = time.perf_counter()
+        for sequence in controls:
+            mujoco.mj_setState(model, raw_data, begin.state, STATE)
+            raw_data.qacc_warmstart[:] = begin.warmstart
+            for row in sequence[::substeps]:
+                raw_data.ctrl[:] = row[:nu]
+                raw_data.mocap_pos[:] = row[nu : nu + 3 * model.nmocap].reshape(-1, 3)
+                raw_data.mocap_quat[:] = row[nu + 3 * model.nmocap :].reshape(-1, 4)
+                mujoco.mj_step(model, raw_data, nstep=substeps)
+        raw_times.append(time.perf_counter() - start)
+    backend.close()
+    rollout_rate, raw_rate = steps / BEST(rollout_times), steps / BEST(raw_times)
+    print(
+        f"rollouts: {config.samples} sequences × {config.horizon} frames × {substeps} steps from "
+        f"frame {START}: {rollout_rate:.0f} steps/s on {threads} threads, raw mj_step {raw_rate:.0f} steps/s "
+        f"(1 thread; least of {repeats})"
+    )
+    return rollout_rate / raw_rate
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--repeats", type=int, default=7)
+    parser.add_argument("--threads", type=int, default=2)
+    parser.add_argument("--no-full", action="store_true", help="skip the whole correction (minutes)")
+    args = parser.parse_args()
+    print(f"start: {_load()}")
+    loaded = load_trial(TZIONAS_DIR / "Models" / "20" / "Model_Hand_R.MOTION")
+    config = CorrectionConfig()
+    ratio = rollout_ratio(loaded, config, args.threads, args.repeats)
+    print(f"  ({_load()})")
+    per_second = float("nan")
+    if not args.no_full:
+        start = time.perf_counter()
+        correction = correct(loaded, config, threads=args.threads)
+        seconds = time.perf_counter() - start
+        recorded = float(correction.reference.schedule.times[-1])
+        per_second = seconds / recorded
+        score = correction.score
+        print(
+            f"correction: {seconds:.1f} s for {recorded:.2f} s recorded on {args.threads} threads "
+            f"({correction.plan.rollouts} rollouts, {correction.plan.steps} steps, "
+            f"{correction.plan.steps / correction.plan.seconds:.0f} steps/s in the planner); cube within "
+            f"1 cm {score.after.within_1cm * 100:.1f} % (pure replay {score.before.within_1cm * 100:.1f} %)"
+        )
+        print(f"  ({_load()})")
+    print(f"rollout_vs_raw_1thread={ratio:.3f}")
+    print(f"correct_seconds_per_recorded_second={per_second:.2f}")
+
+
+if __name__ == "__main__":
+    main()

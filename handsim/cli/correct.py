@@ -1,0 +1,214 @@
+"""``handsim correct TRIAL -o OUT.corrected.npz``: the smallest change to a recording that makes it physical.
+
+Loads the trial as ``handsim replay`` does, corrects it (:mod:`handsim.correct`), writes the corrected trial
+and prints its plausibility score: the finger and wrist corrections, the object's tracking before and after,
+the moments of largest correction, and the verdict (corrected, not corrected with the best found and why, or
+not judged). Exit codes: 0 the file was written (whatever the verdict: it is printed), 1 a handsim error,
+2 a usage error (a file that is no trial, options that do not apply, an output name not ending in
+``.corrected.npz``).
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+import sys
+import time
+from typing import TYPE_CHECKING
+
+from handsim.cli._common import (
+    Commands,
+    add_arctic_options,
+    add_force,
+    add_object_mass_options,
+    non_negative_int,
+    output_file,
+    positive_int,
+    usage_error,
+    write_text,
+)
+from handsim.correct.config import BUDGETS, CorrectionConfig
+
+if TYPE_CHECKING:
+    from handsim.correct import Correction, CorrectionScore
+
+LABEL = 14  # width of the label column
+SUFFIX = ".corrected.npz"
+
+
+def _line(label: str, text: str) -> None:
+    print(f"{label:<{LABEL}}{text}")
+
+
+def _tracking_text(t) -> str:
+    return (
+        f"within 1 cm in {t.within_1cm * 100:.1f} % of frames, mean drift {t.mean_drift_mm:.1f} mm "
+        f"(max {t.max_drift_mm:.1f}), rotation {t.mean_rotation_deg:.1f}° mean; track {t.track}"
+    )
+
+
+def print_score(score: CorrectionScore) -> None:
+    """The plausibility score's lines (also used for each trial of a dataset)."""
+    _line(
+        "fingers",
+        f"correction {score.finger_rms_deg:.2f}° RMS, {score.finger_max_deg:.2f}° max "
+        f"({score.finger_vs_replay_tracking:.2f}× pure replay's joint tracking error, "
+        f"{score.before.joint_tracking_rms_deg:.2f}° RMS)",
+    )
+    if score.wrist_position_rms_mm is None:
+        _line("wrist", "not corrected (no recorded wrist pose, or --no-wrist)")
+    else:
+        _line(
+            "wrist",
+            f"{score.wrist_position_rms_mm:.1f} mm RMS ({score.wrist_position_max_mm:.1f} max), "
+            f"{score.wrist_rotation_rms_deg:.2f}° RMS ({score.wrist_rotation_max_deg:.2f}° max)",
+        )
+    _line("before", _tracking_text(score.before))
+    _line("after", _tracking_text(score.after))
+    for i, m in enumerate(score.largest):
+        _line(
+            "largest" if i == 0 else "",
+            f"{m.time_s:6.2f} s (frame {m.frame}): fingers {m.finger_rms_deg:.2f}° RMS, "
+            f"{m.finger_max_deg:.2f}° max; wrist {m.wrist_mm:.1f} mm, {m.wrist_deg:.2f}°",
+        )
+    _line(score.status, score.reason)
+    if score.large:
+        _line("implausible", f"the recording needs a large correction: {score.large_reason}")
+
+
+def _correct(args: argparse.Namespace) -> int:
+    if not args.output.name.lower().endswith(SUFFIX):
+        return usage_error("correct", f"-o {args.output}: a corrected trial's name ends in {SUFFIX!r}")
+    # lazy: the simulation stack (MuJoCo), only when correcting
+    from handsim.correct import correct, write_corrected
+    from handsim.trials import TrialError, load_trial
+
+    budget = BUDGETS[args.budget]
+    config = CorrectionConfig(
+        samples=args.samples or budget.samples,
+        iterations=args.iterations or budget.iterations,
+        horizon=args.horizon,
+        wrist=not args.no_wrist,
+        seed=args.seed,
+    )
+    try:
+        loaded = load_trial(
+            args.trial,
+            progress=True,
+            density=args.density,
+            mass=args.mass,
+            force=args.force,
+            mano_dir=args.mano_dir,
+            templates=args.templates,
+        )
+    except TrialError as exc:
+        return usage_error("correct", str(exc))
+    trial = loaded.trial
+    _line("trial", f"{trial.kind}  {trial.trajectory_path}")
+    _line("hand", loaded.hand)
+    started = time.perf_counter()
+    last = [0.0]
+
+    def progress(done: int, frames: int) -> None:
+        now = time.perf_counter() - started
+        if done == frames or now - last[0] >= 30.0:
+            last[0] = now
+            print(f"{'':<{LABEL}}frame {done}/{frames} ({now:.0f} s)", file=sys.stderr, flush=True)
+
+    correction = correct(loaded, config, threads=args.threads, progress=progress)
+    _print_correction(correction, time.perf_counter() - started)
+    _line("wrote", str(write_corrected(args.output, correction)))
+    if args.json:
+        # lazy: the record helpers, only with --json
+        import json
+
+        from handsim.correct.trial_file import corrected_header
+
+        text = json.dumps(corrected_header(correction), indent=1, sort_keys=True, allow_nan=False)
+        _line("wrote", str(write_text(args.json, text + "\n")))
+    return 0
+
+
+def _print_correction(correction: Correction, seconds: float) -> None:
+    plan, config = correction.plan, correction.config
+    recorded = float(correction.reference.schedule.times[-1] - correction.reference.schedule.times[0])
+    _line(
+        "method",
+        f"annealed MPPI in receding horizon: {config.samples} samples × {config.iterations} rounds, horizon "
+        f"{config.horizon} frames, seed {config.seed}; {plan.rollouts} rollouts on {correction.threads} "
+        f"thread(s)",
+    )
+    per = seconds / recorded if recorded > 0 else math.nan
+    _line("time", f"{seconds:.1f} s for {recorded:.2f} s recorded ({per:.1f} s per recorded second)")
+    print_score(correction.score)
+
+
+def register(commands: Commands) -> None:
+    """Add the ``correct`` command."""
+    budgets = ", ".join(f"{n} ({b.samples} samples × {b.iterations} rounds)" for n, b in BUDGETS.items())
+    default = CorrectionConfig()
+    parser = commands.add_parser(
+        "correct",
+        help="correct a recording physically: the smallest change that makes its object follow its track",
+        description="Optimise the recording's finger targets (and its wrist pose where one is recorded) "
+        "so that the simulated object follows its recorded track while the motion stays as close as possible "
+        "to the recording (sampling-based optimisation in receding horizon on MuJoCo rollouts; "
+        "docs/correct.md). Writes the corrected trial (replay it with `handsim replay OUT.corrected.npz`) "
+        "and prints how large the correction had to be: a recording that needs a large one is implausible. "
+        "For trials whose objects follow recorded tracks (Tzionas sequences with objects, ARCTIC sequences). "
+        "Deterministic for a seed; the result does not depend on the threads.",
+    )
+    parser.add_argument(
+        "trial", metavar="TRIAL", help="Tzionas Model_Hand_*.MOTION (or Models/NN), ARCTIC .mano.npy"
+    )
+    parser.add_argument(
+        "-o",
+        "--output",
+        type=output_file,
+        required=True,
+        metavar="OUT",
+        help="the corrected trial, NAME.corrected.npz",
+    )
+    parser.add_argument(
+        "--seed", type=non_negative_int, default=0, metavar="N", help="seed of the sampling (default 0)"
+    )
+    parser.add_argument(
+        "--budget", choices=tuple(BUDGETS), default="standard",
+        help=f"search effort per planning step: {budgets}; default standard",
+    )  # fmt: skip
+    parser.add_argument(
+        "--samples",
+        type=positive_int,
+        default=None,
+        metavar="N",
+        help="samples per round (overrides --budget)",
+    )
+    parser.add_argument(
+        "--iterations",
+        type=positive_int,
+        default=None,
+        metavar="N",
+        help="rounds per planning step (overrides --budget)",
+    )
+    parser.add_argument(
+        "--horizon", type=positive_int, default=default.horizon, metavar="FRAMES",
+        help=f"look-ahead in control frames (default {default.horizon}: "
+        f"{default.horizon / default.control_rate:g} s)",
+    )  # fmt: skip
+    parser.add_argument(
+        "--no-wrist", action="store_true", help="correct the fingers only, not the recorded wrist pose"
+    )
+    parser.add_argument(
+        "--threads", type=positive_int, default=None, metavar="N",
+        help="rollout threads (default: $HANDSIM_THREADS, else every core); the result does not depend on it",
+    )  # fmt: skip
+    parser.add_argument(
+        "--json",
+        type=output_file,
+        metavar="OUT.json",
+        help="also write the file's header (provenance, score) as JSON",
+    )
+    add_object_mass_options(parser, forced=True)
+    add_force(parser)
+    add_arctic_options(parser)
+    parser.set_defaults(func=_correct, simulates=True, command_parser=parser)

@@ -1,0 +1,154 @@
+"""Batched rollouts for the sampler: a pluggable backend, and the CPU one on ``mujoco.rollout``'s threads.
+
+The sampler asks a backend for one thing: from one state (MuJoCo's full physics state and its warm-start
+accelerations), simulate ``N`` open-loop control sequences and return the state after every step. Any
+simulator that answers that for the same model can plan a correction; the committed result is always
+simulated by handsim's own replay core on the CPU (:mod:`handsim.correct.planner`), so a backend changes
+how fast a plan is found, never what a corrected file replays to.
+
+:class:`CpuRollout` uses ``mujoco.rollout.Rollout``: a pool of ``nthread`` native threads, one ``MjData``
+each, the rollouts split into chunks. Each rollout sets the whole state it starts from (``mj_setState`` with
+``mjSTATE_FULLPHYSICS``, the warm start copied, the warning counters cleared) and its controls at every
+step, so its states do not depend on which thread ran it or what that thread ran before: the results are
+bitwise the same for any ``nthread`` and chunk size (pinned in ``tests/test_correct.py``), and bitwise those
+of :class:`~handsim.sim.drive.ScheduleDriver` stepping the same controls from the same state.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Protocol
+
+import mujoco
+import numpy as np
+from mujoco import rollout as mj_rollout
+
+from handsim.correct.config import CorrectionError
+from handsim.sim.parallel import sim_threads
+
+STATE = mujoco.mjtState.mjSTATE_FULLPHYSICS
+"""The state a rollout starts from and returns per step."""
+CONTROLS = (
+    mujoco.mjtState.mjSTATE_CTRL | mujoco.mjtState.mjSTATE_MOCAP_POS | mujoco.mjtState.mjSTATE_MOCAP_QUAT
+)
+"""What a rollout's controls set before each step: actuator targets, then every mocap body's pose."""
+
+
+@dataclass(frozen=True)
+class Start:
+    """Where a planning step starts: the committed simulation's state at a frame, as the rollouts take it.
+
+    Attributes:
+        state: ``mj_getState(…, mjSTATE_FULLPHYSICS)`` (:data:`~handsim.correct.backend.STATE`).
+        warmstart: Its ``qacc_warmstart`` (MuJoCo's solver starts from it: part of the state for bitwise
+            rollouts).
+        mocap: Every mocap body's pose (nmocap, 7).
+    """
+
+    state: np.ndarray
+    warmstart: np.ndarray
+    mocap: np.ndarray
+
+
+def start_of(model: mujoco.MjModel, data: mujoco.MjData) -> Start:
+    """The planning start of the simulation in ``data``."""
+    state = np.empty(mujoco.mj_stateSize(model, STATE))
+    mujoco.mj_getState(model, data, state, STATE)
+    return Start(state, data.qacc_warmstart.copy(), np.concatenate([data.mocap_pos, data.mocap_quat], axis=1))
+
+
+class RolloutBackend(Protocol):
+    """Simulates open-loop control sequences from one state (see the module docstring).
+
+    Attributes:
+        name: The backend's name (:data:`BACKENDS`), written into a corrected file's provenance.
+        threads: Threads (or devices' worlds) it runs at once, for people; results never depend on it.
+    """
+
+    name: str
+    threads: int
+
+    def rollout(
+        self, model: mujoco.MjModel, state: np.ndarray, warmstart: np.ndarray, controls: np.ndarray
+    ) -> np.ndarray:
+        """The states after every step of every sequence.
+
+        Args:
+            model: The model (not changed).
+            state: The start, ``mj_getState(…, mjSTATE_FULLPHYSICS)`` (nstate,).
+            warmstart: The start's ``qacc_warmstart`` (nv,).
+            controls: Per sequence and step, the :data:`CONTROLS` vector (N, nstep, ncontrol).
+
+        Returns:
+            States (N, nstep, nstate) in the layout of :data:`STATE`.
+        """
+
+    def close(self) -> None:
+        """Release threads and buffers (the backend is not used after)."""
+
+
+class CpuRollout:
+    """``mujoco.rollout`` on CPU threads (module docstring).
+
+    Args:
+        threads: Native threads; None: :func:`handsim.sim.parallel.sim_threads` (``$HANDSIM_THREADS``, else
+            every core this process may use).
+    """
+
+    name = "cpu"
+
+    def __init__(self, threads: int | None = None) -> None:
+        self.threads = sim_threads() if threads is None else int(threads)
+        if self.threads < 1:
+            raise CorrectionError(f"threads must be ≥ 1, got {threads!r}")
+        self._pool = mj_rollout.Rollout(nthread=self.threads if self.threads > 1 else 0)
+        self._data: list[mujoco.MjData] = []
+        self._model: mujoco.MjModel | None = None
+
+    def _datas(self, model: mujoco.MjModel) -> list[mujoco.MjData]:
+        if self._model is not model:
+            self._model = model
+            self._data = [mujoco.MjData(model) for _ in range(self.threads)]
+        return self._data
+
+    def rollout(
+        self, model: mujoco.MjModel, state: np.ndarray, warmstart: np.ndarray, controls: np.ndarray
+    ) -> np.ndarray:
+        """The states after every step of every sequence (:meth:`RolloutBackend.rollout`)."""
+        count = controls.shape[0]
+        starts = np.broadcast_to(state, (count, state.shape[0]))
+        warm = np.broadcast_to(warmstart, (count, warmstart.shape[0]))
+        states, _ = self._pool.rollout(
+            model,
+            self._datas(model),
+            np.ascontiguousarray(starts),
+            np.ascontiguousarray(controls),
+            control_spec=CONTROLS,
+            initial_warmstart=np.ascontiguousarray(warm),
+            # four chunks per thread: a thread slowed by other work on the machine hands its last chunks to
+            # the others (24 rollouts on 2 threads of a loaded 2-core machine: chunks of 3 ran 1.24× as fast
+            # as chunks of 12); the results do not depend on it
+            chunk_size=max(1, count // (4 * self.threads)),
+        )
+        return states
+
+    def close(self) -> None:
+        """Stop the thread pool."""
+        self._pool.close()
+        self._data = []
+        self._model = None
+
+
+BACKENDS = {"cpu": CpuRollout}
+"""Rollout backends by name (``handsim correct --backend``)."""
+
+
+def rollout_backend(name: str = "cpu", threads: int | None = None) -> RolloutBackend:
+    """The backend called ``name``.
+
+    Raises:
+        CorrectionError: No backend has that name (the message lists them).
+    """
+    if name not in BACKENDS:
+        raise CorrectionError(f"unknown rollout backend {name!r}; backends are {sorted(BACKENDS)}")
+    return BACKENDS[name](threads)
