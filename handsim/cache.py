@@ -8,13 +8,15 @@ content; an entry that is unreadable, of another format, written for another key
 not match raises :class:`CorruptEntryError` when read, and its cache computes the value again instead of
 trusting it. Two entry layouts exist: named NumPy arrays in an ``.npz`` (:func:`write_checked`,
 :func:`read_checked`) and a payload of bytes behind a header naming its key (:func:`write_framed`,
-:func:`read_framed`).
+:func:`read_framed`). An entry that cannot be written is reported by :func:`write_failed`: a warning once
+per cache folder, and a note on the result.
 """
 
 from __future__ import annotations
 
 import hashlib
 import io
+import logging
 import os
 import sys
 from pathlib import Path
@@ -27,6 +29,11 @@ from handsim.files import write_atomic
 
 CACHE_DIR_ENV = "HANDSIM_CACHE_DIR"
 """The environment variable that names the cache folder, overriding the platform's default."""
+
+
+_log = logging.getLogger(__name__)
+_unwritable: set[str] = set()
+"""The cache folders this process has already reported it cannot write to."""
 
 
 class CorruptEntryError(HandsimError):
@@ -60,6 +67,36 @@ def default_cache_dir() -> Path:
     xdg = os.environ.get("XDG_CACHE_HOME")
     base = Path(xdg) if xdg and os.path.isabs(xdg) else Path.home() / ".cache"
     return base / "handsim"
+
+
+def write_failed(root: Path, path: Path, error: OSError, what: str) -> str:
+    """Report that a cache entry could not be written: a warning once per cache folder, a note every time.
+
+    A cache that cannot be written (a read-only folder, ``$HANDSIM_CACHE_DIR`` naming a file, a full disk)
+    costs time, not correctness: the value is computed again on every run. The first failure under
+    ``root`` in this process is logged as a warning (on stderr from the command line), saying so and how to
+    fix it; later ones stay quiet, so a dataset run does not repeat it for every trial.
+
+    Args:
+        root: The cache folder.
+        path: The entry that could not be written.
+        error: Why.
+        what: The cache, e.g. ``"hull"``, ``"mesh"``, ``"placement"``.
+
+    Returns:
+        The note for the result that was not cached: ``could not write <what> cache entry PATH: REASON``.
+    """
+    note = f"could not write {what} cache entry {path}: {error.strerror or error}"
+    if str(root) not in _unwritable:
+        _unwritable.add(str(root))
+        _log.warning(
+            "%s; the cache folder %s cannot be written, so cached results are computed again on every run "
+            "(make it writable, or set %s to a writable folder)",
+            note,
+            root,
+            CACHE_DIR_ENV,
+        )
+    return note
 
 
 def update_array(h: Hasher, name: str, array: np.ndarray | None) -> None:

@@ -18,7 +18,7 @@ from scipy.spatial.transform import Rotation
 from handsim.cli import main
 from handsim.datatypes.skeleton import mj_name
 from handsim.datatypes.trajectory import Trajectory
-from handsim.errors import TrajectoryError
+from handsim.errors import InputFileError, TrajectoryError
 from handsim.io.arctic.mano import MANO_DIR_ENV, MANO_JOINT_NAMES
 from handsim.io.arctic.sequence import HANDS
 from handsim.runner.records import read_records
@@ -27,7 +27,7 @@ from handsim.sim.drive import ScenarioSwitches, ScheduleDriver
 from handsim.sim.replay import replay
 from handsim.sim.stepper import Stepper
 from handsim.sim.summary import HAND_KEYS
-from handsim.trials import TrialError, load_trial
+from handsim.trials import load_trial
 from tests.arctic_fixtures import UPRIGHT, block, template_vertices_mm, write_template
 from tests.mano_fixtures import (
     mano_hand_params,
@@ -242,7 +242,7 @@ def test_templates_folder_given_replaces_the_roots_object_templates(mano, arctic
     (root / "meta" / "object_vtemplates").rename(elsewhere)
     path = root / "raw_seqs" / "s01" / "box_grab_01.mano.npy"
     with pytest.raises(
-        TrialError, match=r"object_vtemplates/box/ is missing \(ARCTIC meta/object_vtemplates\)"
+        InputFileError, match=r"meta/object_vtemplates/box: ARCTIC template folder not found$"
     ):
         load_trial(path, mano_dir=folder)
     loaded = load_trial(path, mano_dir=folder, templates=elsewhere)

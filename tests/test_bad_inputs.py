@@ -17,6 +17,7 @@ import signal
 import socket
 import subprocess
 import sys
+import tempfile
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -486,7 +487,8 @@ def test_a_hand_starting_inside_the_object_is_flagged_with_its_depth(capsys, tmp
         "handsim replay: not valid: the hand is 37.7 mm inside the object at the start, more than 5 mm: the "
         "solver pushes them apart, and what follows is not the recording's",
     )
-    assert "valid       no (initial_penetration): the numbers below judge nothing" in out
+    # the start's depth also passes the object track's penetration limit (a recorded-object trial)
+    assert "valid       no (initial_penetration, deep_penetration): the numbers below judge nothing" in out
     assert "warnings    none" in out  # MuJoCo itself sees nothing wrong
 
 
@@ -521,6 +523,7 @@ def test_a_dataset_record_of_a_flagged_trial_says_not_valid_and_the_report_leave
     assert [(f["code"], f["invalid"]) for f in record["flags"]] == [
         ("initial_penetration", True),
         ("joint_limits", False),
+        ("deep_penetration", True),
     ]
     assert record["flags"][0]["values"]["depth_mm"] == pytest.approx(37.7, abs=0.05)
     assert "flagged" in (out_dir / "report.md").read_text()
@@ -932,3 +935,531 @@ def test_earlier_row_a_skel_without_its_limits_names_the_missing_file(capsys, tm
         f"handsim: error: {models / 'Model_Hand_R.LIMITS'}: file not found; a .SKEL needs its .LIMITS beside "
         "it (same stem)",
     )
+
+
+# --------------------------------------------------------------------------------------------------
+# The same missing file gives the same exit code and the same first line from every command: a missing input
+# is a handsim error (exit 1, docs/cli.md), never a usage error
+
+
+def arctic_sequence(tmp_path: Path) -> tuple[Path, Path]:
+    """An ARCTIC sequence with its object motion and template, and a folder of synthetic MANO models.
+
+    The sequence is ``raw_seqs/s01/phone_grab_01.mano.npy`` of a root in ARCTIC's layout.
+    """
+    from tests.arctic_fixtures import recording, write_template
+    from tests.mano_fixtures import (
+        mano_hand_params,
+        write_arctic_mano_npy,
+        write_arctic_object_npy,
+        write_synthetic_mano_pkl,
+    )
+
+    mano = tmp_path / "mano"
+    mano.mkdir()
+    for side in ("right", "left"):
+        write_synthetic_mano_pkl(mano / f"MANO_{side.upper()}.pkl", side=side)
+    raw = tmp_path / "arctic" / "raw_seqs" / "s01"
+    raw.mkdir(parents=True)
+    path = raw / "phone_grab_01.mano.npy"
+    write_arctic_mano_npy(path, mano_hand_params(12, 1), mano_hand_params(12, 2, side="left"))
+    write_arctic_object_npy(raw / "phone_grab_01.object.npy", recording("phone", 12))
+    write_template(tmp_path / "arctic" / "meta" / "object_vtemplates", "phone")
+    return path, mano
+
+
+def every_command(path: Path, mano: Path, tmp_path: Path) -> dict[str, list[str | Path]]:
+    """Each command that reads an ARCTIC sequence, with its arguments."""
+    return {
+        "replay": ["replay", path, "--mano-dir", mano],
+        "inspect": ["inspect", path, "--mano-dir", mano],
+        "correct": ["correct", path, "--mano-dir", mano, "-o", tmp_path / "phone.corrected.npz"],
+        "report": ["report", path, "--mano-dir", mano, "-o", tmp_path / "out"],
+    }
+
+
+def test_row_a_missing_arctic_object_motion_is_the_same_handsim_error_from_every_command(capsys, tmp_path):
+    path, mano = arctic_sequence(tmp_path)
+    motion = path.with_name("phone_grab_01.object.npy")
+    motion.unlink()
+    line = (
+        f"handsim: error: {motion}: file not found; the ARCTIC sequence phone_grab_01.mano.npy needs its "
+        "object motion phone_grab_01.object.npy (from the same raw_seqs folder)"
+    )
+    for command, argv in every_command(path, mano, tmp_path).items():
+        result = run(capsys, *argv)
+        assert (result.code, result.first) == (1, line), command
+    assert not (tmp_path / "out").exists()  # refused before any run
+
+
+def test_row_a_missing_arctic_template_is_the_same_handsim_error_from_every_command_that_reads_it(
+    capsys, tmp_path
+):
+    path, mano = arctic_sequence(tmp_path)
+    template = tmp_path / "arctic" / "meta" / "object_vtemplates" / "phone"
+    shutil.rmtree(template)
+    commands = every_command(path, mano, tmp_path)
+    for command in ("replay", "correct", "report"):
+        result = run(capsys, *commands[command])
+        assert (result.code, result.first) == (
+            1,
+            f"handsim: error: {template}: ARCTIC template folder not found",
+        )
+    # inspect needs the template only for its side check, which then says why it was not run
+    result = run(capsys, *commands["inspect"])
+    assert result.code == 0
+    assert f"sides      not checked: {template}: ARCTIC template folder not found" in result.out
+
+
+# --------------------------------------------------------------------------------------------------
+# Bounded reads: a pipe, a device or a socket is never opened, a file's size and a .npy header are checked
+# before anything is read or allocated. A command that reads without bound would block or fill the memory,
+# so these rows run it in a child process with a time limit.
+
+
+def bounded(*argv: str | Path, timeout: float = 120) -> Outcome:
+    """``handsim ARGV`` in a child process that must end within ``timeout`` seconds."""
+    done = subprocess.run(
+        [sys.executable, "-m", "handsim.cli", *map(str, argv)],
+        capture_output=True,
+        text=True,
+        timeout=timeout,
+        env=child_env(),
+        check=False,
+    )
+    return Outcome(done.returncode, done.stderr.splitlines(), done.stdout.splitlines())
+
+
+NOT_REGULAR = (
+    "not a regular file; handsim reads regular files only (a pipe or a device may block or never end)"
+)
+
+
+@linux_only
+def test_row_a_named_pipe_named_like_a_recording_is_refused_not_waited_on(tmp_path):
+    fifo = tmp_path / REC
+    os.mkfifo(fifo)
+    result = bounded("inspect", fifo, timeout=60)
+    assert (result.code, result.first) == (1, f"handsim: error: {fifo}: a named pipe (FIFO), {NOT_REGULAR}")
+
+
+@linux_only
+def test_row_dev_zero_linked_as_a_recording_is_refused_not_read_without_end(tmp_path):
+    link = tmp_path / REC
+    link.symlink_to("/dev/zero")
+    result = bounded("inspect", link, timeout=60)
+    assert (result.code, result.first) == (
+        1,
+        f"handsim: error: {link}: a character device (/dev/zero), {NOT_REGULAR}",
+    )
+
+
+@linux_only
+def test_row_a_dataset_with_a_pipe_and_a_device_lists_them_unknown_without_opening_them(tmp_path):
+    data = tmp_path / "data"
+    data.mkdir()
+    os.mkfifo(data / REC)
+    (data / "04_ex01-rad-045-grasp-su03.txt").symlink_to("/dev/urandom")
+    result = bounded("report", data, "-o", tmp_path / "out", timeout=120)
+    assert (result.code, result.first) == (2, f"handsim report: error: no trial in {data}")
+    unknown = [line for line in result.out if line.startswith("unknown")]
+    assert len(unknown) == 2
+    assert unknown[0].endswith(
+        f"{REC}: a named pipe (FIFO), not a regular file (not read: it could block or never end)"
+    )
+    assert unknown[1].endswith(
+        "04_ex01-rad-045-grasp-su03.txt: a character device, not a regular file (not read: it could block or "
+        "never end)"
+    )
+
+
+@pytest.mark.skipif(not hasattr(socket, "AF_UNIX"), reason="needs Unix domain sockets")
+def test_row_a_socket_named_like_a_recording_is_refused(capsys):
+    folder = Path(tempfile.mkdtemp(prefix="hs"))  # short: a socket's path has at most 107 bytes
+    path = folder / REC
+    server = socket.socket(socket.AF_UNIX)
+    try:
+        server.bind(str(path))
+        result = run(capsys, "inspect", path)
+    finally:
+        server.close()
+        shutil.rmtree(folder)
+    assert (result.code, result.first) == (1, f"handsim: error: {path}: a socket, {NOT_REGULAR}")
+
+
+def test_row_a_recording_over_the_size_limit_is_refused_before_it_is_read(capsys, tmp_path):
+    from handsim.io.text_files import MAX_RECORDING_BYTES
+
+    path = tmp_path / REC
+    with path.open("wb") as f:
+        f.truncate(MAX_RECORDING_BYTES + 1)  # sparse: nothing is written
+    result = run(capsys, "inspect", path)
+    assert (result.code, result.first) == (
+        1,
+        f"handsim: error: {path}: 67108865 bytes, more than the 64 MiB (67108864 bytes) handsim reads from a "
+        "glove recording (about 80 minutes at 60 Hz; reading and replaying it takes memory in proportion): "
+        "cut it into shorter recordings",
+    )
+
+
+def test_row_a_mesh_over_the_size_limit_is_refused_before_it_is_read(capsys, tmp_path):
+    from handsim.io.text_files import MAX_FILE_BYTES
+
+    path = tmp_path / "huge.obj"
+    with path.open("wb") as f:
+        f.truncate(MAX_FILE_BYTES + 1)
+    result = run(capsys, "build", "object", path, "--units", "mm")
+    assert (result.code, result.first) == (
+        1,
+        f"handsim: error: {path}: 268435457 bytes, more than the 256 MiB (268435456 bytes) handsim reads "
+        "from an input file",
+    )
+
+
+def arctic_files(folder: Path, right_shape: np.ndarray | None = None) -> tuple[Path, Path, Path]:
+    """An ARCTIC root in ``folder``: ``raw_seqs/s01/phone_grab_01.mano.npy`` (12 frames of both hands, the
+    right hand's betas ``right_shape`` when given), its ``.object.npy`` and the phone's template; and a folder
+    of synthetic MANO models.
+
+    Returns:
+        The ``.mano.npy``, the ``.object.npy`` and the MANO folder.
+    """
+    from tests.arctic_fixtures import recording, write_template
+    from tests.mano_fixtures import (
+        mano_hand_params,
+        write_arctic_mano_npy,
+        write_arctic_object_npy,
+        write_synthetic_mano_pkl,
+    )
+
+    raw = folder / "arctic" / "raw_seqs" / "s01"
+    raw.mkdir(parents=True)
+    right = mano_hand_params(12, 1)
+    if right_shape is not None:
+        right["shape"] = right_shape.astype(np.float32)
+    mano = raw / "phone_grab_01.mano.npy"
+    write_arctic_mano_npy(mano, right, mano_hand_params(12, 2, side="left"))
+    write_arctic_object_npy(raw / "phone_grab_01.object.npy", recording("phone", 12))
+    write_template(folder / "arctic" / "meta" / "object_vtemplates", "phone")
+    models = folder / "mano"
+    models.mkdir()
+    for side in ("right", "left"):
+        write_synthetic_mano_pkl(models / f"MANO_{side.upper()}.pkl", side=side)
+    return mano, raw / "phone_grab_01.object.npy", models
+
+
+def test_row_an_npy_header_claiming_a_trillion_rows_is_refused_naming_shape_and_size(capsys, tmp_path):
+    import io
+
+    mano, motion, models = arctic_files(tmp_path)
+    data = np.load(motion)
+    header = io.BytesIO()
+    np.lib.format.write_array_header_1_0(
+        header, {"descr": data.dtype.str, "fortran_order": False, "shape": (10**12, 7)}
+    )
+    motion.write_bytes(header.getvalue() + data.tobytes())
+    for command in ("inspect", "replay"):
+        result = run(capsys, command, mano, "--mano-dir", models)
+        assert (result.code, result.first) == (
+            1,
+            f"handsim: error: {motion}: the header declares an array of shape (1000000000000, 7) and dtype "
+            "float32 (28000000000000 bytes of data), but the file holds 336 bytes after its header: a "
+            "truncated or corrupted file",
+        ), command
+
+
+# --------------------------------------------------------------------------------------------------
+# Silent results, now refused, flagged or noted
+
+
+def test_row_an_empty_limits_beside_a_skel_is_refused_not_built_as_a_rigid_hand(capsys, tmp_path):
+    models = tzionas_sample(tmp_path) / "Models" / "20"
+    limits = write(models / "Model_Hand_R.LIMITS", "\n")
+    result = run(capsys, "build", "hand", models / "Model_Hand_R.SKEL")
+    assert (result.code, result.first) == (
+        1,
+        f"handsim: error: {limits}: no bone entries (the file is empty or blank): expected 8 lines per bone "
+        "(name, flags 't rx ry rz', 3 axis lines, 3 'min max' lines), at least one for the root bone "
+        "'Lower Arm R'; without them the model would have no degree of freedom",
+    )
+
+
+def test_row_a_motionless_recording_is_flagged_and_its_hold_says_no_grasp(capsys, tmp_path):
+    path = glove_recording(tmp_path, np.tile(0.5 * FLEXED, (60, 1)), np.arange(60) / 60)
+    code, first, out = cli(["replay", str(path)], capsys)
+    assert (code, first) == (0, "")
+    assert (
+        "flag        no_motion (a note): the hand does not move: all 60 rows hold the same joint angles, so "
+        "the recording holds no grasp (a glove lying still, or a frozen data stream?)"
+    ) in out.splitlines()
+    (held,) = [line for line in out.splitlines() if line.startswith("held ")]
+    assert held.startswith(
+        "held        not judged: no grasp in the recording (the summed finger flexion spans "
+    )
+
+
+def test_row_a_switch_off_in_every_row_is_flagged(capsys, tmp_path):
+    ramp = np.clip(np.linspace(-0.3, 1.3, 60), 0.0, 1.0)[:, None] * FLEXED
+    path = glove_recording(tmp_path, ramp, np.arange(60) / 60)
+    path.write_text(path.read_text().replace(" 1 ", " 0 "))  # the switch, the first lone 1 of each row
+    result = run(capsys, "inspect", path)
+    assert (result.code, result.err) == (0, [])
+    assert result.out[-1] == (
+        "flag       switch_off (a note): the glove's switch is off in all 60 rows; GraspDB14 actors switch "
+        "it on for the task (spec §3.5–3.7): is this the recording of a task?"
+    )
+
+
+def test_row_a_corrupted_value_in_the_records_is_noted_naming_record_and_key(capsys, tmp_path):
+    from tests.helpers import write_short_grasp
+
+    out = tmp_path / "out"
+    grasp = write_short_grasp(tmp_path / "data", "cube")
+    assert cli(["report", str(grasp), "-o", str(out), "--workers", "1", "--frames", "0"], capsys)[0] == 0
+    records = out / "records.jsonl"
+    record = json.loads(records.read_text())
+    record["summary"]["max_penetration_mm"] = "lots"
+    record["summary"]["valid"] = "yes"
+    records.write_text(json.dumps(record) + "\n")
+    code, first, stdout = cli(["report", "--render-only", str(out)], capsys)
+    assert (code, first) == (0, "")
+    assert stdout.splitlines()[:2] == [
+        f"note        {records}: record 1 ('cube.grasp.json#1'): summary 'max_penetration_mm' is 'lots', "
+        "expected a finite number: shown as missing and left out of every statistic",
+        f"note        {records}: record 1 ('cube.grasp.json#1'): summary 'valid' is 'yes', expected true or "
+        "false: shown as missing and left out of every statistic",
+    ]
+    assert "'max_penetration_mm' is 'lots'" in (out / "report.md").read_text()  # the report says it too
+
+
+WHOLE = "options['{}'] must be a whole number (int), got"
+
+
+@pytest.mark.parametrize(
+    ("env_id", "options", "error", "message"),
+    [
+        (
+            "handsim/Replay-v0",
+            {"fram": 2},
+            ValueError,
+            "ReplayEnv.reset: unknown option 'fram'; its options are 'frame' (the start frame, a whole "
+            "number before the last frame); 'recording' (which recording, a whole number from 0)",
+        ),
+        (
+            "handsim/Replay-v0",
+            [2],
+            TypeError,
+            "ReplayEnv.reset: options must be a dict or None, got list [2]",
+        ),
+        ("handsim/Replay-v0", {"frame": 2.7}, TypeError, f"{WHOLE.format('frame')} float 2.7"),
+        ("handsim/Replay-v0", {"frame": True}, TypeError, f"{WHOLE.format('frame')} bool True"),
+        ("handsim/Replay-v0", {"frame": "abc"}, TypeError, f"{WHOLE.format('frame')} str 'abc'"),
+        ("handsim/Replay-v0", {"recording": 0.0}, TypeError, f"{WHOLE.format('recording')} float 0.0"),
+        ("handsim/Grasp-v0", {"frame": 2}, ValueError, "GraspEnv.reset takes no options, got 'frame'"),
+        (
+            "handsim/Grasp-v0",
+            "f=2",
+            TypeError,
+            "GraspEnv.reset: options must be a dict or None, got str 'f=2'",
+        ),
+    ],
+)
+def test_row_env_reset_options_are_checked_gymnasium_style(env_id, options, error, message):
+    import re
+
+    import gymnasium as gym
+
+    import handsim  # noqa: F401  (registers the environments)
+
+    env = gym.make(env_id).unwrapped
+    with pytest.raises(error, match=f"^{re.escape(message)}$"):
+        env.reset(seed=0, options=options)
+    env.reset(seed=0, options={})  # no options, as None: accepted
+    if env_id == "handsim/Replay-v0":
+        assert env.reset(seed=0, options={"frame": np.int64(3)})[1]["frame"] == 3  # a NumPy integer is one
+
+
+def test_row_an_unwritable_cache_is_reported_once_for_mesh_and_placement_writes(
+    capsys, caplog, tmp_path, monkeypatch
+):
+    from tests.helpers import write_short_grasp
+
+    blocker = write(tmp_path / "cache", "a file where the cache folder should be")
+    monkeypatch.setenv("HANDSIM_CACHE_DIR", str(blocker))
+    grasp = write_short_grasp(tmp_path / "data", "cube")
+    with caplog.at_level("WARNING", logger="handsim"):
+        code, _, out = cli(["replay", str(grasp)], capsys)
+        assert code == 0
+        cli(["replay", str(grasp)], capsys)  # again: the folder was reported already
+    reported = [r.getMessage() for r in caplog.records if "cannot be written" in r.getMessage()]
+    assert len(reported) == 1
+    assert reported[0].endswith(
+        f"; the cache folder {blocker} cannot be written, so cached results are computed again on every run "
+        "(make it writable, or set HANDSIM_CACHE_DIR to a writable folder)"
+    )
+    assert f"could not write placement cache entry {blocker / 'placement'}" in out
+
+
+def test_row_an_unwritable_hull_cache_is_reported(capsys, caplog, tmp_path):
+    blocker = write(tmp_path / "cache", "a file where the cache folder should be")
+    argv = build_ring(tmp_path)[3:]  # build object ring.stl --units m
+    with caplog.at_level("WARNING", logger="handsim"):
+        code, first, _ = cli([*argv, "--cache-dir", str(blocker)], capsys)
+    assert (code, first.startswith("CoACD") or first == "") == (0, True)
+    (message,) = [r.getMessage() for r in caplog.records if "cannot be written" in r.getMessage()]
+    assert message.startswith(f"could not write hull cache entry {blocker / 'coacd'}")
+
+
+def test_row_a_hand_position_a_thousand_km_away_is_a_usage_error(capsys):
+    result = run(capsys, "build", "scene", "--hand-pos", "1e6", "0", "0.1")
+    assert result.code == 2
+    assert result.first == (
+        "handsim build scene: error: argument --hand-pos: expected a coordinate within ±1 m of the table "
+        "top's centre (the table is 1 m × 0.7 m, its top at z = 0), got 1e6"
+    )
+    assert result.err[1].startswith("usage: handsim build scene ")
+
+
+def test_row_calibrated_targets_beyond_7_rad_are_refused_naming_gain_and_line(capsys, tmp_path):
+    from handsim.glove.calibration import GloveCalibration
+
+    gains = [-0.015] * 23
+    gains[4] = -1000.0  # I-MCPJ: a typing error for -0.01
+    calibration = GloveCalibration(gains=tuple(gains), offsets=(100.0,) * 23, provenance="typo")
+    cal = write(tmp_path / "cal.json", json.dumps(calibration.to_dict()))
+    path = write(tmp_path / REC.replace("-rad-", "-raw-"), glove_rows(4, counts=True))
+    result = run(capsys, "inspect", path, "--calibration", cal)
+    assert (result.code, result.first) == (
+        1,
+        f"handsim: error: {path}:1 [sensor I-MCPJ]: count 104 becomes -4000 rad with the calibration 'typo' "
+        "(gain -1000 rad/count, offset 100), beyond the 7 rad no joint angle exceeds (|angle| ≤ 2π; 4 "
+        "calibrated values are): is the calibration this glove's?",
+    )
+
+
+def test_row_two_cubes_half_a_metre_apart_in_one_obj_are_noted(capsys, tmp_path):
+    near, far = trimesh.creation.box((0.05, 0.05, 0.05)), trimesh.creation.box((0.05, 0.05, 0.05))
+    far.apply_translation((0.5, 0.0, 0.0))
+    path = write(tmp_path / "two.obj", trimesh.util.concatenate([near, far]).export(file_type="obj"))
+    result = run(capsys, "build", "object", path, "--units", "m", "--no-cache")
+    assert result.code == 0
+    assert (
+        "note       the mesh has 2 disconnected parts, apart from one another (no edge joins them and their "
+        "bounding boxes do not meet); they are simulated as one rigid object: split the file to get separate "
+        "objects"
+    ) in result.out
+
+
+def test_a_mug_whose_handle_is_its_own_shell_is_one_part():
+    from handsim.builders.catalog import get
+
+    assert "disconnected parts" not in str(get("mug"))  # two closed shells that meet: one object
+
+
+# --------------------------------------------------------------------------------------------------
+# Vague messages, now naming the file, line, field and what was expected
+
+
+@linux_only
+def test_row_a_file_size_limit_while_recording_names_the_records_file_and_leaves_no_partial_line(
+    capsys, tmp_path, monkeypatch
+):
+    import resource
+
+    from tests.helpers import write_short_grasp
+
+    monkeypatch.setenv("HANDSIM_CACHE_DIR", str(tmp_path / "cache"))
+    grasp = write_short_grasp(tmp_path / "data", "cube")
+    assert cli(["replay", str(grasp)], capsys)[0] == 0  # mesh and placement cached: the child writes neither
+    out = tmp_path / "out"
+
+    def small_files() -> None:
+        resource.setrlimit(resource.RLIMIT_FSIZE, (8192, 8192))  # `ulimit -f 8`: run.json fits, a record not
+
+    argv = ["report", str(grasp), "-o", str(out), "--workers", "1", "--frames", "0"]
+    done = subprocess.run(
+        [sys.executable, "-m", "handsim.cli", *argv],
+        capture_output=True, text=True, timeout=300, env=child_env(), preexec_fn=small_files, check=False,
+    )  # fmt: skip
+    assert (done.returncode, done.stderr.splitlines()[0]) == (
+        1,
+        f"handsim: error: {out / 'records.jsonl'}: File too large",
+    )
+    assert (out / "records.jsonl").read_bytes() == b""  # the failed line was cut back
+
+
+@pytest.mark.parametrize(
+    ("line", "message"),
+    [
+        ("v 0.1 abc 0.2", "2 [vertex]: expected a number, got 'abc'"),
+        ("v 0.1 0.2", "2 [vertex]: expected 3 to 7 numbers after 'v', got 2"),
+        (
+            "f 1 2 100",
+            "10 [face index]: vertex index 100 out of range; expected 1..8 or -8..-1 (counting back from the "
+            "last vertex read): the file has 8 vertices and OBJ indices are 1-based",
+        ),
+        (
+            "f 1 2 0",
+            "10 [face index]: vertex index 0 out of range; expected 1..8 or -8..-1 (counting back from the "
+            "last vertex read): the file has 8 vertices and OBJ indices are 1-based",
+        ),
+        ("f 1 2", "10 [face]: a face needs at least 3 vertex indices, got 2"),
+        (
+            "f 1 2 x",
+            "10 [face index]: expected a vertex index (a whole number, optionally followed by "
+            "/texture/normal indices), got 'x'",
+        ),
+    ],
+)
+def test_row_an_obj_with_a_bad_line_names_the_file_the_line_and_what_was_expected(
+    capsys, tmp_path, line, message
+):
+    lines = box_text("obj").splitlines()
+    index = 1 if line.startswith("v") else 9
+    assert lines[index].split()[0] == line.split()[0]
+    lines[index] = line
+    path = write(tmp_path / "box.obj", "\n".join(lines) + "\n")
+    result = run(capsys, "build", "object", path, "--units", "mm")
+    assert (result.code, result.first) == (1, f"handsim: error: {path}:{message}")
+
+
+@pytest.mark.parametrize("value", ["-1", "0", "two"])
+def test_row_workers_that_are_no_whole_number_of_at_least_1_say_what_is_accepted(capsys, value):
+    result = run(capsys, "report", str(SCRIPTED), "--workers", value)
+    shown = repr(value) if value == "two" else value
+    assert (result.code, result.first) == (
+        2,
+        f"handsim report: error: argument --workers: expected a whole number ≥ 1, got {shown}",
+    )
+
+
+def test_row_a_non_finite_beta_is_called_a_beta_not_a_frame(capsys, tmp_path):
+    betas = np.zeros(10)
+    betas[3] = np.nan
+    mano, _, _ = arctic_files(tmp_path, right_shape=betas)
+    result = run(capsys, "inspect", mano)
+    assert (result.code, result.first) == (
+        1,
+        f"handsim: error: {mano} [right.shape]: non-finite value at beta 3",
+    )
+
+
+@pytest.mark.parametrize(
+    ("data", "after_path"),
+    [
+        (
+            glove_rows(4).encode("utf-16"),
+            ": not a UTF-8 text file: it starts with a UTF-16 byte-order mark; save it as UTF-8 text",
+        ),
+        (
+            glove_rows(4).replace("\n", "\x00\n", 2).encode(),
+            ":1: not a UTF-8 text file: a NUL byte at byte 212 (binary data, or UTF-16/32 text); save it as "
+            "UTF-8 text",
+        ),
+    ],
+    ids=["utf-16", "nul"],
+)
+def test_row_utf16_or_nul_bytes_in_a_recording_say_not_a_utf8_text_file(capsys, tmp_path, data, after_path):
+    path = write(tmp_path / REC, data)
+    result = run(capsys, "inspect", path)
+    assert (result.code, result.first) == (1, f"handsim: error: {path}{after_path}")

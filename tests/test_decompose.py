@@ -388,15 +388,52 @@ def test_decompose_raises_error_if_worker_output_is_not_npz(annulus: Mesh, fault
         decompose(annulus, PARAMS, use_cache=False)
 
 
-def test_decompose_shows_progress_on_stderr_when_asked(
-    annulus: Mesh, faulty_worker, capsys: pytest.CaptureFixture[str]
+CHATTY_WORKER = (
+    "import time\n"
+    "for k in range(2000):  # CoACD's own progress: carriage returns, on both streams\n"
+    "    print(f'\\r[CoACD] {k / 20:.1f} %', end='', file=sys.stdout if k % 2 else sys.stderr)\n"
+    "time.sleep(0.3)  # the parent polls a few times meanwhile\n"
+    "cube = real.np.array([[x, y, z] for x in (0, 0.01) for y in (0, 0.01) for z in (0, 0.01)])\n"
+    "faces = real.np.array([[0, 1, 2], [1, 3, 2], [4, 6, 5], [5, 6, 7], [0, 4, 1], [1, 4, 5],\n"
+    "                       [2, 3, 6], [3, 7, 6], [0, 2, 4], [2, 6, 4], [1, 5, 3], [3, 5, 7]])\n"
+    "real._save(out_path, real._pack([(cube, faces)], 0.3))\n"
+)
+"""A worker that floods its output with CoACD-like progress lines, then returns one cube."""
+
+
+@pytest.fixture
+def chatty_worker(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    script = tmp_path / "chatty_worker.py"
+    script.write_text(_FAULTY_WORKER_HEAD + CHATTY_WORKER)
+    monkeypatch.setattr(coacd_process, "_WORKER", script)
+
+
+def test_decompose_progress_in_a_log_is_two_plain_lines_and_none_of_coacds_own_output(
+    annulus: Mesh, chatty_worker, capsys: pytest.CaptureFixture[str]
 ) -> None:
-    faulty_worker("empty")
-    with pytest.raises(DecompositionError):
-        decompose(annulus, PARAMS, use_cache=False, progress=True)
+    decompose(annulus, PARAMS, use_cache=False, progress=True)  # stderr captured: not a terminal
+    captured = capsys.readouterr()
+    assert "\r" not in captured.err and captured.out == ""
+    lines = captured.err.splitlines()
+    assert lines[0] == f"CoACD annulus: running, timeout {PARAMS.timeout_s:g} s"
+    assert re.fullmatch(r"CoACD annulus: done after \d+\.\d s", lines[1]) and len(lines) == 2
+
+
+def test_decompose_progress_on_a_terminal_is_a_bar_counting_the_time(
+    annulus: Mesh, chatty_worker, capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch
+) -> None:
+    monkeypatch.setattr("handsim.progress.is_terminal", lambda: True)
+    decompose(annulus, PARAMS, use_cache=False, progress=True)
     err = capsys.readouterr().err
-    assert "CoACD annulus: 00:0" in err
-    assert "done" in err
+    assert "\rCoACD annulus: 00:0" in err and err.rstrip().endswith(", done")
+    assert "[CoACD]" not in err and "running, timeout" in err and "done after" not in err
+
+
+def test_decompose_shows_no_progress_unless_asked(
+    annulus: Mesh, chatty_worker, capsys: pytest.CaptureFixture[str]
+) -> None:
+    decompose(annulus, PARAMS, use_cache=False)
+    assert capsys.readouterr() == ("", "")
 
 
 def test_usable_hulls_drops_flat_hull_with_note() -> None:

@@ -59,5 +59,5 @@ def test_torch_threads_must_be_a_whole_number_of_at_least_one(capsys) -> None:
     assert (
         capsys.readouterr()
         .err.splitlines()[-1]
-        .endswith(": error: argument --torch-threads: expected a number ≥ 1, got 0")
+        .endswith(": error: argument --torch-threads: expected a whole number ≥ 1, got 0")
     )

@@ -299,9 +299,9 @@ def test_resample_reports_the_largest_gap_between_input_samples() -> None:
     traj = _trajectory([0.0, 0.25, 0.5, 1.0, 1.25, 1.75], {"x": [0.0] * 6}, notes=("read",))
     result = resample(traj, 4.0)
     assert (result.largest_gap_s, result.largest_gap_at_s) == (0.5, 0.5)  # the first of two 0.5 s gaps
-    assert (
-        result.notes[1]
-        == "largest gap between input samples: 500.0 ms, from frame 2 at 0.5000 s (2.00 output periods)"
+    assert result.notes[1] == (
+        "largest gap between input samples: 500.0 ms (2.00 × the median interval, 250.0 ms), from frame 2 at "
+        "0.5000 s (2.00 output periods)"
     )
     assert result.trajectory.notes == ("read", *result.notes)
     assert result.notes[0].startswith(
@@ -314,6 +314,23 @@ def test_resample_calls_evenly_spaced_input_regular() -> None:
     assert resample(traj, 100.0).notes[0].startswith("resampled 10 samples (30.00 Hz mean, regular) to")
 
 
+@pytest.mark.parametrize(
+    ("intervals_ms", "noted"),
+    [
+        ([33.3] * 20, False),  # ARCTIC's regular 30 Hz clock: its period is no gap
+        ([15.0, 16.0] * 10, False),  # GraspDB14's rows every 15 or 16 ms: jitter
+        ([15.0, 16.0] * 10 + [23.0], False),  # 1.44 median intervals: within GAP_FACTOR
+        ([15.0, 16.0] * 10 + [31.0], True),  # a dropped sample: two periods
+    ],
+)
+def test_resample_notes_the_largest_gap_only_beyond_gap_factor_median_intervals(intervals_ms, noted) -> None:
+    times = np.concatenate([[0.0], np.cumsum(intervals_ms) / 1e3])
+    result = resample(_trajectory(times, {"x": [0.0] * len(times)}), 100.0)
+    gap_notes = [n for n in result.notes if n.startswith("largest gap between input samples")]
+    assert len(gap_notes) == noted
+    assert result.largest_gap_s == pytest.approx(max(intervals_ms) / 1e3)  # reported either way
+
+
 def test_resample_of_one_sample_gives_one_sample_and_no_gap() -> None:
     result = resample(_trajectory([0.5], {"x": [1.0]}), 100.0)
     assert result.trajectory.nframes == 1 and result.trajectory.times[0] == 0.5
@@ -322,10 +339,10 @@ def test_resample_of_one_sample_gives_one_sample_and_no_gap() -> None:
 
 def test_resample_notes_that_downsampling_does_not_filter() -> None:
     traj = _trajectory(np.arange(11) / 10.0, {"x": [0.0] * 11})
-    assert resample(traj, 4.0).notes[2] == (
+    assert resample(traj, 4.0).notes[1] == (
         "downsampled without low-pass filtering: motion faster than 2 Hz (half the new rate) aliases"
     )
-    assert len(resample(traj, 100.0).notes) == 2
+    assert len(resample(traj, 100.0).notes) == 1  # a regular clock: no gap
 
 
 # --------------------------------------------------------------------------------------------------
@@ -426,7 +443,8 @@ def test_resampling_graspdb_trial_to_100_hz_reports_its_largest_gap(graspdb_dir:
     assert result.largest_gap_s == pytest.approx(0.032, abs=1e-12)
     assert result.largest_gap_at_s == pytest.approx(2.043, abs=1e-12)
     assert result.notes[1] == (
-        "largest gap between input samples: 32.0 ms, from frame 123 at 2.0430 s (3.20 output periods)"
+        "largest gap between input samples: 32.0 ms (2.00 × the median interval, 16.0 ms), from frame 123 at "
+        "2.0430 s (3.20 output periods)"
     )
     out = result.trajectory
     assert out.nframes == 469 and out.times[-1] == pytest.approx(4.68)

@@ -20,7 +20,6 @@ import time
 from pathlib import Path
 
 import numpy as np
-from tqdm import tqdm
 
 from handsim.builders.decomposition_types import (
     DecompositionError,
@@ -29,9 +28,10 @@ from handsim.builders.decomposition_types import (
     unpack_hulls,
 )
 from handsim.datatypes.mesh import Mesh
+from handsim.progress import progress_bar, progress_line
 
 _WORKER = Path(__file__).with_name("_coacd_worker.py")
-_POLL_S = 0.1  # how often the parent checks the child (and refreshes the progress bar)
+_POLL_S = 0.1  # how often the parent checks the child (and refreshes the progress bar on a terminal)
 _TAIL_LINES = 20  # lines of the child's output quoted in an error
 
 
@@ -93,28 +93,31 @@ def run_worker(
 
 
 def _wait(proc: subprocess.Popen, timeout_s: float, start: float, name: str, progress: bool) -> int | None:
-    """Wait for the child, showing elapsed time if asked; its exit status, or None on timeout."""
-    with tqdm(
-        desc=f"CoACD {name}",
-        bar_format="{desc}: {elapsed}{postfix}",
-        file=sys.stderr,
-        mininterval=0.5
-        if sys.stderr.isatty()
-        else 30.0,  # a log file gets a line every 30 s, not 10 a second
-        disable=not progress,
+    """Wait for the child, showing elapsed time if asked; its exit status, or None on timeout.
+
+    On a terminal the elapsed time counts up in place; elsewhere (a log) one line says that CoACD started
+    and one how it ended (:mod:`handsim.progress`). The child's own output goes to its log file, never here.
+    """
+    what = f"CoACD {name}"
+    progress_line(f"{what}: running, timeout {timeout_s:g} s", enabled=progress)
+    with progress_bar(
+        enabled=progress, desc=what, bar_format="{desc}: {elapsed}{postfix}", mininterval=0.5
     ) as bar:
         while True:
             elapsed = time.perf_counter() - start
             remaining = timeout_s - elapsed
             if remaining <= 0:
                 bar.set_postfix_str(f"timed out after {timeout_s:g} s")
+                progress_line(f"{what}: timed out after {timeout_s:g} s", enabled=progress)
                 return None
             try:
                 status = proc.wait(timeout=min(_POLL_S, remaining))
             except subprocess.TimeoutExpired:
                 bar.set_postfix_str(f"running, timeout {timeout_s:g} s")
             else:
-                bar.set_postfix_str("done" if status == 0 else "failed")
+                ended = "done" if status == 0 else "failed"
+                bar.set_postfix_str(ended)
+                progress_line(f"{what}: {ended} after {time.perf_counter() - start:.1f} s", enabled=progress)
                 return status
 
 

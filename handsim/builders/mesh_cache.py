@@ -27,7 +27,7 @@ from pathlib import Path
 
 import numpy as np
 
-from handsim.cache import CorruptEntryError, default_cache_dir, read_checked, write_checked
+from handsim.cache import CorruptEntryError, default_cache_dir, read_checked, write_checked, write_failed
 from handsim.datatypes.mesh import Mesh
 from handsim.version import source_fingerprint
 
@@ -123,7 +123,8 @@ def generated_mesh(name: str, generate: Callable[[], Mesh], cache_dir: str | Pat
     Returns:
         The mesh, bitwise the one ``generate`` gives.
     """
-    path = entry_path(cache_dir if cache_dir is not None else default_cache_dir(), mesh_key(name))
+    root = Path(cache_dir) if cache_dir is not None else default_cache_dir()
+    path = entry_path(root, mesh_key(name))
     if path.exists():
         try:
             return read_entry(path)
@@ -133,5 +134,5 @@ def generated_mesh(name: str, generate: Callable[[], Mesh], cache_dir: str | Pat
     try:
         write_entry(path, mesh)
     except OSError as e:
-        _log.warning("could not write mesh cache entry %s: %s", path, e)
+        write_failed(root, path, e, "mesh")
     return mesh

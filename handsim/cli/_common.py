@@ -153,23 +153,25 @@ def range_problem(args: argparse.Namespace) -> str | None:
     return None
 
 
-def non_negative_int(text: str) -> int:
-    """An argparse type: a whole number ≥ 0 (a usage error, exit 2, otherwise)."""
+def _whole_number(text: str, minimum: int) -> int:
+    """``text`` as a whole number ≥ ``minimum``; an argparse type error saying what is accepted otherwise."""
     try:
         value = int(text)
     except ValueError:
-        raise argparse.ArgumentTypeError(f"expected a whole number, got {text!r}") from None
-    if value < 0:
-        raise argparse.ArgumentTypeError(f"expected a number ≥ 0, got {value}")
+        raise argparse.ArgumentTypeError(f"expected a whole number ≥ {minimum}, got {text!r}") from None
+    if value < minimum:
+        raise argparse.ArgumentTypeError(f"expected a whole number ≥ {minimum}, got {value}")
     return value
+
+
+def non_negative_int(text: str) -> int:
+    """An argparse type: a whole number ≥ 0 (a usage error, exit 2, otherwise)."""
+    return _whole_number(text, 0)
 
 
 def positive_int(text: str) -> int:
     """An argparse type: a whole number ≥ 1 (a usage error, exit 2, otherwise)."""
-    value = non_negative_int(text)
-    if value == 0:
-        raise argparse.ArgumentTypeError("expected a number ≥ 1, got 0")
-    return value
+    return _whole_number(text, 1)
 
 
 def control_rate(text: str) -> float:

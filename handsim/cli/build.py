@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import math
 from collections.abc import Callable
 
 from handsim.cli._common import (
@@ -17,6 +18,25 @@ from handsim.cli._common import (
     write_text,
 )
 from handsim.datatypes.physical_ranges import HAND_MASS
+
+HAND_POS_LIMIT_M = 1.0
+"""Largest distance of the hand's root from the table top's centre along each axis, m: the table is
+1 m × 0.7 m with its top at z = 0 and the floor 0.75 m below, and an arm reaches about 0.7 m; a hand farther
+away grasps nothing on it (1e6 is a unit or typing error)."""
+
+
+def hand_coordinate(text: str) -> float:
+    """An argparse type: one coordinate of ``--hand-pos``, metres, within :data:`HAND_POS_LIMIT_M` of 0."""
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a number of metres, got {text!r}") from None
+    if not (math.isfinite(value) and abs(value) <= HAND_POS_LIMIT_M):
+        raise argparse.ArgumentTypeError(
+            f"expected a coordinate within ±{HAND_POS_LIMIT_M:g} m of the table top's centre (the table is "
+            f"1 m × 0.7 m, its top at z = 0), got {text}"
+        )
+    return value
 
 
 def _hand_spec(skeleton_path: str | None, args: argparse.Namespace):
@@ -250,8 +270,8 @@ def register(commands: Commands) -> None:
     scene.add_argument("--no-hand", action="store_true", help="objects only")
     _add_hand_options(scene, "--hand-mass")  # --mass is the object's
     scene.add_argument(
-        "--hand-pos", type=float, nargs=3, default=(0.0, 0.0, 0.12), metavar=("X", "Y", "Z"),
-        help="position of the hand's root, metres (default 0 0 0.12)",
+        "--hand-pos", type=hand_coordinate, nargs=3, default=(0.0, 0.0, 0.12), metavar=("X", "Y", "Z"),
+        help=f"position of the hand's root, metres, each within ±{HAND_POS_LIMIT_M:g} (default 0 0 0.12)",
     )  # fmt: skip
     scene.add_argument(
         "--object", action="append", default=[], metavar="MESH_OR_CATALOG_NAME", help="an object (repeatable)"

@@ -31,7 +31,7 @@ def _run_minari(args: argparse.Namespace) -> int:
         author=args.author,
         author_email=args.author_email,
         code_permalink=args.code_permalink,
-        progress=sys.stderr.isatty(),
+        progress=True,  # a bar on a terminal, nothing in a log (handsim.progress)
         on_note=lambda note: print(f"note        {note}", flush=True),
         command=["handsim", *sys.argv[1:]],
     )

@@ -561,7 +561,8 @@ def register(commands: Commands) -> None:
         "raw_seqs/sXX/<seq>.mano.npy drives both MANO hands (your MANO_RIGHT.pkl and MANO_LEFT.pkl: "
         "--mano-dir or HANDSIM_MANO_DIR) with the subject's betas, the object of meta/object_vtemplates free "
         "at its recorded pose and articulation: the summary gives each hand's numbers and the object's drift "
-        "(docs/arctic.md). "
+        "(docs/arctic.md). The terms of the summary (held, not judged, fit at, hold_robustness, grip check, "
+        "followed/lost …) are defined in docs/concepts.md. "
         f"Exit codes: 0 done, 1 handsim error, 2 usage error or not a trial, {EXIT_DIVERGED} diverged, "
         f"{EXIT_NOT_VALID} not valid (a plausibility flag).",
     )
@@ -617,8 +618,9 @@ def register(commands: Commands) -> None:
         "--video", type=output_file, metavar="MP4|GIF", help="render the replay (mp4 needs handsim[video])"
     )
     replay.add_argument(
-        "--camera", default="track", choices=("track", "hand_cam", "overview"),
-        help="video camera: track (follows the hand; default), hand_cam or overview (the scene's)",
+        "--camera", default="track", choices=("track", "frame", "hand_cam", "overview"),
+        help="video camera: track (follows the hand; default), frame (aimed at every object and hand at "
+        "each moment: both hands of an ARCTIC sequence), hand_cam or overview (the scene's)",
     )  # fmt: skip
     replay.add_argument(
         "--size", type=int, nargs=2, default=(640, 480), metavar=("W", "H"), help="video size (640 480)"

@@ -38,6 +38,8 @@ def _render(out: Path) -> int:
     from handsim.report import render_report
 
     files = render_report(out)
+    for note in files.notes:
+        print(f"note        {note}")
     print(f"report      {files.html}")
     print(f"markdown    {files.markdown}")
     print(f"json        {files.json}")
@@ -90,18 +92,23 @@ def run_and_render(
         0 done, 1 every trial failed (the errors counted on stderr), 2 no trial to run, 130 interrupted.
 
     Raises:
-        HandsimError: The dataset is missing, OUT holds records of other parameters, Ray is missing …
+        HandsimError: The dataset is missing, OUT holds records of other parameters, Ray is missing …; a
+            recording given alone misses a file it needs (as ``handsim replay`` says it).
     """
-    # lazy: the runner (MuJoCo) and the trial loaders, only for a run
+    # lazy: the runner (MuJoCo), the trial loaders and the report's file groups, only for a run
+    from handsim.report.files import group_files
     from handsim.runner.execute import run_dataset
     from handsim.trials import Discovery, discover, select
 
     out = Path(out)
     discovery = dataset if isinstance(dataset, Discovery) else discover(dataset, options)
     entries = select(discovery.entries, only, limit)
-    for item in discovery.unknown:
-        print(f"unknown     {item.path}: {item.reason}")
+    unknown = group_files({"path": u.path, "reason": u.reason} for u in discovery.unknown)
+    for group in unknown:
+        print(f"unknown     {group.what()}: {group.reason}")
     if not entries:
+        if not only and not isinstance(dataset, Discovery) and Path(dataset).is_file():
+            return _not_a_trial(dataset, options)
         what = f" matching {only!r}" if only else ""
         return usage_error("report", f"no trial{what} in {dataset}")
     print(
@@ -112,7 +119,7 @@ def run_and_render(
     try:
         summary = run_dataset(
             source, out, workers=workers, backend=backend, address=address, config=config, frames=frames,
-            command=command, progress=sys.stderr.isatty(),
+            command=command, progress=True,  # a bar on a terminal, nothing in a log (handsim.progress)
         )  # fmt: skip
     except KeyboardInterrupt:
         print(
@@ -129,6 +136,24 @@ def run_and_render(
     if summary.all_failed:
         return _all_failed(summary.failed, summary.trials, summary.failures)
     return code
+
+
+def _not_a_trial(path: str | Path, options: TrialOptions | None) -> int:
+    """Why one recording given as the dataset is no trial, as ``handsim replay`` says it; the exit code.
+
+    A missing file it needs (an ARCTIC sequence's ``.object.npy``) is a handsim error (raised: exit code 1);
+    a file of no kind, or an option that does not apply, a usage error (2).
+    """
+    # lazy: the trial registry, only for a recording that is no trial
+    from handsim.trials import TrialError, TrialOptions
+    from handsim.trials.registry import find_trial
+
+    given = options or TrialOptions()
+    try:
+        find_trial(path, mano_dir=given.mano_dir, templates=given.templates)
+    except TrialError as exc:
+        return usage_error("report", str(exc))
+    return usage_error("report", f"no trial in {path}")
 
 
 def _all_failed(failed: int, trials: int, failures: tuple[tuple[str, int, str], ...]) -> int:
@@ -176,7 +201,8 @@ def register(commands: Commands) -> None:
         description="Find the trials of a dataset folder (GraspDB14 recordings, Tzionas Models/NN sequences, "
         "ARCTIC raw_seqs), replay each in MuJoCo on all cores (or Ray), append one record per trial to "
         "OUT/records.jsonl, and render the report from the records. A killed run restarted with the same "
-        "command resumes; a failing trial is recorded and the run goes on. Exit codes: 0 done, 1 handsim "
+        "command resumes; a failing trial is recorded and the run goes on. The report's terms (outcomes, "
+        "hold rate, robustness, fit at, on track …): docs/concepts.md. Exit codes: 0 done, 1 handsim "
         f"error or every trial failed, 2 usage error, {EXIT_INTERRUPTED} interrupted.",
     )
     report.add_argument("dataset", nargs="?", metavar="DATASET", help="dataset folder or one recording")

@@ -98,6 +98,8 @@ def _inspect(args: argparse.Namespace) -> int:
         segmentation = segment_grasps(trajectory)
         for line in segmentation.lines():
             print(line)
+        for flag in trajectory.flags:  # what the recording's checks flag (every replay of it says it too)
+            print(f"flag       {flag.line()}")
     if args.plot:
         # lazy: matplotlib (an optional extra), only with --plot
         from handsim.viz.plotting import plot_trajectory

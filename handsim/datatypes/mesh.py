@@ -22,6 +22,13 @@ if TYPE_CHECKING:
 
 FLATNESS_TOL = 1e-6  # smallest / largest principal extent below which a mesh is flat
 MAX_HOLE_EDGES = 64  # holes with at most this many boundary edges are "small" and filled
+PART_GAP_M = 1e-3
+"""Gap between the bounding boxes of two edge-disconnected pieces of a mesh above which they are separate
+parts, m: pieces that overlap or touch (a mug's handle modelled as its own closed surface through the
+wall) form one object."""
+MAX_PIECES_GROUPED = 2000
+"""Most edge-disconnected pieces :func:`separate_parts` groups by their bounding boxes (pairwise); above
+it, every piece counts as a part."""
 
 
 @dataclass(frozen=True)
@@ -59,6 +66,44 @@ class Mesh:
         return trimesh.Trimesh(self.vertices, self.faces, process=False)
 
 
+def separate_parts(vertices: np.ndarray, faces: np.ndarray) -> int:
+    """How many separate parts a mesh falls into: its edge-connected pieces, grouped where they meet.
+
+    Pieces joined by no edge but whose bounding boxes overlap or lie within :data:`PART_GAP_M` of each
+    other count as one part (closed shells modelled through each other, such as a handle through a wall);
+    pieces farther apart are separate parts, which one rigid body cannot mean.
+
+    Args:
+        vertices: Vertex positions in metres, shape (V, 3).
+        faces: Triangles, shape (F, 3).
+
+    Returns:
+        The number of parts (1 for a connected mesh).
+    """
+    from scipy.sparse import coo_matrix  # lazy: SciPy, as trimesh below
+    from scipy.sparse.csgraph import connected_components
+
+    edges = faces[:, [0, 1, 1, 2, 2, 0]].reshape(-1, 2)
+    n = len(vertices)
+    graph = coo_matrix((np.ones(len(edges)), (edges[:, 0], edges[:, 1])), shape=(n, n))
+    _, labels = connected_components(graph, directed=False)
+    pieces, piece = np.unique(labels[faces[:, 0]], return_inverse=True)
+    if len(pieces) == 1 or len(pieces) > MAX_PIECES_GROUPED:
+        return len(pieces)
+    corners = vertices[faces]  # (F, 3, 3): every vertex a face uses
+    low = np.full((len(pieces), 3), np.inf)
+    high = np.full((len(pieces), 3), -np.inf)
+    np.minimum.at(low, piece, corners.min(axis=1))
+    np.maximum.at(high, piece, corners.max(axis=1))
+    meet = np.all(
+        (low[:, None, :] <= high[None, :, :] + PART_GAP_M)
+        & (low[None, :, :] <= high[:, None, :] + PART_GAP_M),
+        axis=2,
+    )
+    groups, _ = connected_components(coo_matrix(meet), directed=False)
+    return int(groups)
+
+
 def validate_mesh(
     vertices: npt.ArrayLike, faces: npt.ArrayLike, source: str, *, require_watertight: bool = True
 ) -> Mesh:
@@ -72,7 +117,8 @@ def validate_mesh(
             from a density, would be meaningless). Pass False when the mass is given explicitly.
 
     Returns:
-        The repaired mesh, with each repair listed in ``notes``.
+        The repaired mesh, with each repair listed in ``notes``, and a note when it falls into several
+        disconnected parts (they move as one rigid body, which is rarely what two objects in one file mean).
 
     Raises:
         MeshError: Fewer than 4 vertices, no faces, non-finite vertices, face indices out of range,
@@ -137,6 +183,13 @@ def validate_mesh(
     if mesh.is_watertight and mesh.volume < 0:
         trimesh.repair.fix_inversion(mesh)
         notes.append("inverted faces pointing inwards")
+    parts = separate_parts(np.asarray(mesh.vertices), np.asarray(mesh.faces))
+    if parts > 1:
+        notes.append(
+            f"the mesh has {parts} disconnected parts, apart from one another (no edge joins them and their "
+            "bounding boxes do not meet); they are simulated as one rigid object: split the file to get "
+            "separate objects"
+        )
     if require_watertight and not mesh.is_watertight:
         raise MeshError(
             f"{source}: the mesh is not watertight after repair (open boundary or non-manifold edges), so "

@@ -34,7 +34,7 @@ from handsim.builders.hand import build_hand
 from handsim.builders.objects import object_bounds
 from handsim.builders.scene import resting_position
 from handsim.envs._base import DEFAULT_CAMERA, DEFAULT_SIZE, HandEnv
-from handsim.envs._checks import nonnegative, positive
+from handsim.envs._checks import nonnegative, positive, reset_options
 from handsim.envs._observation import ContactSummary, ObservationLayout, add_state
 from handsim.io.graspdb.default_skeleton import DEFAULT_BREADTH_RATIO, DEFAULT_HAND_LENGTH_M, default_skeleton
 from handsim.sim.control import DEFAULT_CONTROL_RATE, substeps_for
@@ -467,7 +467,18 @@ class GraspEnv(HandEnv):
 
     # ---- gymnasium API ----------------------------------------------------------------------------------
     def reset(self, *, seed: int | None = None, options: dict | None = None) -> tuple[np.ndarray, dict]:
-        """Open hand at its start pose above the object; the object at a seeded random offset."""
+        """Open hand at its start pose above the object; the object at a seeded random offset.
+
+        Args:
+            seed: Seeds ``np_random`` (the object's offset).
+            options: None or an empty dict: every episode starts the same way, so there is nothing to
+                choose (an option is refused rather than ignored).
+
+        Raises:
+            TypeError: ``options`` is not a dict.
+            ValueError: ``options`` holds any key.
+        """
+        reset_options(options, {}, type(self).__name__)
         super().reset(seed=seed)
         stepper, layout = self._stepper, self._scene.layout
         stepper.reset()

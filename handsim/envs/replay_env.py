@@ -25,7 +25,7 @@ from gymnasium import spaces
 
 from handsim.datatypes.trajectory import Trajectory
 from handsim.envs._base import DEFAULT_CAMERA, DEFAULT_SIZE, HandEnv
-from handsim.envs._checks import nonnegative, positive
+from handsim.envs._checks import nonnegative, positive, reset_options, whole_option
 from handsim.envs.recordings import RecordingError, recordings_from_keywords
 from handsim.envs.replay_reward import DRIFT, STEP_NUMBERS, RewardWeights
 from handsim.envs.replay_task import ReplayTask
@@ -46,6 +46,13 @@ def _layout_mismatch(recordings: Sequence, names: tuple[str, ...], other: tuple[
         f"{len(names)} elements; element {first} is {b!r} in one and {a!r} in another): sample only "
         "recordings of the same hand and objects in one environment"
     )
+
+
+RESET_OPTIONS = {
+    "frame": "the start frame, a whole number before the last frame",
+    "recording": "which recording, a whole number from 0",
+}
+"""The options :meth:`ReplayEnv.reset` takes, with what each is (for the message of an unknown one)."""
 
 
 class ReplayEnv(HandEnv):
@@ -289,21 +296,30 @@ class ReplayEnv(HandEnv):
     def reset(self, *, seed: int | None = None, options: dict | None = None) -> tuple[np.ndarray, dict]:
         """Put the scene at its recorded state of frame 0 (or of ``options["frame"]``, or a random frame).
 
+        Args:
+            seed: Seeds ``np_random`` (the random start frame and recording, the reset noise).
+            options: None, or a dict of :data:`RESET_OPTIONS`: ``"frame"`` (the start frame) and
+                ``"recording"`` (which recording), whole numbers.
+
         Raises:
-            ValueError: ``options["frame"]`` is not a frame before the last.
+            TypeError: ``options`` is not a dict, or an option is not a whole number (2.7 is not rounded,
+                True is not 1).
+            ValueError: An unknown option, ``options["frame"]`` not a frame before the last, or
+                ``options["recording"]`` not one of the recordings.
         """
+        options = reset_options(options, RESET_OPTIONS, type(self).__name__)
+        chosen = {name: whole_option(options, name) for name in RESET_OPTIONS if name in options}
         super().reset(seed=seed)
-        options = options or {}
         count = len(self._recordings)
-        if "recording" in options:
-            index = int(options["recording"])
+        if "recording" in chosen:
+            index = chosen["recording"]
             if not 0 <= index < count:
                 raise ValueError(f"options['recording'] must be in [0, {count - 1}], got {index}")
         else:
             index = int(self.np_random.integers(0, count)) if count > 1 else 0
         self._configure(index)
-        if "frame" in options:
-            start = int(options["frame"])
+        if "frame" in chosen:
+            start = chosen["frame"]
             if not 0 <= start < self._last:
                 raise ValueError(f"options['frame'] must be a frame in [0, {self._last - 1}], got {start}")
         elif self._random_start:

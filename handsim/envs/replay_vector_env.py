@@ -198,7 +198,8 @@ class ReplayVectorEnv(gym.vector.VectorEnv):
         """Reset every world (see :meth:`ReplayEnv.reset`; ``options`` apply to every world).
 
         Raises:
-            ValueError: A seed list of the wrong length, or a bad ``options["frame"]``.
+            TypeError: ``options`` is not a dict, or an option is not a whole number.
+            ValueError: A seed list of the wrong length, an unknown option, or a bad ``options["frame"]``.
         """
         if seed is None:
             seeds: list[int | None] = [None] * self.num_envs

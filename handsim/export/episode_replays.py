@@ -15,10 +15,9 @@ from concurrent.futures import ProcessPoolExecutor
 from types import TracebackType
 from typing import TypeVar
 
-from tqdm import tqdm
-
 from handsim.export.episode import EpisodeLayout, ReplayedEpisode, record_layout, replay_record
 from handsim.export.errors import ExportError, RecordMismatchError
+from handsim.progress import progress_bar
 from handsim.runner.worker import prepare_pool_worker
 
 Made = TypeVar("Made")
@@ -55,7 +54,7 @@ class EpisodeReplays:
         workers: Processes replaying records (1: in this process).
         rtol: Relative tolerance of the summary comparison with the records.
         atol: Absolute tolerance of that comparison, in each number's unit.
-        progress: Show progress bars.
+        progress: Show progress bars on stderr when it is a terminal (:mod:`handsim.progress`).
     """
 
     def __init__(self, root: str | None, workers: int, rtol: float, atol: float, progress: bool) -> None:
@@ -76,7 +75,7 @@ class EpisodeReplays:
     def _map(
         self, make: Callable[..., Made], records: Sequence[dict], args: tuple, desc: str
     ) -> Iterator[Made | Outcome]:
-        with tqdm(total=len(records), unit="trial", desc=desc, disable=not self._progress) as bar:
+        with progress_bar(enabled=self._progress, total=len(records), unit="trial", desc=desc) as bar:
             if self._pool is None:
                 for record in records:
                     yield _outcome(make, record, *args)

@@ -12,8 +12,9 @@ import numpy as np
 from handsim.datatypes.mesh import Mesh, principal_extents, validate_mesh
 from handsim.errors import InputFileError, MeshError
 from handsim.io.mesh_counts import check_ascii_ply, check_stl
+from handsim.io.obj import check_obj
 from handsim.io.off import parse_off
-from handsim.io.text_files import UTF8_BOM, decode_text, read_bytes
+from handsim.io.text_files import UTF8_BOM, decode_text, decode_text_file, read_bytes
 
 MESH_SUFFIXES = (".obj", ".off", ".stl", ".ply")
 UNIT_SCALES = {"m": 1.0, "mm": 1e-3}
@@ -64,8 +65,10 @@ def read_mesh_arrays(path: str | Path, units: str) -> tuple[np.ndarray, np.ndarr
 
     Raises:
         InputFileError: Missing or unreadable file, or an unsupported extension.
-        FormatError: An OFF file that does not follow its format, an ASCII PLY or binary STL that holds
-            fewer or more elements than its header promises (file, line and field named).
+        FormatError: An OFF file that does not follow its format, an OBJ with a malformed vertex or face
+            line (:func:`handsim.io.obj.check_obj`), an ASCII PLY or binary STL that holds fewer or more
+            elements than its header promises, a text mesh in UTF-16 or with NUL bytes (file, line and
+            field named).
         MeshError: An unknown unit, an unparsable file, a file without faces, an implausible size or an
             object thinner than :data:`MIN_THICKNESS_M` (see :func:`read_mesh`).
     """
@@ -79,13 +82,15 @@ def read_mesh_arrays(path: str | Path, units: str) -> tuple[np.ndarray, np.ndarr
             f"{p}: unknown mesh file type {p.suffix!r}; handsim reads {', '.join(MESH_SUFFIXES)}"
         )
     if suffix == ".off":
-        vertices, faces = parse_off(decode_text(data), p, UNIT_SCALES[units])
+        vertices, faces = parse_off(decode_text_file(data, p), p, UNIT_SCALES[units])
     else:
         data = _without_text_bom(data, suffix)
         if suffix == ".stl":
             check_stl(p, data)
         elif suffix == ".ply":
             check_ascii_ply(p, decode_text(data))
+        else:
+            check_obj(p, decode_text_file(data, p))
         vertices, faces = _trimesh_arrays(p, data)
         vertices = vertices * UNIT_SCALES[units]
     if len(faces) == 0:

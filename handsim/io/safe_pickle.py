@@ -23,6 +23,7 @@ import _compat_pickle
 import ast
 import collections
 import io
+import math
 import pickle
 from collections.abc import Mapping
 from pathlib import Path
@@ -30,7 +31,8 @@ from typing import Any
 
 import numpy as np
 
-from handsim.errors import FormatError, InputFileError
+from handsim.errors import FormatError
+from handsim.io.text_files import open_input
 
 try:  # numpy >= 2
     from numpy._core.multiarray import _reconstruct, scalar
@@ -121,13 +123,6 @@ def _unpickle(file: io.BufferedIOBase, path: Path, allowed: Mapping[tuple[str, s
         raise FormatError(path, f"not a valid pickle of arrays: {type(exc).__name__}: {exc}") from None
 
 
-def _existing(path: str | Path) -> Path:
-    p = Path(path)
-    if not p.is_file():
-        raise InputFileError(f"{p}: file not found")
-    return p
-
-
 def load_restricted_pickle(path: str | Path, allowed: Mapping[tuple[str, str], Any] | None = None) -> Any:
     """Unpickle a file, resolving only numpy array reconstruction, plain containers and ``allowed``.
 
@@ -142,12 +137,13 @@ def load_restricted_pickle(path: str | Path, allowed: Mapping[tuple[str, str], A
         The unpickled object.
 
     Raises:
-        InputFileError: The file does not exist.
+        InputFileError: The file does not exist, is not a regular file, or is larger than
+            :data:`~handsim.io.text_files.MAX_FILE_BYTES` (:func:`~handsim.io.text_files.open_input`).
         FormatError: The pickle names a global outside the allowed table (the message names the file
             and the global; nothing was executed), or it is not a valid pickle.
     """
-    p = _existing(path)
-    with p.open("rb") as f:
+    p = Path(path)
+    with open_input(p) as (f, _):
         return _unpickle(f, p, allowed)
 
 
@@ -162,6 +158,21 @@ def loads_restricted_pickle(
     return _unpickle(io.BytesIO(data), Path(source), allowed)
 
 
+def _check_npy_size(p: Path, shape: tuple[int, ...], dtype: np.dtype, count: int, available: int) -> None:
+    """Refuse a ``.npy`` header whose shape × dtype needs more bytes than follow it in the file.
+
+    Checked before the array is allocated: a header may claim any shape (10¹² rows would be terabytes),
+    and only the file's size tells whether the data is there.
+    """
+    needed = count * dtype.itemsize
+    if needed > available:
+        raise FormatError(
+            p,
+            f"the header declares an array of shape {shape} and dtype {dtype} ({needed} bytes of data), "
+            f"but the file holds {available} bytes after its header: a truncated or corrupted file",
+        )
+
+
 def load_npy(path: str | Path, allowed: Mapping[tuple[str, str], Any] | None = None) -> np.ndarray:
     """Read a ``.npy`` file; an object array (``allow_pickle``) is unpickled with the restricted unpickler.
 
@@ -174,12 +185,14 @@ def load_npy(path: str | Path, allowed: Mapping[tuple[str, str], Any] | None = N
         ``.item()``).
 
     Raises:
-        InputFileError: The file does not exist.
-        FormatError: Not a ``.npy`` file, a malformed header, a refused global, or a pickle that is not
-            the array the header describes.
+        InputFileError: The file does not exist, is not a regular file, or is larger than
+            :data:`~handsim.io.text_files.MAX_FILE_BYTES` (:func:`~handsim.io.text_files.open_input`).
+        FormatError: Not a ``.npy`` file, a malformed header, a header whose shape and dtype need more
+            bytes than the file holds (refused before anything is allocated), a refused global, or a
+            pickle that is not the array the header describes.
     """
-    p = _existing(path)
-    with p.open("rb") as f:
+    p = Path(path)
+    with open_input(p) as (f, size):
         if f.read(6) != NPY_MAGIC:
             raise FormatError(p, "not a .npy file (no \\x93NUMPY magic)")
         version = f.read(2)
@@ -193,10 +206,13 @@ def load_npy(path: str | Path, allowed: Mapping[tuple[str, str], Any] | None = N
             dtype = np.lib.format.descr_to_dtype(header["descr"])
             shape = tuple(header["shape"])
             fortran = bool(header["fortran_order"])
-        except (ValueError, SyntaxError, KeyError, TypeError) as exc:
+            if not all(isinstance(n, int) and not isinstance(n, bool) and n >= 0 for n in shape):
+                raise ValueError(f"shape {shape} is not a tuple of whole numbers ≥ 0")
+        except (ValueError, SyntaxError, KeyError, TypeError, MemoryError) as exc:
             raise FormatError(p, f"malformed .npy header {text.strip()!r}: {exc}") from None
         if not dtype.hasobject:
-            count = int(np.prod(shape, dtype=np.int64))
+            count = math.prod(shape)
+            _check_npy_size(p, shape, dtype, count, size - f.tell())
             data = np.fromfile(f, dtype=dtype, count=count)
             if data.size != count:
                 raise FormatError(p, f"truncated .npy data: expected {count} values, found {data.size}")

@@ -15,7 +15,7 @@ from collections.abc import Callable, Iterable, Sequence
 
 import numpy as np
 
-from handsim.report.records import STATUSES, natural_key
+from handsim.report.records import STATUSES, natural_key, number
 from handsim.runner.records import record_valid
 
 GROUP_KEYS: tuple[str, ...] = ("object", "grasp", "actor")
@@ -44,14 +44,6 @@ TRACK_OUTCOMES = ("followed", "lost", "not judged")
 """The verdicts on a recorded object's track (the summary's ``track``)."""
 ROBUST = 0.8
 """A held trial counts as robustly held when at least this fraction of its robustness ensemble held."""
-
-
-def number(value: object) -> float | None:
-    """``value`` as a finite float, or None (missing, null, boolean, non-numeric, NaN or infinite)."""
-    if isinstance(value, bool) or not isinstance(value, (int, float)):
-        return None
-    value = float(value)
-    return value if math.isfinite(value) else None
 
 
 def summary_value(record: dict, key: str) -> float | None:

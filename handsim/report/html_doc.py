@@ -10,9 +10,11 @@ from handsim.report.aggregate import (
     distributions,
     meta_value,
     outcome_counts,
+    summary_value,
 )
 from handsim.report.charts import PALETTE, histogram, stacked_bars
-from handsim.report.columns import GROUP_COLUMNS, HAND_COLUMNS, TRIAL_COLUMNS
+from handsim.report.columns import GROUP_COLUMNS, HAND_COLUMNS, TRIAL_COLUMNS, shown
+from handsim.report.files import group_files
 from handsim.report.frames import FrameBudget, load_frames
 from handsim.report.html_repro import reproducibility
 from handsim.report.html_trial import trial_section
@@ -40,8 +42,8 @@ def _outcome_chart(records: tuple[dict, ...], key, title: str) -> str:
 def _file_list(entries: list, title: str) -> str:
     if not entries:
         return f'<p class="note">{esc(title)}: none.</p>'
-    rows = [[fmt.text((e or {}).get("path")), fmt.text((e or {}).get("reason"))] for e in entries]
-    return f"<h3>{esc(title)} ({len(rows)})</h3>" + simple_table(["path", "reason"], rows)
+    rows = [[g.what(), fmt.text(g.reason)] for g in group_files(e or {} for e in entries)]
+    return f"<h3>{esc(title)} ({len(entries)})</h3>" + simple_table(["path", "reason"], rows)
 
 
 def _overview(run: RunRecords, summary: dict) -> str:
@@ -56,6 +58,8 @@ def _overview(run: RunRecords, summary: dict) -> str:
         ("follow rate", fmt.rate(total["followed"], total["track_judged"]), ""),
         ("max penetration mm", fmt.num(total["penetration_max_mm"]), ""),
     ]
+    rates = {c.label for c in shown(GROUP_COLUMNS, summary["trials"])}  # a rate only where trials have it
+    cards = [card for card in cards if card[0] not in ("hold rate", "follow rate") or card[0] in rates]
     cards_html = (
         '<div class="cards">'
         + "".join(
@@ -89,25 +93,41 @@ def _overview(run: RunRecords, summary: dict) -> str:
     )
 
 
+_GROUP_NOTES = (
+    (
+        "hold rate",
+        "Hold rate: glove trials whose object stayed in hand through the hold window, of those judged.",
+    ),
+    (
+        "follow rate",
+        "Follow rate: recorded-object trials whose object stayed within the tolerance of its recorded track "
+        "over every frame the recording moves it, of those judged.",
+    ),
+    ("slip max mm", "Slip and penetration statistics are over each trial's maximum."),
+    ("drift mean mm", "Drift mean is the mean of each trial's mean drift."),
+)
+"""The groups' note, a sentence per column it explains, each only where that column is shown."""
+
+
 def _groups(run: RunRecords, summary: dict) -> str:
+    columns = shown(GROUP_COLUMNS, summary["trials"])
+    labels = {c.label for c in columns}
+    explained = [text for label, text in _GROUP_NOTES if label in labels]
+    if "slip max mm" not in labels:
+        explained.append("Penetration statistics are over each trial's maximum.")
     parts = [
         '<section class="block" id="groups"><h2>Groups</h2>',
-        '<p class="note">Hold rate: glove trials whose object stayed in hand through the hold window, of '
-        "those judged. Follow rate: recorded-object trials whose object stayed within the tolerance of its "
-        "recorded track over every frame the recording moves it, of those judged. Slip and penetration "
-        "statistics are over each trial's maximum; drift mean is the mean of each trial's mean drift. "
-        "Trials flagged not valid (a plausibility flag) are counted but left out of the rates and the "
-        "statistics. Limit violations and gaps filled are totals over the group's "
-        "recordings. Hover a header for its meaning.</p>",
+        f'<p class="note">{" ".join(explained)} Trials flagged not valid (a plausibility flag) are counted '
+        "but left out of the rates and the statistics. Limit violations and gaps filled are totals over the "
+        "group's recordings. Hover a header for its meaning.</p>",
     ]
     for key in GROUP_KEYS:
         rows = summary["groups"][key]
-        parts.append(f"<h3>{GROUP_TITLES[key]}</h3>")
-        if not rows:
-            parts.append(f'<p class="note">No trial has a{"n" if key[0] in "aeiou" else ""} {key}.</p>')
+        if not rows:  # no trial has this field (no grasp type outside glove datasets): no table
             continue
+        parts.append(f"<h3>{GROUP_TITLES[key]}</h3>")
         parts.append(
-            table(GROUP_COLUMNS, rows, first=(key, lambda r: esc(fmt.text(r["group"]))), total=summary["all"])
+            table(columns, rows, first=(key, lambda r: esc(fmt.text(r["group"]))), total=summary["all"])
         )
         if key == "object":
             parts.append(_outcome_chart(run.records, lambda r: meta_value(r, "object"), "Outcome by object"))
@@ -116,10 +136,12 @@ def _groups(run: RunRecords, summary: dict) -> str:
 
 
 def _distributions(run: RunRecords) -> str:
+    """A histogram per metric that some trial has (flagged ones too): no slip chart without glove trials."""
     values = distributions(run.records)
     charts = [
         histogram(values[key], title=title, x_label=title.rsplit("(", 1)[-1].rstrip(")"), colour=PALETTE[i])
         for i, (key, title) in enumerate(DISTRIBUTIONS.items())
+        if any(summary_value(r, key) is not None for r in run.records)
     ]
     return (
         '<section class="block" id="distributions"><h2>Distributions</h2>'
@@ -148,7 +170,11 @@ def _index(summary: dict) -> str:
         '<section class="block" id="trials"><h2>All trials</h2>'
         '<p class="note">Click a trial for its curves, numbers and frames. Ordered by id.</p>'
         '<div class="scroll tall">'
-        + table(TRIAL_COLUMNS, summary["trials"], first=("trial", lambda r: link(r["anchor"], r["id"])))
+        + table(
+            shown(TRIAL_COLUMNS, summary["trials"]),
+            summary["trials"],
+            first=("trial", lambda r: link(r["anchor"], r["id"])),
+        )
         + "</div>"
         + _two_hands(summary)
         + "</section>"
@@ -200,7 +226,8 @@ def render_html(run: RunRecords, summary: dict, frame_budget: FrameBudget | None
             '<header class="top"><h1>handsim physics-plausibility report</h1>',
             f'<div class="sub">{esc(fmt.text(summary["dataset"]))} · {fmt.plural(o["trials"], "trial")} · '
             f"{o['by_status']['ok']} ok · {o['by_status']['diverged']} diverged · "
-            f"{o['by_status']['error']} errors · metric spec {esc(spec)}</div></header>",
+            f"{o['by_status']['error']} errors · metric spec {esc(spec)} · terms: handsim's "
+            "docs/concepts.md</div></header>",
             '<nav class="toc">' + "".join(link(a, label) for a, label in _NAV) + "</nav><main>",
             _overview(run, summary),
             _groups(run, summary),

@@ -102,6 +102,20 @@ def _fields(values: dict, fields: Sequence[tuple[str, str, int | None]]) -> list
     return items
 
 
+def _recording(quality: dict | None) -> str:
+    """The recording's quality, and a glove recording's checks (annotation, phase source, spikes) if any.
+
+    Those keys are None in the record of a recording that is not checked (Tzionas, ARCTIC): a row of dashes
+    for each would only say that they do not apply.
+    """
+    if not quality:
+        return ""
+    known = {key for key, _, _ in _QUALITY_FIELDS}
+    if all(value is None for key, value in quality.items() if key not in known):
+        quality = {key: value for key, value in quality.items() if key in known}
+    return "<h4>Recording</h4>" + numbers(_fields(quality, _QUALITY_FIELDS))
+
+
 def _checked_curves(curves: dict) -> tuple[dict, list[str]]:
     """The curves whose length matches ``time_s`` (others left out, with a note)."""
     n = len(curves.get("time_s") or [])
@@ -483,7 +497,7 @@ def trial_section(record: dict, row: dict, images: Sequence[FrameImage], trials:
         _error(record),
         _flags(record),
         numbers(_fields(summary, SUMMARY_FIELDS)) if summary else "",
-        ("<h4>Recording</h4>" + numbers(_fields(quality, _QUALITY_FIELDS))) if quality else "",
+        _recording(quality),
         _curves(record),
         _frames(images),
         _hold(record),

@@ -9,7 +9,8 @@ from urllib.parse import quote
 
 from handsim.report import fmt
 from handsim.report.aggregate import GROUP_KEYS
-from handsim.report.columns import GROUP_COLUMNS, HAND_COLUMNS, TRIAL_COLUMNS, Column
+from handsim.report.columns import GROUP_COLUMNS, HAND_COLUMNS, TRIAL_COLUMNS, Column, shown
+from handsim.report.files import group_files
 from handsim.report.records import STATUSES
 
 HTML_NAME = "report.html"
@@ -61,7 +62,8 @@ def render_markdown(summary: dict) -> str:
         f"{o['by_status']['error']} errors; {summary['all']['flagged']} flagged not valid (left out of "
         "every rate and statistic). Metric spec "
         f"{', '.join(summary['metric_spec_versions']) or fmt.MISSING}. Plots, per-trial curves and frames: "
-        f"[{HTML_NAME}]({HTML_NAME}).",
+        f"[{HTML_NAME}]({HTML_NAME}). The terms (outcomes, hold rate, robustness, fit at, on track …) are "
+        "defined in handsim's docs/concepts.md.",
         "",
         "## Dataset overview",
         "",
@@ -75,17 +77,20 @@ def render_markdown(summary: dict) -> str:
     for key, title in (("companion", "Companion files"), ("unknown", "Unknown files (not used)")):
         entries = o[key]
         out += [f"{title}: {len(entries) or 'none'}.", ""]
-        out += [f"- `{cell(fmt.text(e.get('path')))}` — {cell(fmt.text(e.get('reason')))}" for e in entries]
+        out += [
+            f"- `{cell(fmt.text(g.path))}`{cell(g.count_text())} — {cell(fmt.text(g.reason))}"
+            for g in group_files(entries)
+        ]
         out += [""] if entries else []
     out += ["## Groups", ""]
-    out += [f"- **{c.label}**: {c.help}" for c in GROUP_COLUMNS if c.help] + [""]
+    group_columns = shown(GROUP_COLUMNS, summary["trials"])
+    out += [f"- **{c.label}**: {c.help}" for c in group_columns if c.help] + [""]
     for key in GROUP_KEYS:
         rows = summary["groups"][key]
-        out += [f"### {GROUP_TITLES[key]}", ""]
-        if not rows:
-            out += [f"No trial has a{'n' if key[0] in 'aeiou' else ''} {key}.", ""]
+        if not rows:  # no trial has this field (no grasp type outside glove datasets): no table
             continue
-        out += _column_table(GROUP_COLUMNS, rows, (key, lambda r: cell(fmt.text(r["group"]))), summary["all"])
+        out += [f"### {GROUP_TITLES[key]}", ""]
+        out += _column_table(group_columns, rows, (key, lambda r: cell(fmt.text(r["group"]))), summary["all"])
         out += [""]
     out += ["## Worst trials first", "", f"Ranking: {summary['ranking']}", ""]
     for w in summary["worst"]:
@@ -96,7 +101,7 @@ def render_markdown(summary: dict) -> str:
         )
     out += ["", "## All trials", ""]
     out += _column_table(
-        TRIAL_COLUMNS,
+        shown(TRIAL_COLUMNS, summary["trials"]),
         summary["trials"],
         ("trial", lambda r: f"[{link_text(r['id'])}]({HTML_NAME}#{r['anchor']})"),
         None,

@@ -25,11 +25,14 @@ class ReportFiles:
         html: The self-contained HTML page.
         markdown: The Markdown version (tables and worst trials; links to the HTML and the frames).
         json: The machine-readable summary.
+        notes: What reading the records had to decide (a cut-off line, a value the report cannot use …),
+            also listed in the report under "Notes on the records".
     """
 
     html: Path
     markdown: Path
     json: Path
+    notes: tuple[str, ...] = ()
 
 
 def render_report(out_dir: str | Path, *, embed_budget: int = DEFAULT_EMBED_BUDGET) -> ReportFiles:
@@ -46,7 +49,7 @@ def render_report(out_dir: str | Path, *, embed_budget: int = DEFAULT_EMBED_BUDG
             linked by their path relative to ``out_dir`` instead.
 
     Returns:
-        The paths written.
+        The paths written, and the notes on reading the records.
 
     Raises:
         InputFileError: ``out_dir`` has no ``records.jsonl``.
@@ -55,7 +58,10 @@ def render_report(out_dir: str | Path, *, embed_budget: int = DEFAULT_EMBED_BUDG
     run = read_run(out_dir)
     summary = build_summary(run)
     files = ReportFiles(
-        html=run.out_dir / HTML_NAME, markdown=run.out_dir / MARKDOWN_NAME, json=run.out_dir / JSON_NAME
+        html=run.out_dir / HTML_NAME,
+        markdown=run.out_dir / MARKDOWN_NAME,
+        json=run.out_dir / JSON_NAME,
+        notes=run.notes,
     )
     text = json.dumps(summary, indent=2, sort_keys=True, ensure_ascii=False, allow_nan=False) + "\n"
     write_atomic(files.json, text.encode("utf-8"))

@@ -21,8 +21,7 @@ import time
 from collections.abc import Callable, Sequence
 from pathlib import Path
 
-from tqdm import tqdm
-
+from handsim.progress import progress_bar
 from handsim.runner.errors import RunnerError
 from handsim.runner.local_backend import in_process_outcomes, pool_outcomes
 from handsim.runner.output_lock import LOCK_FILE, OutputLock
@@ -105,7 +104,8 @@ def run_dataset(
         config: Replay parameters; default :class:`~handsim.sim.replay.ReplayConfig` with the stability
             tests at the end of the hold window (``stability_at="grasp"``, glove trials only).
         frames: Frames rendered per trial (0: none).
-        progress: Show a progress bar with ETA (tqdm, on stderr).
+        progress: Show a progress bar with ETA on stderr when it is a terminal (:mod:`handsim.progress`:
+            nothing in a log).
         command: The command line, for ``run.json`` (default ``sys.argv``).
         on_record: Called with each record after it is written.
 
@@ -164,7 +164,7 @@ def run_dataset(
         else:  # a pool even for one trial: records must not depend on how many trials were left
             outcomes = pool_outcomes(todo, trial_outcome, config, frames, min(workers, len(todo)))
         ran: list[str] = []
-        bar = tqdm(total=len(todo), unit="trial", desc="trials", disable=not progress, dynamic_ncols=True)
+        bar = progress_bar(enabled=progress, total=len(todo), unit="trial", desc="trials", dynamic_ncols=True)
         status = {"ok": 0, "diverged": 0, "error": 0}
         with contextlib.closing(outcomes), RecordWriter(out) as writer, bar:
             if len(entries) > len(todo):

@@ -12,6 +12,7 @@ shortest round-trip form, NaN and infinities as ``null``, UTF-8 without ASCII es
 from __future__ import annotations
 
 import contextlib
+import errno
 import json
 import math
 import os
@@ -207,25 +208,38 @@ def _signals_deferred() -> Iterator[None]:
 
 
 class RecordWriter:
-    """Appends records to ``OUT/records.jsonl``, each line flushed and fsynced before the next."""
+    """Appends records to ``OUT/records.jsonl``, each line written whole and fsynced before the next."""
 
     def __init__(self, out: str | Path) -> None:
-        """Open (create) the records file of ``out`` for appending."""
+        """Open (create) the records file of ``out`` for appending (unbuffered: a line is one write)."""
         Path(out).mkdir(parents=True, exist_ok=True)
         self.path = Path(out) / RECORDS_FILE
-        self._file = open(self.path, "ab")
+        self._file = open(self.path, "ab", buffering=0)
 
     def append(self, record: dict) -> None:
         """Write one record as a complete line and make it durable.
 
         Ctrl-C and SIGTERM are held back while the line is written (POSIX): they act after it, so an
-        interrupted run leaves no partial record.
+        interrupted run leaves no partial record. A write that fails (a full disk, ``ulimit -f``) leaves
+        no partial line either: the file is cut back to where the line began.
+
+        Raises:
+            OSError: The line could not be written; the error names the records file.
         """
-        line = encode_record(record)
+        line = memoryview(encode_record(record))
         with _signals_deferred():
-            self._file.write(line)
-            self._file.flush()
-            os.fsync(self._file.fileno())
+            start = os.fstat(self._file.fileno()).st_size
+            try:
+                while line:
+                    written = self._file.write(line)
+                    if not written:  # a regular file takes at least one byte or raises; never loop on 0
+                        raise OSError(errno.EIO, "the file took no byte of the record")
+                    line = line[written:]
+                os.fsync(self._file.fileno())
+            except OSError as exc:
+                with contextlib.suppress(OSError):
+                    os.ftruncate(self._file.fileno(), start)
+                raise OSError(exc.errno, exc.strerror, str(self.path)) from exc
 
     def close(self) -> None:
         """Close the file."""

@@ -2,9 +2,13 @@
 
 Which frames (:func:`key_frames`), in this order of choice: the frame with the most hand links touching
 the object, the grasp (glove trials: the start of the hold window; recorded trials: the first frame with
-hand–object contact), the first and the last; more frames, when asked, evenly between. Rendering needs an
-OpenGL context (without a display EGL, unless ``MUJOCO_GL`` says otherwise: :mod:`handsim.viz.headless`); when
-there is none the trial gets a note and no frames, not an error.
+hand–object contact), the first and the last; more frames, when asked, evenly between.
+
+Each frame is seen from the ``frame`` camera (:func:`handsim.viz.render.frame_camera`): aimed at that
+moment's objects and hands together, so a two-hand ARCTIC frame shows both hands and the object, and a glove
+frame the hand with its object wherever it fell. Rendering needs an OpenGL context (without a display EGL,
+unless ``MUJOCO_GL`` says otherwise: :mod:`handsim.viz.headless`); when there is none the trial gets a note
+and no frames, not an error.
 """
 
 from __future__ import annotations
@@ -20,10 +24,10 @@ from handsim.runner.trial_record import touching_links
 from handsim.sim.replay import ReplayResult
 from handsim.sim.scene.compiled import SimScene
 from handsim.viz.headless import offscreen_backend
-from handsim.viz.render import render_states
+from handsim.viz.render import FRAME_CAMERA, render_states
 
 FRAMES_DIR = "frames"
-RENDER_CAMERA = "track"
+RENDER_CAMERA = FRAME_CAMERA
 RENDER_SIZE = (320, 240)
 """Width and height of a rendered frame, pixels (small: the report embeds them)."""
 RENDER_SHADOWS = False

@@ -19,12 +19,12 @@ from handsim.builders.arctic_objects import arctic_object
 from handsim.builders.mano_hand import build_mano_hands
 from handsim.io.arctic.mano import MANO_DIR_ENV, find_mano_files
 from handsim.io.arctic.sequence import HANDS, ArcticSequence, read_arctic_sequence
+from handsim.io.arctic.templates import read_arctic_template
 from handsim.sim.arctic_scene import arctic_scene
 from handsim.trials.arctic_hands import SideCheck, arctic_trajectory, hand_side_check
 from handsim.trials.base import (
     LoadedTrial,
     Trial,
-    TrialError,
     TrialObject,
     TrialOptions,
     build_objects,
@@ -79,13 +79,19 @@ def _trial(path: Path, options: TrialOptions) -> Trial:
 
 
 def _find(path: Path, options: TrialOptions) -> Trial:
-    find_mano_files(options.mano_dir)  # before any work: says which files are needed and where to put them
+    """The trial of a sequence, its files checked before any work.
+
+    Raises:
+        InputFileError: The MANO files, the object motion or the object template are missing: the readers'
+            own errors, so that every command says the same of the same missing file (a handsim error, exit
+            code 1, as ``handsim inspect`` reading the sequence).
+    """
+    find_mano_files(options.mano_dir)  # says which files are needed and where to put them
     _, motion, template = _sequence(path, options.templates)
     if not motion.is_file():
-        raise TrialError(f"{path}: an ARCTIC MANO sequence without its {motion.name} beside it")
+        read_arctic_sequence(path)  # raises, naming the missing object motion, before reading anything
     if not template.is_dir():
-        where = "--templates" if options.templates is not None else "ARCTIC meta/object_vtemplates"
-        raise TrialError(f"{path}: its object template {template}/ is missing ({where})")
+        read_arctic_template(template)  # raises, naming the missing template folder
     return _trial(path, options)
 
 
@@ -152,9 +158,10 @@ def _template_files(template: Path) -> list[Path]:
 def _sort_files(sorting: Sorting) -> None:
     for f in sorting.open_files():
         p = PurePosixPath(f)
-        if len(p.parts) < 3 or p.parts[-3] != "raw_seqs" or not p.name.endswith(MANO_SUFFIX):
+        full = sorting.base / p  # the layout judged on the whole path: also a sequence given alone
+        if len(full.parts) < 3 or full.parts[-3] != "raw_seqs" or not p.name.endswith(MANO_SUFFIX):
             continue
-        seq, motion, template = _sequence(sorting.base / p)
+        seq, motion, template = _sequence(full)
         if not motion.is_file():
             sorting.unknown[f] = f"an ARCTIC MANO sequence without its {motion.name} beside it: not a trial"
             continue
@@ -164,13 +171,13 @@ def _sort_files(sorting: Sorting) -> None:
                 "not a trial"
             )
             continue
-        trial = _trial(sorting.base / p, sorting.options)
+        trial = _trial(full, sorting.options)
         parts = seq.split("_")
         meta = group_fields(
-            object=parts[0], action=parts[1] if len(parts) > 2 else None, actor=p.parent.name, sequence=seq
+            object=parts[0], action=parts[1] if len(parts) > 2 else None, actor=full.parent.name, sequence=seq
         )
         inputs = (
-            trial_input("trajectory", sorting.base / p, sorting.base),
+            trial_input("trajectory", full, sorting.base),
             trial_input("trajectory", motion, sorting.base),
             *(trial_input("object", t, sorting.base) for t in _template_files(template)),
         )

@@ -26,6 +26,7 @@ from fnmatch import fnmatchcase
 from pathlib import Path, PurePosixPath
 
 from handsim.errors import HandsimError, InputFileError
+from handsim.io.text_files import require_file, special_file
 from handsim.trials.base import TrialOptions
 from handsim.trials.kind import TrialKind
 from handsim.trials.sorting import CompanionFile, Sorting, TrialEntry, UnknownFile
@@ -70,11 +71,15 @@ class Discovery:
         }
 
 
-def _walk(root: Path, base: Path, kinds: Sequence[TrialKind], companions: dict[str, str]) -> list[str]:
-    """Every file under ``root`` as a path relative to ``base``.
+def _walk(
+    root: Path, base: Path, kinds: Sequence[TrialKind], companions: dict[str, str], unknown: dict[str, str]
+) -> list[str]:
+    """Every regular file under ``root`` as a path relative to ``base``.
 
     Links to folders are followed once (a folder reached again through a link is listed, not searched
-    twice); hidden folders and the bulk folders of a layout are listed whole.
+    twice); hidden folders and the bulk folders of a layout are listed whole. Named pipes, devices and
+    sockets (or links to them) go to ``unknown`` with what they are: no kind may open them, as reading one
+    could block forever or never end.
     """
     bulk = [k.bulk_folder for k in kinds if k.bulk_folder is not None]
     files: list[str] = []
@@ -95,7 +100,13 @@ def _walk(root: Path, base: Path, kinds: Sequence[TrialKind], companions: dict[s
             else:
                 companions[rel] = what
         dirs[:] = kept
-        files.extend((here / name).relative_to(base).as_posix() for name in sorted(names))
+        for name in sorted(names):
+            rel = (here / name).relative_to(base).as_posix()
+            special = special_file(here / name)
+            if special is None:
+                files.append(rel)
+            else:
+                unknown[rel] = f"{special}, not a regular file (not read: it could block or never end)"
     return sorted(files)
 
 
@@ -141,16 +152,24 @@ def discover_with(
         For a single recording or trial folder the ids are relative to its parent folder.
 
     Raises:
-        InputFileError: ``dataset`` does not exist.
+        InputFileError: ``dataset`` does not exist, or is a named pipe, a device or a socket.
     """
     root = Path(dataset).resolve()
     if not root.exists():
         raise InputFileError(f"{dataset}: dataset not found (expected a folder or a recording)")
+    if not root.is_dir():
+        require_file(dataset)  # a regular file, not a pipe or device that a kind's reader would block on
     single = root.is_file() or _is_trial_folder(root, kinds)
     base = root.parent if single else root
     companions: dict[str, str] = {}
-    files = [root.relative_to(base).as_posix()] if root.is_file() else _walk(root, base, kinds, companions)
-    sorting = Sorting(base=base, files=files, companions=companions, options=options or TrialOptions())
+    unknown: dict[str, str] = {}
+    if root.is_file():
+        files = [root.relative_to(base).as_posix()]
+    else:
+        files = _walk(root, base, kinds, companions, unknown)
+    sorting = Sorting(
+        base=base, files=files, companions=companions, unknown=unknown, options=options or TrialOptions()
+    )
     for kind in kinds:
         kind.sort_files(sorting)
     _rest(sorting, kinds)

@@ -83,13 +83,16 @@ def whole_recording_verdict(trajectory: Trajectory) -> str | None:
     """Why a whole recording's hold is not judged (no complete grasp episode in it), or None.
 
     A recording whose grasps are all cut off by its start or end (or that holds none) has no hold to judge:
-    its replay still measures the hand, but its hold outcome is this reason.
+    its replay still measures the hand, but its hold outcome is this reason. One without any grasp episode
+    (a hand that never closes, or never moves) says "no grasp" first, plainly.
     """
     segmentation = segment_grasps(trajectory)
     if segmentation.complete:
         return None
     if segmentation.calibration is not None:
         return f"not judged: {segmentation.calibration.text()}"
+    if not segmentation.episodes:
+        return f"not judged: no grasp in the recording ({segmentation.note})"
     cut_off = "; ".join(f"episode {e.index}: {e.note}" for e in segmentation.episodes if e.truncated)
     return (
         "not judged: the recording holds no complete grasp episode (" + (cut_off or segmentation.note) + ")"

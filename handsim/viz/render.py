@@ -2,7 +2,10 @@
 
 A replay keeps the state of every control frame when asked (``ReplayConfig(keep_states=True)``);
 :func:`render_states` puts each state into an ``MjData``, runs ``mj_forward`` and renders it from a camera
-of the scene (``hand_cam``, ``overview``) or from a camera tracking the hand (``track``).
+of the scene (``hand_cam``, ``overview``), from a camera tracking the (first) hand (``track``), or from one
+that frames every object and every hand (``frame``: aimed at each state's box around them, from just far
+enough for it to fit the view; a two-hand ARCTIC scene's frames show both hands and the object, where
+``track`` follows one hand and may leave the rest out).
 :func:`write_video` renders every ``stride``-th state, so that the video plays in real time at about
 :data:`DEFAULT_FPS`, and encodes it:
 
@@ -37,6 +40,8 @@ DEFAULT_FPS = 30.0
 """Target frame rate of a video, Hz; the exact rate is the control rate over a whole stride."""
 TRACK_CAMERA = "track"
 """Camera name that follows the hand's root body (a tracking free camera) instead of a fixed camera."""
+FRAME_CAMERA = "frame"
+"""Camera name that frames the scene's objects and hands: a free camera aimed at the box around them."""
 VIDEO_FORMATS = {
     ".mp4": 'H.264 video (PyAV: pip install "handsim[video]")',
     ".gif": "animated GIF (Pillow)",
@@ -45,6 +50,9 @@ _QUALITY_LOCK = threading.Lock()  # a model's offsamples and shadowsize are 0 on
 _TRACK_DISTANCE = 0.45  # m
 _TRACK_AZIMUTH = 135.0  # degrees
 _TRACK_ELEVATION = -25.0  # degrees
+_FRAME_MARGIN = 0.9
+"""The framed box fills at most this fraction of the view's half-height and half-width: room around it."""
+_FRAME_MIN_DISTANCE = 0.2  # m: no closer, however small the box (a lone fingertip)
 
 
 @dataclass(frozen=True)
@@ -88,12 +96,84 @@ def frame_stride(frame_dt: float, fps: float = DEFAULT_FPS) -> int:
 
 
 def camera_names(scene: SimScene) -> tuple[str, ...]:
-    """Cameras :func:`render_states` accepts: the scene's cameras and :data:`TRACK_CAMERA`."""
+    """Cameras :func:`render_states` accepts: the scene's, :data:`TRACK_CAMERA` and :data:`FRAME_CAMERA`."""
     model = scene.model
-    return (*(model.camera(i).name for i in range(model.ncam)), TRACK_CAMERA)
+    return (*(model.camera(i).name for i in range(model.ncam)), TRACK_CAMERA, FRAME_CAMERA)
 
 
-def _camera(scene: SimScene, camera: str) -> str | mujoco.MjvCamera:
+def _framed_geoms(scene: SimScene) -> np.ndarray:
+    """The geoms :data:`FRAME_CAMERA` frames: every hand's and every object's (not the floor, the stand)."""
+    model = scene.model
+    layout = scene.layout
+    roots = {layout.root_body, *(h.root_body for h in layout.hands), *(o.root_body for o in layout.objects)}
+    movers = sorted({int(model.body_rootid[b]) for b in roots if b > 0} - {0})  # never the world's own
+    return np.flatnonzero(np.isin(model.body_rootid[model.geom_bodyid], movers))
+
+
+def framed_box(scene: SimScene, data: mujoco.MjData) -> tuple[np.ndarray, np.ndarray]:
+    """The box around every object and every hand of the scene in ``data``'s state: lower, upper corner (m).
+
+    Each geom of a hand's or an object's bodies counts as its own bounding box (MuJoCo's ``geom_aabb``) as
+    placed in ``data`` (after ``mj_kinematics`` or ``mj_forward``); the static world does not count. A scene
+    with none of them: the hand's root, a point.
+
+    Returns:
+        The corners (3,) and (3,).
+    """
+    geoms = _framed_geoms(scene)
+    if not geoms.size:
+        point = data.xpos[scene.layout.root_body].copy()
+        return point, point
+    aabb = scene.model.geom_aabb[geoms]  # centre (3) and half sizes (3) in the geom's frame
+    turns = data.geom_xmat[geoms].reshape(-1, 3, 3)
+    centres = data.geom_xpos[geoms] + np.einsum("gij,gj->gi", turns, aabb[:, :3])
+    halves = np.einsum("gij,gj->gi", np.abs(turns), aabb[:, 3:])
+    return (centres - halves).min(axis=0), (centres + halves).max(axis=0)
+
+
+def frame_camera(scene: SimScene, data: mujoco.MjData, aspect: float) -> mujoco.MjvCamera:
+    """The :data:`FRAME_CAMERA` for ``data``'s state: a free camera aimed at :func:`framed_box`.
+
+    It looks from the track camera's direction (azimuth 135°, elevation −25°) at the box's centre, from the
+    nearest distance at which every corner of the box is inside the view, vertically (``fovy``) and
+    horizontally (``fovy`` widened by ``aspect``), with :data:`_FRAME_MARGIN` to spare.
+
+    Args:
+        scene: The scene.
+        data: Its state, after ``mj_kinematics`` or ``mj_forward``.
+        aspect: Image width / height.
+
+    Returns:
+        The camera.
+    """
+    low, high = framed_box(scene, data)
+    centre = (low + high) / 2.0
+    az, el = np.radians(_TRACK_AZIMUTH), np.radians(_TRACK_ELEVATION)
+    forward = np.array([np.cos(el) * np.cos(az), np.cos(el) * np.sin(az), np.sin(el)])
+    right = np.cross(forward, [0.0, 0.0, 1.0])
+    right /= np.linalg.norm(right)
+    up = np.cross(right, forward)
+    corners = np.array(
+        [[x, y, z] for x in (low[0], high[0]) for y in (low[1], high[1]) for z in (low[2], high[2])]
+    )
+    offsets = corners - centre
+    tan_v = _FRAME_MARGIN * np.tan(np.radians(scene.model.vis.global_.fovy) / 2.0)
+    tan_h = tan_v * aspect
+    # a corner at depth d + o·forward is in view when |o·up| ≤ depth · tan_v and |o·right| ≤ depth · tan_h
+    needed = np.maximum(np.abs(offsets @ up) / tan_v, np.abs(offsets @ right) / tan_h) - offsets @ forward
+    cam = mujoco.MjvCamera()
+    cam.type = mujoco.mjtCamera.mjCAMERA_FREE
+    cam.lookat[:] = centre
+    cam.distance = max(_FRAME_MIN_DISTANCE, float(needed.max()))
+    cam.azimuth = _TRACK_AZIMUTH
+    cam.elevation = _TRACK_ELEVATION
+    return cam
+
+
+def _camera(scene: SimScene, camera: str) -> str | mujoco.MjvCamera | None:
+    """The camera to render from; None for :data:`FRAME_CAMERA`, aimed anew at each state."""
+    if camera == FRAME_CAMERA:
+        return None
     if camera == TRACK_CAMERA:
         cam = mujoco.MjvCamera()
         cam.type = mujoco.mjtCamera.mjCAMERA_TRACKING
@@ -148,7 +228,8 @@ def render_states(
     Args:
         scene: The replayed scene.
         states: ``qpos`` per frame (N, nq), e.g. ``ReplayResult.states``.
-        camera: A camera of the scene (``hand_cam``, ``overview``) or :data:`TRACK_CAMERA`.
+        camera: A camera of the scene (``hand_cam``, ``overview``), :data:`TRACK_CAMERA` or
+            :data:`FRAME_CAMERA` (aimed at each state's objects and hands: :func:`frame_camera`).
         width: Image width, pixels (at most the scene's offscreen buffer, 1280).
         height: Image height, pixels (at most 960).
         stride: Render states 0, stride, 2 · stride …
@@ -176,7 +257,8 @@ def render_states(
         for q in qpos[::stride]:
             data.qpos[:] = q
             mujoco.mj_forward(model, data)
-            renderer.update_scene(data, camera=cam)
+            view = frame_camera(scene, data, width / height) if cam is None else cam
+            renderer.update_scene(data, camera=view)
             yield renderer.render()
     finally:
         renderer.close()

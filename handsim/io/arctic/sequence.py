@@ -153,8 +153,14 @@ def _shape_text(shape: tuple[int | None, ...]) -> str:
     return f"({inner}{',' if len(shape) == 1 else ''})"
 
 
-def _float_field(path: Path, field: str, value: Any, shape: tuple[int | None, ...]) -> np.ndarray:
-    """A finite floating-point array of the given shape (None = any length), else a FormatError."""
+def _float_field(
+    path: Path, field: str, value: Any, shape: tuple[int | None, ...], axes: tuple[str, ...] = ("frame",)
+) -> np.ndarray:
+    """A finite floating-point array of the given shape (None = any length), else a FormatError.
+
+    ``axes`` names what the leading indices count, for the message of a non-finite value (``("beta",)``
+    for a shape vector: "non-finite value at beta 3", not "at frame 3").
+    """
     if not isinstance(value, np.ndarray):
         raise FormatError(path, f"expected a numpy array, got {type(value).__name__}", field=field)
     if value.dtype.kind != "f":
@@ -165,8 +171,9 @@ def _float_field(path: Path, field: str, value: Any, shape: tuple[int | None, ..
         raise FormatError(path, f"expected shape {_shape_text(shape)}, got {value.shape}", field=field)
     bad = ~np.isfinite(value)
     if bad.any():
-        frame = int(np.argwhere(bad)[0][0])
-        raise FormatError(path, f"non-finite value at frame {frame}", field=field)
+        index = np.argwhere(bad)[0]
+        where = ", ".join(f"{axis} {int(i)}" for axis, i in zip(axes, index, strict=False))
+        raise FormatError(path, f"non-finite value at {where}", field=field)
     return value.astype(float)
 
 
@@ -278,12 +285,12 @@ def _hand(path: Path, hand: str, entry: dict, fps: float, sha256: str) -> MANOSe
     notes: list[str] = []
     raw_shape = entry["shape"]
     if isinstance(raw_shape, np.ndarray) and raw_shape.ndim == 2:
-        shapes = _float_field(path, f"{hand}.shape", raw_shape, (n, 10))
+        shapes = _float_field(path, f"{hand}.shape", raw_shape, (n, 10), ("frame", "beta"))
         spread = float(np.ptp(shapes, axis=0).max())
         shape = shapes.mean(axis=0)
         notes.append(f"{hand}.shape given per frame; their mean used (largest spread {spread:.1e})")
     else:
-        shape = _float_field(path, f"{hand}.shape", raw_shape, (10,))
+        shape = _float_field(path, f"{hand}.shape", raw_shape, (10,), ("beta",))
     fitting_err = None
     if entry.get("fitting_err") is not None:
         fitting_err = _fitting_err(path, f"{hand}.fitting_err", entry["fitting_err"], n)

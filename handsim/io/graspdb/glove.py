@@ -31,12 +31,13 @@ from handsim.io.graspdb.filenames import filename_datatype
 from handsim.io.graspdb.rows import (
     FIRST_SENSOR_COLUMN,
     RAW_ADVICE,
+    RAW_LIMIT,
     SWITCH_COLUMN,
     parse_rows,
     row_stamp,
     split_rows,
 )
-from handsim.io.text_files import decode_text, read_bytes, sha256_of
+from handsim.io.text_files import MAX_RECORDING_BYTES, decode_text_file, read_bytes, sha256_of
 
 _DIP_SENSORS = tuple(s for s in SENSORS if s.computed)
 
@@ -66,9 +67,27 @@ def graspdb_row_count(path: str | Path) -> int:
         The number of rows, without parsing them.
 
     Raises:
-        InputFileError: The file is missing or unreadable.
+        InputFileError: The file is missing, not a regular file, unreadable or too large
+            (:func:`read_recording`).
+        FormatError: It is not UTF-8 text (UTF-16, or NUL bytes).
     """
-    return len(split_rows(decode_text(read_bytes(Path(path))))[1])
+    return len(split_rows(decode_text_file(read_recording(path), path))[1])
+
+
+def read_recording(path: str | Path) -> bytes:
+    """The bytes of a glove recording, bounded by :data:`~handsim.io.text_files.MAX_RECORDING_BYTES`.
+
+    Raises:
+        InputFileError: Missing, not a regular file, unreadable, or larger than the limit (the message
+            advises cutting it).
+    """
+    return read_bytes(
+        path,
+        MAX_RECORDING_BYTES,
+        "a glove recording",
+        " (about 80 minutes at 60 Hz; reading and replaying it takes memory in proportion): cut it into "
+        "shorter recordings",
+    )
 
 
 def read_graspdb_raw(path: str | Path) -> RawGloveRecording:
@@ -81,14 +100,15 @@ def read_graspdb_raw(path: str | Path) -> RawGloveRecording:
         ``(times, switch, counts)``.
 
     Raises:
-        InputFileError: The file is missing or unreadable.
+        InputFileError: The file is missing, not a regular file, unreadable or too large
+            (:func:`read_recording`).
         FormatError: The file name says ``-rad-`` or ``_annot-``, the file is empty, a row does not have 30
             entries, a time stamp or switch is invalid (as for :func:`read_graspdb_glove`), or a sensor
             value is not an integer count 0..255 (then it is probably a file of angles in radians). The
             message names the file, the 1-based line and the field.
     """
     p = Path(path)
-    data = read_bytes(p)
+    data = read_recording(p)
     _refuse_annotation(p)
     if filename_datatype(p) == "rad":
         raise FormatError(
@@ -145,17 +165,20 @@ def read_graspdb_glove(
         The trajectory, with ``switch``, ``source`` and ``sha256`` of the file bytes set.
 
     Raises:
-        InputFileError: The file is missing or unreadable.
+        InputFileError: The file is missing, not a regular file, unreadable or too large
+            (:func:`read_recording`).
         FormatError: The file is empty, a row does not have 30 entries, an entry is not a finite number,
             the switch is not 0 or 1, a time stamp is not a valid date and time or not after the
             previous row's; without a calibration, the file is a raw-count file (``-raw-`` in its name,
-            or a sensor value with magnitude above 7); with one, the name says ``-rad-`` or a sensor value
-            is not an integer count 0..255. The message names the file, the 1-based line and the field.
+            or a sensor value with magnitude above 7); with one, the name says ``-rad-``, a sensor value
+            is not an integer count 0..255, or a calibrated angle exceeds 7 rad in magnitude (the bound of
+            ``rad`` files: a calibration that does not fit the glove). The message names the file, the
+            1-based line and the field.
         TrajectoryError: ``skeleton`` lacks a DoF the glove drives (the message lists the missing DoFs
             and the skeleton's DoFs).
     """
     p = Path(path)
-    data = read_bytes(p)
+    data = read_recording(p)
     _refuse_annotation(p)
     named = filename_datatype(p)
     if calibration is None:
@@ -180,6 +203,7 @@ def read_graspdb_glove(
         )
         values, times, rows = parse_rows(p, data, "raw", why)
         sensors = apply_calibration(values[:, FIRST_SENSOR_COLUMN:], calibration)
+        _check_calibrated(p, data, values[:, FIRST_SENSOR_COLUMN:], sensors, calibration)
 
     driven = driven_dofs()
     by_dof = {s.dof: s for s in SENSORS if s.dof is not None}
@@ -230,6 +254,36 @@ def read_graspdb_glove(
         notes=tuple(notes),
     )
     return trajectory if skeleton is None else with_limit_note(trajectory, skeleton)
+
+
+def _check_calibrated(
+    p: Path, data: bytes, counts: np.ndarray, angles: np.ndarray, calibration: GloveCalibration
+) -> None:
+    """Refuse calibrated angles beyond :data:`~handsim.io.graspdb.rows.RAW_LIMIT`, the bound of ``rad`` files.
+
+    No joint turns more than a full turn (|angle| ≤ 2π); a calibrated angle beyond 7 rad comes from a gain
+    or offset that does not fit the glove (a gain of −1000 rad/count instead of about −0.01), and would be
+    replayed as targets clamped to the joint limits, judged as if it were motion.
+
+    Raises:
+        FormatError: The first such value, naming the line, the sensor, its count and the calibration's
+            gain and offset for it.
+    """
+    beyond = np.abs(angles) > RAW_LIMIT
+    if not beyond.any():
+        return
+    row, column = (int(i) for i in np.argwhere(beyond)[0])
+    name = SENSORS[column].name
+    linenos, _ = split_rows(decode_text_file(data, p))
+    raise FormatError(
+        p,
+        f"count {counts[row, column]:g} becomes {angles[row, column]:.6g} rad with the calibration "
+        f"'{calibration.provenance}' (gain {calibration.gains[column]:g} rad/count, offset "
+        f"{calibration.offsets[column]:g}), beyond the {RAW_LIMIT:g} rad no joint angle exceeds (|angle| ≤ "
+        f"2π; {int(beyond.sum())} calibrated values are): is the calibration this glove's?",
+        line=linenos[row],
+        field=f"sensor {name}",
+    )
 
 
 def _calibration_notes(calibration: GloveCalibration, counts: np.ndarray) -> list[str]:

@@ -25,7 +25,7 @@ import numpy as np
 
 from handsim.errors import FormatError
 from handsim.glove.sensors import SENSOR_NAMES
-from handsim.io.text_files import decode_text, parse_float
+from handsim.io.text_files import decode_text_file, parse_float
 
 NTOKENS = 30
 """Entries per motion row: 6 time-stamp fields, the switch, 23 sensors."""
@@ -91,7 +91,7 @@ def parse_rows(p: Path, data: bytes, kind: str, why: str) -> tuple[np.ndarray, n
         why: Text added to the message of a sensor value that does not fit ``kind``.
     """
     # Text that is not UTF-8 can only sit in a token that is not a number; that error shows it as Latin-1.
-    text = decode_text(data)
+    text = decode_text_file(data, p)
     linenos, rows = split_rows(text)
     if not rows:
         what = "23 sensor values in radians" if kind == "rad" else "23 raw sensor counts"

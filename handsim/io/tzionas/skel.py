@@ -149,11 +149,20 @@ def read_limits(path: str | Path, bone_names: list[str], root: str | None = None
         Entries by bone name, axes normalised (except the root's), limits in radians.
 
     Raises:
-        FormatError: Unknown or duplicate bone, wrong entry size, bad flag, axis or limit.
+        FormatError: No entry at all (an empty or blank file: the model would get no DoF), unknown or
+            duplicate bone, wrong entry size, bad flag, axis or limit.
     """
     p = Path(path)
     out: dict[str, BoneLimits] = {}
-    for block in blank_line_blocks(read_text(p)):
+    blocks = blank_line_blocks(read_text(p))
+    if not blocks:
+        raise FormatError(
+            p,
+            "no bone entries (the file is empty or blank): expected 8 lines per bone (name, flags "
+            f"'t rx ry rz', 3 axis lines, 3 'min max' lines), at least one for the root bone"
+            f"{f' {root!r}' if root else ''}; without them the model would have no degree of freedom",
+        )
+    for block in blocks:
         if len(block) % 8:
             msg = (
                 f"entry has {len(block)} non-blank lines; expected 8 per bone (name, flags 't rx ry rz', "

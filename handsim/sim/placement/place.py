@@ -59,7 +59,7 @@ from pathlib import Path
 
 import numpy as np
 
-from handsim.cache import CorruptEntryError, default_cache_dir
+from handsim.cache import CorruptEntryError, default_cache_dir, write_failed
 from handsim.datatypes.trajectory import Trajectory
 from handsim.sim.parallel import map_until
 from handsim.sim.placement.cache import entry_path, placement_key, read_entry, write_entry
@@ -138,7 +138,8 @@ def place_object(
     if not use_cache:
         return _place(scene, trajectory, grasp, spec, release_delay, control_rate, shift, turn_deg)
     key = placement_key(scene, trajectory, grasp, arguments)
-    path = entry_path(cache_dir if cache_dir is not None else default_cache_dir(), key)
+    root = Path(cache_dir) if cache_dir is not None else default_cache_dir()
+    path = entry_path(root, key)
     notes = []
     if path.is_file():
         try:
@@ -148,7 +149,9 @@ def place_object(
     placement = _place(scene, trajectory, grasp, spec, release_delay, control_rate, shift, turn_deg)
     try:
         write_entry(path, key, placement)
-    except (OSError, pickle.PicklingError, TypeError) as e:  # a full disk; a result that will not pickle
+    except OSError as e:  # a read-only cache folder, a file in its place, a full disk
+        notes.append(write_failed(root, path, e, "placement"))
+    except (pickle.PicklingError, TypeError) as e:  # a result that will not pickle
         notes.append(f"could not write placement cache entry {path}: {e}")
     return replace(placement, note="; ".join([placement.note, *notes])) if notes else placement
 
