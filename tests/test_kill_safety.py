@@ -101,7 +101,7 @@ def _export(run_dir: Path, dataset_id: str, *options: str) -> list[str]:
     return ["export", "minari", str(run_dir), "--dataset-id", dataset_id, "--workers", "1", *options]
 
 
-ALL = [f"{name}.grasp.json" for name in OBJECTS]
+ALL = [f"{name}.grasp.json#1" for name in OBJECTS]  # each holds one grasp episode
 
 
 def test_a_killed_export_leaves_no_dataset_and_the_next_run_names_and_removes_its_leftover(
@@ -159,13 +159,13 @@ def test_the_dataset_an_overwrite_replaces_survives_a_kill_at_every_step_and_two
 
     killed = _handsim(replace, env, kill=swap_done)
     assert killed.returncode == -signal.SIGKILL, killed.stderr
-    assert _episodes("handsim/o-v0") == ["cube.grasp.json"]  # the new one, whole
+    assert _episodes("handsim/o-v0") == ["cube.grasp.json#1"]  # the new one, whole
     done = _handsim(_export(run_dir, "handsim/other-v0", "--only", "tennis*"), env)  # another id's export
     assert done.returncode == 0, done.stderr
     assert _notes(done)[-1].startswith(
         f"removed {replaced}: the dataset 'handsim/o-v0' an export with --overwrite"
     )
-    assert _episodes("handsim/o-v0") == ["cube.grasp.json"]
+    assert _episodes("handsim/o-v0") == ["cube.grasp.json#1"]
     assert not (root / ".handsim-export").exists()
 
 
