@@ -19,6 +19,7 @@ from gymnasium.utils.env_checker import check_env
 
 import handsim  # noqa: F401  registers the environments
 from handsim.builders.graspdb_objects import UnknownObjectError
+from handsim.datatypes.fingers import finger_of
 from handsim.envs import ENVS, register_envs
 from handsim.envs.grasp_env import GraspEnv
 from handsim.envs.recordings import default_replay_inputs
@@ -303,6 +304,32 @@ def test_grasp_closing_and_lifting_succeeds():
     assert info["lift"] > 0.05
     assert success[-1] and info["is_success"]
     assert not any(success[: int(0.5 / env.dt)])  # needs hold_time (0.5 s) of holding first
+    assert info["reward_lift"] == pytest.approx(1.0)  # the held lift is paid in full
+
+
+def _sides_touching(env: GraspEnv, obs: np.ndarray) -> set[str]:
+    """The sides (thumb, fingers, palm) whose links push on the object, read from the observation."""
+    forces = obs[env.observation_slices["contact_force"]]
+    sides = {"thumb": "thumb", "palm": "palm"}
+    links = env.scene.layout.link_names
+    return {sides.get(finger_of(n), "fingers") for n, f in zip(links, forces, strict=True) if f > 0}
+
+
+def test_grasp_lift_reward_is_zero_unless_the_hand_holds_the_object():
+    """Random actions knock the ball about (and up) without holding it: no lift is paid for that."""
+    env = GraspEnv()
+    env.action_space.seed(0)
+    knocked_up = 0
+    for seed in range(3):
+        env.reset(seed=seed)
+        done = False
+        while not done:
+            obs, _, terminated, truncated, info = env.step(env.action_space.sample())
+            done = terminated or truncated
+            knocked_up += info["lift"] > 0
+            if len(_sides_touching(env, obs)) < 2:
+                assert info["reward_lift"] == 0.0
+    assert knocked_up  # the rollout does lift the ball at times: the gate is what keeps the term at 0
 
 
 def test_grasp_scripted_root_has_joint_targets_only():

@@ -33,6 +33,7 @@ from handsim.builders.catalog import get
 from handsim.builders.hand import build_hand
 from handsim.builders.objects import object_bounds
 from handsim.builders.scene import resting_position
+from handsim.datatypes.fingers import finger_of
 from handsim.envs._base import DEFAULT_CAMERA, DEFAULT_SIZE, HandEnv
 from handsim.envs._checks import nonnegative, positive, reset_options
 from handsim.envs._observation import ContactSummary, ObservationLayout, add_state
@@ -70,6 +71,10 @@ GRASP_AHEAD = 0.03
 """The object's centre starts under the point this far ahead of the palm's centre along the fingers, m."""
 CONTACT_LINKS = 3
 """``reward_contact`` is full when this many hand links touch the object."""
+HOLD_SIDES = ("thumb", "fingers", "palm")
+"""The sides a hand can press an object from (:func:`contact_sides`); ``reward_lift`` pays only while the
+object is touched from at least two of them, so a lift is paid when the hand holds the object, not when a
+stray knock sends it up."""
 REACH_SCALE = 10.0
 """1/m: ``reward_reach = reach_weight · (1 − tanh(REACH_SCALE · distance))``."""
 FALL_HEIGHT = -0.05
@@ -120,6 +125,39 @@ def finger_coupling(dof_names: tuple[str, ...] | list[str]) -> np.ndarray:
         if not coupling[:, column].any():
             raise ValueError(f"hand_action='fingers': no DoF of {list(dof_names)} belongs to {name!r}")
     return coupling
+
+
+def contact_sides(link_names: tuple[str, ...] | list[str]) -> tuple[np.ndarray, ...]:
+    """Indices of the hand links on each side of :data:`HOLD_SIDES` (thumb, the other fingers, palm).
+
+    An object touched from two of these sides is squeezed between them, so the hand can carry it; links of
+    one side alone (say the index and the middle finger) only push it.
+
+    Args:
+        link_names: The hand's link names, in the order of the per-link contact forces.
+
+    Returns:
+        One index array per side, in :data:`HOLD_SIDES` order (:func:`handsim.datatypes.fingers.finger_of`
+        decides each link's finger; every finger but the thumb is on the ``"fingers"`` side).
+    """
+    fingers = [finger_of(name) for name in link_names]
+    thumb = [i for i, f in enumerate(fingers) if f == "thumb"]
+    palm = [i for i, f in enumerate(fingers) if f == "palm"]
+    others = [i for i, f in enumerate(fingers) if f not in ("thumb", "palm")]
+    return tuple(np.array(side, dtype=np.int64) for side in (thumb, others, palm))
+
+
+def held_from_two_sides(link_forces: np.ndarray, sides: tuple[np.ndarray, ...]) -> bool:
+    """Whether the object is touched from at least two sides (:func:`contact_sides`).
+
+    Args:
+        link_forces: Normal force on the object per hand link, N.
+        sides: The link indices of each side, from :func:`contact_sides`.
+
+    Returns:
+        True when links of two or more sides push on the object: the hand holds it.
+    """
+    return sum(bool(np.any(link_forces[side] > 0.0)) for side in sides) >= 2
 
 
 def _wristless_default_hand() -> mujoco.MjSpec:
@@ -235,7 +273,8 @@ class GraspEnv(HandEnv):
 
     * ``reward_reach = reach_weight · (1 − tanh(10 · |object_to_grasp|))``;
     * ``reward_contact = contact_weight · min(links touching, 3) / 3``;
-    * ``reward_lift = lift_weight · clip(lift / lift_height, 0, 1)``;
+    * ``reward_lift = lift_weight · clip(lift / lift_height, 0, 1)`` while the hand holds the object
+      (touched from two of :data:`HOLD_SIDES`: thumb, other fingers, palm), else 0;
     * ``reward_hold = hold_weight`` while the object is ``lift_height`` up and touched, else 0;
     * ``reward_penetration = −penetration_weight · penetration in mm`` (the deepest hand–object one);
     * ``reward_success = success_weight`` on the episode's last step (truncated at ``duration``, or ended
@@ -395,6 +434,7 @@ class GraspEnv(HandEnv):
         self._rel_slice = obs.add("object_to_grasp", ("x", "y", "z"))
         self._contacts = ContactSummary(self._scene)
         self._force_slice = obs.add("contact_force", layout.link_names)
+        self._sides = contact_sides(layout.link_names)
         self._pen_index = obs.add("penetration", ("depth",)).start
         self._lift_index = obs.add("lift", ("height",)).start
         self._hold_index = obs.add("hold", ("fraction",)).start
@@ -499,7 +539,8 @@ class GraspEnv(HandEnv):
         self._started = True
         penetration, touching = self._observe()
         lift = float(self._obs[self._lift_index])
-        terms = self._terms(lift, penetration, touching, lifted=False, held_at_end=False)
+        grasped = held_from_two_sides(self._obs_force, self._sides)
+        terms = self._terms(lift, penetration, touching, grasped, lifted=False, held_at_end=False)
         return self._obs.copy(), {
             **terms,
             "success": False,
@@ -556,7 +597,8 @@ class GraspEnv(HandEnv):
         terminated = failed or (success and self._terminate_on_success)
         truncated = n >= self._steps and not terminated
         held_at_end = success and not failed and (terminated or truncated)
-        terms = self._terms(lift, penetration, touching, lifted, held_at_end)
+        grasped = held_from_two_sides(self._obs_force, self._sides)
+        terms = self._terms(lift, penetration, touching, grasped, lifted, held_at_end)
         reward = sum(terms.values())
         if terminated or truncated:
             self._started = False
@@ -577,15 +619,19 @@ class GraspEnv(HandEnv):
         return self._obs.copy(), reward, terminated, truncated, info
 
     def _terms(
-        self, lift: float, penetration: float, touching: int, lifted: bool, held_at_end: bool
+        self, lift: float, penetration: float, touching: int, grasped: bool, lifted: bool, held_at_end: bool
     ) -> dict[str, float]:
-        """The reward terms, by name, in the order they are summed (see the class)."""
+        """The reward terms, by name, in the order they are summed (see the class).
+
+        ``grasped`` (touched from two sides, :func:`held_from_two_sides`) gates ``reward_lift``: without
+        it, random actions that knock the object upward would be paid for a lift the hand does not hold.
+        """
         rel = self._obs_rel
         distance = math.sqrt(float(np.dot(rel, rel)))
         return {
             "reward_reach": self._w_reach * (1.0 - math.tanh(REACH_SCALE * distance)),
             "reward_contact": self._w_contact * min(touching, CONTACT_LINKS),
-            "reward_lift": self._w_lift * min(max(lift, 0.0), self._lift_height),
+            "reward_lift": self._w_lift * min(max(lift, 0.0), self._lift_height) if grasped else 0.0,
             "reward_hold": self._w_hold if lifted else 0.0,
             "reward_penetration": -self._w_pen * penetration,
             "reward_success": self._w_success if held_at_end else 0.0,

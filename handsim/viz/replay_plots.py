@@ -143,9 +143,21 @@ def replay_curves(result: ReplayResult) -> ReplayCurves:
     )
 
 
+HOLD_SHADE = "#e8f4e8"
+"""Fill of the hold window behind the curves."""
+HOLD_EDGE = "#2e7d32"
+"""Colour of the hold window's edges on the contacts raster, where the raster covers the shade."""
+
+
 def _mark(ax, curves: ReplayCurves) -> None:
+    """Mark the hold window, the release, the loss and a divergence on one panel.
+
+    The window's shade goes under everything (``zorder=-1``: above only the axes' background), so it never
+    hides a curve or the contacts raster; on the raster, cells with contacts cover it, so
+    :func:`draw_contacts` draws the window's edges too.
+    """
     if curves.hold_window is not None:
-        ax.axvspan(*curves.hold_window, color="#e8f4e8", lw=0, zorder=0)
+        ax.axvspan(*curves.hold_window, color=HOLD_SHADE, lw=0, zorder=-1)
     if curves.release is not None:
         ax.axvline(curves.release, color="#2e7d32", lw=0.9, ls="--")
     if curves.lost_at is not None:
@@ -154,10 +166,57 @@ def _mark(ax, curves: ReplayCurves) -> None:
         ax.axvline(curves.diverged_at, color="#c0392b", lw=1.4)
 
 
+def contacts_label(most: int) -> str:
+    """The contacts raster's axis label, with its colour scale.
+
+    Args:
+        most: The largest contact count of any link in any frame.
+
+    Returns:
+        ``"contacts per link"`` and, on a second line, the scale: ``"(dark 1 … bright N)"`` when counts
+        differ, ``"(1 per cell)"`` when every coloured cell holds one contact, ``"(none)"`` without any (a
+        scale from 1 to 1 would say nothing).
+    """
+    if most <= 0:
+        scale = "(none)"
+    elif most == 1:
+        scale = "(1 per cell)"
+    else:
+        scale = f"(dark 1 … bright {most})"
+    return f"contacts per link\n{scale}"
+
+
+def draw_contacts(ax, curves: ReplayCurves) -> None:
+    """Draw the contacts-per-link raster on ``ax``: one row per link, one column per frame, 0 blank.
+
+    Colours run from 1 (dark) to the largest count (bright). The hold window's shade lies under the raster
+    (:func:`_mark`), so the raster stays readable inside it; its edges are drawn over the raster as lines.
+
+    Args:
+        ax: A matplotlib axes.
+        curves: The replay's curves.
+    """
+    t, nlinks = curves.times, len(curves.links)
+    most = int(curves.link_contacts.max()) if curves.link_contacts.size else 0
+    if nlinks and t.size:
+        dt = float(t[1] - t[0]) if t.size > 1 else 1.0
+        counts = np.ma.masked_equal(curves.link_contacts.T, 0)
+        ax.imshow(
+            counts, aspect="auto", interpolation="nearest", cmap="viridis", origin="lower",
+            extent=(t[0] - dt / 2, t[-1] + dt / 2, -0.5, nlinks - 0.5), vmin=1, vmax=max(most, 1),
+        )  # fmt: skip
+        ax.set_yticks(range(nlinks), curves.links, fontsize=max(4, 8 - nlinks // 12))
+        if curves.hold_window is not None:
+            for edge in curves.hold_window:
+                ax.axvline(edge, color=HOLD_EDGE, lw=1.0, zorder=3)
+    ax.set_ylabel(contacts_label(most), fontsize=8)
+
+
 def plot_replay(result: ReplayResult, path: str | Path, *, title: str | None = None) -> Path:
     """Plot a replay: penetration, contacts per link, tracking and tip errors, drift (or slip) over time.
 
-    The hold window is shaded green, the release is a dashed green line, the moment the object was lost a
+    The hold window is shaded green (under the curves and the contacts raster, whose window edges are
+    green lines), the release is a dashed green line, the moment the object was lost a
     dotted red line and a divergence a solid red line.
 
     Args:
@@ -184,16 +243,7 @@ def plot_replay(result: ReplayResult, path: str | Path, *, title: str | None = N
     ax_pen.axhline(1.0, lw=0.7, ls="--", color="#7f8c8d")
     ax_pen.set_ylabel("hand through\nitself (mm)" if hand_only else "penetration\n(mm)", fontsize=8)
 
-    if nlinks and t.size:
-        dt = float(t[1] - t[0]) if t.size > 1 else 1.0
-        counts = np.ma.masked_equal(c.link_contacts.T, 0)
-        ax_con.imshow(
-            counts, aspect="auto", interpolation="nearest", cmap="viridis", origin="lower",
-            extent=(t[0] - dt / 2, t[-1] + dt / 2, -0.5, nlinks - 0.5),
-        )  # fmt: skip
-        ax_con.set_yticks(range(nlinks), c.links, fontsize=max(4, 8 - nlinks // 12))
-    most = int(c.link_contacts.max()) if c.link_contacts.size else 0
-    ax_con.set_ylabel(f"contacts per link\n(dark 1 … bright {max(most, 1)})", fontsize=8)
+    draw_contacts(ax_con, c)
 
     ax_err.plot(t, c.tracking_error * DEG, lw=1.0, color="#1f4e8c", label=CURVES["tracking_error"].label)
     ax_err.set_ylabel("tracking\nerror (°)", fontsize=8)
