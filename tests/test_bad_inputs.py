@@ -905,7 +905,8 @@ def test_earlier_row_a_mesh_without_units_asks_for_them(capsys, tmp_path):
     result = run(capsys, "build", "object", path)
     assert (result.code, result.first) == (
         1,
-        f"handsim: error: {path}: give the mesh's units ('m' or 'mm'); a wrong guess scales it 1000×",
+        f"handsim: error: {path}: give the mesh's units (--units m or --units mm); a wrong guess scales it "
+        "1000×",
     )
 
 
@@ -914,8 +915,8 @@ def test_earlier_row_a_mesh_in_mm_read_as_metres_suggests_mm(capsys, tmp_path):
     result = run(capsys, "build", "object", path, "--units", "m")
     assert (result.code, result.first) == (
         1,
-        f"handsim: error: {path}: the object is 50 m across in units='m', outside the plausible 5 mm – "
-        "0.6 m; are the coordinates in mm? (pass units='mm')",
+        f"handsim: error: {path}: the object is 50 m across with --units m, outside the plausible 5 mm – "
+        "0.6 m; are the coordinates in mm? (give --units mm)",
     )
 
 
@@ -1463,3 +1464,70 @@ def test_row_utf16_or_nul_bytes_in_a_recording_say_not_a_utf8_text_file(capsys, 
     path = write(tmp_path / REC, data)
     result = run(capsys, "inspect", path)
     assert (result.code, result.first) == (1, f"handsim: error: {path}{after_path}")
+
+
+def test_row_mano_betas_scaled_a_millionfold_are_refused_naming_the_side_the_beta_and_its_value(
+    capsys, tmp_path
+):
+    betas = np.linspace(-1.0, 1.0, 10) * 1e6
+    mano, _, models = arctic_files(tmp_path, right_shape=betas)
+    result = run(capsys, "replay", mano, "--mano-dir", models)
+    assert (result.code, result.first) == (
+        1,
+        f"handsim: error: {mano} [right.shape]: beta 0 is -1e+06 (10 beyond the limit); MANO betas are in "
+        "standard deviations of its shape space and fitted hands lie within a few units of 0, expected "
+        "|beta| ≤ 10: a corrupted or mis-scaled shape",
+    )
+    assert result.out == []  # refused before any model is built or replayed
+
+
+def test_row_a_rot_cut_to_10_frames_names_rot_not_pose(capsys, tmp_path):
+    from tests.mano_fixtures import mano_hand_params, write_arctic_mano_npy
+
+    mano, _, models = arctic_files(tmp_path)
+    right = mano_hand_params(12, 1)
+    right["rot"] = right["rot"][:10]
+    write_arctic_mano_npy(mano, right, mano_hand_params(12, 2, side="left"))
+    result = run(capsys, "inspect", mano, "--mano-dir", models)
+    assert (result.code, result.first) == (
+        1,
+        f"handsim: error: {mano} [right.rot]: 10 frames, but right.pose and right.trans have 12; expected "
+        "one row per frame in every field (a truncated or misaligned field)",
+    )
+
+
+def test_row_a_mesh_over_the_face_limit_is_announced_before_coacd_starts(capsys, tmp_path, monkeypatch):
+    import handsim.builders.decompose as decompose
+    from handsim.builders.decomposition_types import DecompositionError
+
+    mesh = tmp_path / "ring.stl"
+    ring = trimesh.creation.annulus(r_min=0.03, r_max=0.05, height=0.02, sections=16)
+    ring.export(mesh)
+    started = []
+
+    def no_coacd(mesh, params, name, progress):  # the warning must come first; CoACD never runs here
+        started.append(name)
+        raise DecompositionError(f"{name}: CoACD not run in this test")
+
+    monkeypatch.setattr(decompose, "COACD_FACE_WARNING", len(ring.faces) - 1)
+    monkeypatch.setattr(decompose, "run_worker", no_coacd)
+    monkeypatch.setenv("HANDSIM_CACHE_DIR", str(tmp_path / "cache"))
+    result = run(capsys, "build", "object", mesh, "--units", "m")
+    assert (result.code, result.first) == (
+        1,
+        f"handsim: warning: {mesh}: {len(ring.faces)} faces, more than the {len(ring.faces) - 1} beyond "
+        "which CoACD may run until its 600 s timeout; decimate the mesh first to decompose it in seconds",
+    )
+    assert started == [str(mesh)]
+
+
+def test_row_a_mass_out_of_range_on_the_command_line_suggests_force_not_force_true(capsys, tmp_path):
+    path = tmp_path / "crate.obj"
+    trimesh.creation.box(extents=(0.5, 0.5, 0.5)).export(path)
+    result = run(capsys, "build", "object", path, "--units", "m")
+    assert (result.code, result.first) == (
+        1,
+        "handsim: error: object 'crate' mass 125 kg (1.25e+05 cm³ at 1000 kg/m³) is outside the plausible "
+        "0.001 to 23 kg (household objects a hand grasps), see docs/objects.md; give --force to use it "
+        "anyway",
+    )

@@ -95,9 +95,9 @@ def test_build_object_from_mesh_file_needs_units(capsys, tmp_path):
     path = tmp_path / "block.stl"
     trimesh.creation.box((40.0, 30.0, 20.0)).export(path)
     assert main(["build", "object", str(path)]) == 1
-    assert "give the mesh's units ('m' or 'mm')" in capsys.readouterr().err
+    assert "give the mesh's units (--units m or --units mm)" in capsys.readouterr().err
     assert main(["build", "object", str(path), "--units", "m"]) == 1
-    assert "are the coordinates in mm? (pass units='mm')" in capsys.readouterr().err
+    assert "are the coordinates in mm? (give --units mm)" in capsys.readouterr().err
     assert main(["build", "object", str(path), "--units", "mm", "--density", "500"]) == 0
     assert "mass       12.0 g" in capsys.readouterr().out
 

@@ -16,6 +16,8 @@ split into convex pieces. :func:`decompose` does that:
   deleted, rebuilt and reported in :attr:`Decomposition.notes`. Only successes are cached, so an entry
   exists only for a mesh found concave: the cache is read before the convexity test, and a hit computes
   no hull (nor imports trimesh and SciPy).
+- A mesh of more than :data:`COACD_FACE_WARNING` faces is decomposed all the same, after a warning on
+  stderr (and a note) naming the mesh and its face count: CoACD may then run until its timeout.
 - Every hull returned is recomputed by qhull (consistent outward faces) and has at least 4
   non-coplanar vertices, as MuJoCo requires; flat pieces from CoACD are dropped with a note.
 
@@ -29,6 +31,7 @@ The settings and result types are in :mod:`handsim.builders.decomposition_types`
 from __future__ import annotations
 
 import contextlib
+import sys
 from pathlib import Path
 
 import numpy as np
@@ -50,6 +53,13 @@ rule is applied (an entry exists only for a mesh the rule found concave), and it
 rule: a change of the rule (this tolerance, :func:`_hull_if_convex`) must bump
 :data:`~handsim.builders.hull_cache.CACHE_FORMAT_VERSION` and rebuild the bundled cache
 (``scripts/bundle_catalog_hulls.py``), or cached decompositions would outlive it."""
+
+COACD_FACE_WARNING = 200_000
+"""Face count beyond which :func:`decompose` warns before starting CoACD. CoACD's time grows with the face
+count (its preprocessing and every cut visit all faces): a 2.1M-face scan ran out the default 600 s
+timeout. Grasped household objects need a few thousand to some tens of thousands of faces for contact; a
+larger mesh is usually an unsimplified scan, better decimated first (e.g. trimesh's
+``simplify_quadric_decimation``) than decomposed for minutes."""
 
 
 def decompose(
@@ -93,6 +103,14 @@ def decompose(
     if hull is not None:
         return Decomposition(hulls=(hull,), key=key, skipped="mesh is convex")
 
+    faces = len(mesh.faces)
+    if faces > COACD_FACE_WARNING:
+        note = (
+            f"{name}: {faces} faces, more than the {COACD_FACE_WARNING} beyond which CoACD may run until its "
+            f"{params.timeout_s:g} s timeout; decimate the mesh first to decompose it in seconds"
+        )
+        print(f"handsim: warning: {note}", file=sys.stderr, flush=True)
+        notes.append(note)
     raw, seconds = run_worker(mesh, params, name, progress)
     hulls, dropped = _usable_hulls(raw, name)
     if path is not None:

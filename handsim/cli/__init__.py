@@ -18,7 +18,7 @@ import threading
 from collections.abc import Sequence
 
 from handsim.cli import build, catalog, correct, demo, export, replay, report, trajectory
-from handsim.cli._common import EXIT_INTERRUPTED, Parser, range_problem
+from handsim.cli._common import EXIT_INTERRUPTED, Parser, cli_wording, range_problem
 from handsim.errors import HandsimError
 from handsim.thread_setting import threads_setting
 from handsim.version import __version__
@@ -49,6 +49,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     """Run the ``handsim`` command; returns the process exit code."""
     main_thread = threading.current_thread() is threading.main_thread()
     previous = signal.signal(signal.SIGTERM, _terminate) if main_thread else None  # a killed job: as Ctrl-C
+    args = None
     try:
         parser = build_parser()
         args = parser.parse_args(argv)
@@ -60,7 +61,7 @@ def main(argv: Sequence[str] | None = None) -> int:
             args.command_parser.error(problem)  # the problem first, then the usage, on stderr: exit 2
         return args.func(args)
     except HandsimError as exc:
-        print(f"handsim: error: {exc}", file=sys.stderr)
+        print(f"handsim: error: {cli_wording(str(exc), args)}", file=sys.stderr)
         return 1
     except BrokenPipeError:  # stdout closed early (`handsim … | head`): stop quietly, as other tools do
         os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())  # no second error at exit

@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import argparse
 import math
+import re
 import sys
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, NoReturn, Protocol
@@ -49,6 +50,42 @@ class Parser(argparse.ArgumentParser):
     def error(self, message: str) -> NoReturn:
         """Print ``PROG: error: MESSAGE`` and the usage to stderr and exit with status 2."""
         self.exit(2, f"{self.prog}: error: {message}\n{self.format_usage()}")
+
+
+PYTHON_WORDING: tuple[tuple[str, re.Pattern[str], str], ...] = (
+    (
+        "units",
+        re.compile(r"give the mesh's units \('m' or 'mm'\)"),
+        "give the mesh's units (--units m or --units mm)",
+    ),
+    ("units", re.compile(r"\bin units='(mm?)'"), r"with --units \1"),
+    ("units", re.compile(r"\(pass units='(mm?)'\)"), r"(give --units \1)"),
+    ("force", re.compile(r"\bpass force=True\b"), "give --force"),
+)
+"""Library phrases that name a Python keyword argument, each with the command option it stands for: the
+option's ``dest``, the phrase, and its command-line wording (:func:`cli_wording`)."""
+
+
+def cli_wording(message: str, args: argparse.Namespace | None) -> str:
+    """``message`` with the Python keyword arguments it suggests named as the command's options instead.
+
+    The library words its errors for Python callers (``pass units='mm'``, ``pass force=True``); a user of the
+    command line typed ``--units`` or ``--force``. A phrase is reworded only when the command has that
+    option, so a command without it keeps the library's wording.
+
+    Args:
+        message: The error message.
+        args: The parsed arguments of the command that failed, or None before parsing.
+
+    Returns:
+        The message as the command line should show it.
+    """
+    if args is None:
+        return message
+    for dest, phrase, wording in PYTHON_WORDING:
+        if hasattr(args, dest):
+            message = phrase.sub(wording, message)
+    return message
 
 
 def usage_error(command: str, message: str) -> int:

@@ -128,8 +128,9 @@ def _read_tzionas(path: Path) -> Trajectory:
     """A hand ``.MOTION`` with the sequence's object tracks when its ``Configs/NN`` lists them."""
     if not path.stem.startswith("Model_Hand"):
         raise InputFileError(
-            f"{path}: not a hand motion (Model_Hand_*.MOTION); object motions are read with "
-            "handsim.io.tzionas.motion.read_tzionas_object_motion"
+            f"{path}: not a hand motion (Model_Hand_*.MOTION); give the sequence's Model_Hand_*.MOTION, "
+            "whose replay brings the objects of its Configs/NN (in Python, object motions alone are read "
+            "with handsim.io.tzionas.motion.read_tzionas_object_motion)"
         )
     if (config_dir_of(path.parent) / "MODELS_INFO.txt").is_file():
         return read_tzionas_sequence(path.parent, hand=path.stem)

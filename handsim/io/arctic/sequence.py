@@ -23,6 +23,8 @@ every message names the file, the field, the frame and what was expected):
   (objects) is a corrupted frame (e.g. a ×1000 spike);
 * speed: a hand or the object moving faster than :data:`MAX_HAND_SPEED` / :data:`MAX_OBJECT_SPEED` between
   two frames (at :data:`ARCTIC_FPS`) is a jump no human motion makes;
+* shape: a beta beyond :data:`MANO_BETA_LIMIT` is a corrupted or mis-scaled shape;
+* frame counts: per-frame fields of different lengths name the field that differs from the others;
 * the two hands holding identical data (one hand's data copied into the other's entry) is refused.
 """
 
@@ -86,7 +88,17 @@ MAX_OBJECT_SPEED = 10.0
 ARTICULATION_LIMIT_RAD = 2.0 * math.pi
 """Largest plausible |articulation| in radians; larger values mean degrees."""
 
+MANO_BETA_LIMIT = 10.0
+"""Largest plausible |MANO shape coefficient| (beta). MANO's shape space is PCA-whitened: betas are in
+standard deviations of the training scans, so fitted hands lie within a few units of 0 and 10 standard
+deviations is already far beyond any human hand. A larger beta is a corrupted or mis-scaled file, and
+building it gives a hand metres across whose replay diverges without naming the betas."""
+
 MANO_FIELDS = ("rot", "pose", "trans", "shape", "fitting_err")
+
+PER_FRAME_FIELDS = ("rot", "pose", "trans")
+"""The required MANO fields holding one row per frame; their common length is the frame count that
+``shape`` (when given per frame) and ``fitting_err`` are checked against."""
 
 
 @dataclass(frozen=True)
@@ -265,10 +277,54 @@ def _load_hands(path: Path) -> dict[str, dict]:
     return data
 
 
+def _check_frame_counts(path: Path, hand: str, entry: dict) -> None:
+    """Refuse per-frame fields of different lengths, naming the one that differs from the others.
+
+    Fields that are not sized sequences are left to the per-field checks that follow.
+    """
+    lengths: dict[str, int] = {}
+    for name in PER_FRAME_FIELDS:
+        value = entry.get(name)
+        if isinstance(value, np.ndarray) and value.ndim >= 1:
+            lengths[name] = value.shape[0]
+        elif isinstance(value, (list, tuple)):
+            lengths[name] = len(value)
+    if len(set(lengths.values())) < 2:
+        return
+    counts = list(lengths.values())
+    common = max(counts, key=lambda n: (counts.count(n), n))
+    odd = next(name for name, n in lengths.items() if n != common)
+    others = [f"{hand}.{name}" for name, n in lengths.items() if n == common]
+    listed = others[0] if len(others) == 1 else ", ".join(others[:-1]) + " and " + others[-1]
+    raise FormatError(
+        path,
+        f"{lengths[odd]} frames, but {listed} {'has' if len(others) == 1 else 'have'} {common}; expected "
+        "one row per frame in every field (a truncated or misaligned field)",
+        field=f"{hand}.{odd}",
+    )
+
+
+def _check_betas(path: Path, field: str, betas: np.ndarray, axes: tuple[str, ...]) -> None:
+    """Refuse a beta beyond :data:`MANO_BETA_LIMIT`, naming its index (and frame) and value."""
+    far = np.abs(betas) > MANO_BETA_LIMIT
+    if not far.any():
+        return
+    index = tuple(int(i) for i in np.argwhere(far)[0])
+    where = ", ".join(f"{axis} {i}" for axis, i in zip(axes, index, strict=True))
+    raise FormatError(
+        path,
+        f"{where} is {float(betas[index]):.4g} ({int(far.sum())} beyond the limit); MANO betas are in "
+        "standard deviations of its shape space and fitted hands lie within a few units of 0, expected "
+        f"|beta| ≤ {MANO_BETA_LIMIT:g}: a corrupted or mis-scaled shape",
+        field=field,
+    )
+
+
 def _hand(path: Path, hand: str, entry: dict, fps: float, sha256: str) -> MANOSequence:
     missing = [k for k in MANO_FIELDS[:4] if k not in entry]
     if missing:
         raise FormatError(path, f"missing {missing}; a MANO entry has {list(MANO_FIELDS)}", field=hand)
+    _check_frame_counts(path, hand, entry)
     rot = _float_field(path, f"{hand}.rot", entry["rot"], (None, 3))
     n = rot.shape[0]
     if n == 0:
@@ -286,11 +342,13 @@ def _hand(path: Path, hand: str, entry: dict, fps: float, sha256: str) -> MANOSe
     raw_shape = entry["shape"]
     if isinstance(raw_shape, np.ndarray) and raw_shape.ndim == 2:
         shapes = _float_field(path, f"{hand}.shape", raw_shape, (n, 10), ("frame", "beta"))
+        _check_betas(path, f"{hand}.shape", shapes, ("frame", "beta"))
         spread = float(np.ptp(shapes, axis=0).max())
         shape = shapes.mean(axis=0)
         notes.append(f"{hand}.shape given per frame; their mean used (largest spread {spread:.1e})")
     else:
         shape = _float_field(path, f"{hand}.shape", raw_shape, (10,), ("beta",))
+        _check_betas(path, f"{hand}.shape", shape, ("beta",))
     fitting_err = None
     if entry.get("fitting_err") is not None:
         fitting_err = _fitting_err(path, f"{hand}.fitting_err", entry["fitting_err"], n)
@@ -365,7 +423,8 @@ def read_arctic_mano(path: str | Path, hand: str = "right", *, fps: float = ARCT
             missing field, a field of the wrong type, dtype or shape (pose not 45 values per frame;
             fitting_err not one number per frame), non-finite values, translations that look like
             millimetres, a frame outside the capture volume or a jump faster than :data:`MAX_HAND_SPEED`,
-            hands of different lengths or identical hands. The message names the file and the field
+            a beta beyond :data:`MANO_BETA_LIMIT`, per-frame fields of different lengths, hands of
+            different lengths or identical hands. The message names the file and the field
             (``right.pose``).
         HandsimError: ``hand`` is neither ``"right"`` nor ``"left"``, or a non-positive ``fps``.
     """
