@@ -159,15 +159,14 @@ def test_every_graspdb_file_kind_is_a_trial_input_or_has_its_exact_reason(tmp_pa
         "02_ex01-raw-003-grasp-su01_annot-.txt": "GraspDB14 phase annotation of "
         "02_ex01-raw-003-grasp-su01.txt, which is not replayed (its entry says why)",
         "su04_calib-raw-1.txt": (
-            "CyberGlove calibration sequence (raw counts): estimate a calibration from it to replay -raw- "
-            "recordings (handsim.glove.estimate_calibration)"
+            "calibration sequence (use `handsim calibrate`): CyberGlove raw counts; the calibration "
+            "estimated from it replays -raw- recordings"
         ),
-        "su04_calib-rad-1.txt": "CyberGlove calibration sequence in radians (joint angles, already "
-        "calibrated): not read; a calibration is estimated from the raw-count sequence, and -rad- "
-        "recordings need none",
+        "su04_calib-rad-1.txt": "calibration sequence, in radians (already calibrated): not read; `handsim "
+        "calibrate` takes the raw-count sequence, and -rad- recordings need none",
         "su04_calib-.txt": (
-            "CyberGlove calibration sequence (its name says neither -rad- nor -raw-): estimate a calibration "
-            "from it if it holds raw counts (handsim.glove.estimate_calibration; reading it refuses angles)"
+            "calibration sequence (use `handsim calibrate` if it holds raw counts; its name says neither "
+            "-rad- nor -raw-, and reading it refuses angles)"
         ),
         "img123.jpg": "GraspDB14 image of an actor's hand, rectified as img123-rect.jpg (spec 003 §4.1.1): "
         "not read",

@@ -51,16 +51,16 @@ _NAME_HELP = "spec 003 §4.1.2: <objID>[_<graspID>|_<actionID>]_ex<NN>-rad|raw-<
 
 _CALIBRATION = {
     "raw": (
-        "CyberGlove calibration sequence (raw counts): estimate a calibration from it to replay -raw- "
-        "recordings (handsim.glove.estimate_calibration)"
+        "calibration sequence (use `handsim calibrate`): CyberGlove raw counts; the calibration estimated "
+        "from it replays -raw- recordings"
     ),
     "rad": (
-        "CyberGlove calibration sequence in radians (joint angles, already calibrated): not read; a "
-        "calibration is estimated from the raw-count sequence, and -rad- recordings need none"
+        "calibration sequence, in radians (already calibrated): not read; `handsim calibrate` takes the "
+        "raw-count sequence, and -rad- recordings need none"
     ),
     None: (
-        "CyberGlove calibration sequence (its name says neither -rad- nor -raw-): estimate a calibration "
-        "from it if it holds raw counts (handsim.glove.estimate_calibration; reading it refuses angles)"
+        "calibration sequence (use `handsim calibrate` if it holds raw counts; its name says neither -rad- "
+        "nor -raw-, and reading it refuses angles)"
     ),
 }
 """What a ``_calib-`` file is, by the data type its name says (``filename_datatype``)."""
