@@ -497,17 +497,15 @@ def member_verdict(scene: SimScene, schedule: ControlSchedule, spec: MetricSpec)
         looks.append(int(np.searchsorted(times, times[release] + after - 1e-9)))
         after *= 2.0
 
-    def lost(qpos: np.ndarray, sensors: np.ndarray) -> bool:  # a loss so far is the loss of the whole run
-        obj = scene.layout.objects[0]
-        tracks = hold_tracks(scene, schedule, sensors)
-        released = float(times[release])
-        window = scene.setup.hold_window
-        return (
-            _placed(scene)
-            and hold_outcome(tracks, qpos[:, obj.free_qpos + 2], released, window, spec).held is False
-        )
+    height = scene.layout.objects[0].free_qpos + 2  # the object's world height in qpos
+    released = float(times[release])
 
-    qpos, sensors, _, _ = run_schedule(driver, frames=last, until=lost, checks=looks)
+    def lost(qpos: np.ndarray, sensors: np.ndarray) -> bool:  # a loss so far is the loss of the whole run
+        tracks = hold_tracks(scene, schedule, sensors)
+        return hold_outcome(tracks, qpos[:, height], released, scene.setup.hold_window, spec).held is False
+
+    until = lost if _placed(scene) else None  # an unplaced object is never lost: run to the window's end
+    qpos, sensors, _, _ = run_schedule(driver, frames=last, until=until, checks=looks)
     outcome, _ = _hold(scene, schedule, hold_tracks(scene, schedule, sensors), qpos, sensors, release, spec)
     return outcome.held, outcome.reason
 
