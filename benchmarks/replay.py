@@ -4,9 +4,10 @@ Run: python benchmarks/replay.py [--repeats N]
 
 Scenes: the Tzionas hand + cube (sequence 20, bundled), a glove + ball (the GraspDB14 power-sphere trial
 on its skeleton when ``../shared/data`` is present, else the default hand closing on the tennis ball), and
-an ARCTIC-shaped scene (:func:`handsim.sim.arctic_scene.arctic_scene`: two MANO hands of the bundled
-mean-shape model, each welded to a moving wrist, curling their fingers over a two-part box whose lid opens
-and closes, 10 s at ARCTIC's 30 fps).
+an ARCTIC-shaped scene (:func:`handsim.sim.arctic_scene.arctic_scene` on the synthetic recording of
+``benchmarks/arctic_recording.py``: two MANO hands of the bundled mean-shape model, each welded to a moving
+wrist, carry a two-part box between their palms, set it down, and one lifts its lid with its fingertips,
+10 s at ARCTIC's 30 fps).
 
 Run it from the repository root as ``PYTHONPATH=. python benchmarks/replay.py`` to time this tree's
 ``handsim`` (a script's own folder comes first on ``sys.path``, so an installed copy would win).
@@ -47,25 +48,21 @@ one environment's, worst N), ``arctic_replay_vs_raw=<ratio>`` (the ARCTIC-shaped
 from __future__ import annotations
 
 import argparse
-import math
 import os
 import statistics
-import tempfile
 import time
 from pathlib import Path
 
 import mujoco
 import numpy as np
-import trimesh
+from arctic_recording import arctic_case_scene  # benchmarks/arctic_recording.py
 from replay_inputs import ReplayInputs  # benchmarks/replay_inputs.py (scripts run from benchmarks/)
 
 from handsim.assets import TZIONAS_DIR
 from handsim.builders import build_hand, build_scene, default_hand
-from handsim.builders.arctic_objects import arctic_object
 from handsim.builders.catalog import get, get_graspdb
-from handsim.builders.mano_hand import build_mano_hand, mano_hand_skeleton
 from handsim.builders.objects import build_object
-from handsim.datatypes.trajectory import ObjectTrack, Trajectory
+from handsim.datatypes.trajectory import Trajectory
 from handsim.io import read_skeleton, read_trajectory
 from handsim.io.tzionas.objects import read_tzionas_object
 from handsim.io.tzionas.sequence import read_tzionas_sequence
@@ -123,46 +120,10 @@ def glove_case():
     return "glove + ball (default hand, synthetic)", glove_scene(hand, trajectory, ball), trajectory
 
 
-def _box_template(folder: Path) -> Path:
-    """ARCTIC's template layout (mm, canonical +y up, hinge on z): a 120 × 60 × 160 mm box and its lid."""
-    out = folder / "box"
-    out.mkdir()
-    for name, y in (("bottom", (-60.0, 0.0)), ("top", (0.0, 10.0))):
-        box = trimesh.creation.box(extents=(120.0, y[1] - y[0], 160.0))
-        box.apply_translation([-60.0, (y[0] + y[1]) / 2, 0.0])
-        box.export(out / f"{name}.obj")
-    return out
-
-
 def arctic_case():
-    """Two mean-shape MANO hands at the sides of a box, fingers curling, wrists swaying, the lid opening."""
-    n, fps = 300, 30.0
-    t = np.arange(n) / fps
-    upright = (math.cos(math.pi / 4), math.sin(math.pi / 4), 0.0, 0.0)  # canonical +y → world +z
-    track = ObjectTrack(
-        pose=np.tile([0.0, 0.0, 0.06, *upright], (n, 1)),
-        articulation=0.2 + 0.3 * (1 - np.cos(2 * np.pi * t / t[-1])),
-    )
-    columns, targets, roots, hands = [], [], {}, {}
-    for side, x in (("right", 0.17), ("left", -0.29)):
-        skeleton = mano_hand_skeleton(side=side)
-        hands[side] = build_mano_hand(side=side, root="fixed")
-        curl = 0.4 * (1 - np.cos(2 * np.pi * 0.5 * t))[:, None]
-        flexes = np.array([n.endswith("_z") and not n.startswith("thumb") for n in skeleton.dof_names])
-        targets.append(curl * flexes * (1.0 if side == "right" else -1.0))
-        columns += [f"{side}/{d}" for d in skeleton.dof_names]
-        sway = 0.01 * np.sin(2 * np.pi * 0.3 * t)
-        position = np.column_stack([x + sway, np.full(n, -0.02), 0.085 + sway])
-        roots[side] = np.column_stack([position, np.tile([1.0, 0.0, 0.0, 0.0], (n, 1))])
-    trajectory = Trajectory(
-        t, tuple(columns), np.hstack(targets), np.ones((n, len(columns)), bool), objects={"box": track},
-        hand_roots=roots,
-    )  # fmt: skip
-    with tempfile.TemporaryDirectory() as folder:
-        model = arctic_object(_box_template(Path(folder)), articulation=track.articulation)
-        box = build_object(model)
-    scene = arctic_scene(hands, trajectory, box, "box")
-    return "ARCTIC-shaped: two MANO hands + box and lid", scene, trajectory, (hands, box)
+    """Two mean-shape MANO hands carry a box, then one opens its lid (:mod:`arctic_recording`)."""
+    case = arctic_case_scene()
+    return "ARCTIC-shaped: two MANO hands + box and lid", case.scene, case.trajectory, (case.hands, case.box)
 
 
 def arctic_check_seconds(hands, trajectory, box, repeats: int) -> tuple[float, float]:

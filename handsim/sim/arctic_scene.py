@@ -221,6 +221,122 @@ def _support(
     }
 
 
+@dataclass(frozen=True)
+class _Start:
+    """The recording's frame 0 in the scene: the object's start, the world shift and the first notes."""
+
+    at_start: ObjectStart
+    world: np.ndarray
+    placed: np.ndarray
+    notes: tuple[str, ...]
+
+
+def _start(trajectory: Trajectory, obj: mujoco.MjSpec, track: str) -> _Start:
+    """The object at frame 0 and the shift putting its origin above the scene's and its lowest point at z = 0.
+
+    Raises:
+        TrajectoryError: The object's track missing.
+    """
+    if track not in trajectory.objects:
+        raise TrajectoryError(
+            f"{trajectory.source or 'trajectory'}: no object track {track!r}; "
+            f"it has {list(trajectory.objects)}"
+        )
+    recorded = trajectory.objects[track]
+    start = np.asarray(recorded.pose[0], dtype=float)
+    first = None if recorded.articulation is None else float(recorded.articulation[0])
+    at_start = object_at_start(obj, start, first)
+    lowest = float(at_start.points[:, 2].min())
+    world = np.array([-start[0], -start[1], -lowest, 1.0, 0.0, 0.0, 0.0])
+    notes = [
+        "gravity = world −z (ARCTIC's world is z-up; no axis snapped); the recording is shifted by "
+        f"{(world[:3] * 1000).round(1).tolist()} mm: the object's origin at frame 0 above the origin, the "
+        "support plane (z = 0) under its lowest point at frame 0",
+    ]
+    if first is not None and not math.isnan(at_start.angle) and at_start.angle != first:
+        notes.append(
+            f"the recorded articulation at frame 0 ({math.degrees(first):.1f}°) is outside the hinge's "
+            f"range: the object starts at {math.degrees(at_start.angle):.1f}°, its stop (drift is still "
+            "measured against the recording)"
+        )
+    return _Start(at_start, world, compose(world, start), tuple(notes))
+
+
+@dataclass(frozen=True)
+class _Checked:
+    """The scene as the checks before the run left it, and what they found."""
+
+    scene: SimScene
+    data: mujoco.MjData
+    world: _World
+    found: dict[str, Passage]
+    hinge: HingeStart | None
+
+
+def _check(
+    scene: SimScene,
+    build: tuple[Mapping[str, mujoco.MjSpec], Trajectory, mujoco.MjSpec],
+    first: _Start,
+    world: _World,
+    track: str,
+) -> _Checked:
+    """Run the checks before the run (see the module notes) and recompile the scene where they change it.
+
+    Args:
+        scene: The scene as first built.
+        build: The hands, the trajectory and the object it was built from.
+        first: The recording's frame 0 in the scene.
+        world: Its static bodies as first built.
+        track: The object's track.
+
+    Returns:
+        The checked scene with its data at frame 0 (the hinge at its settled start), the fitted world, each
+        static body's deepest recorded hand point, the hinge's start (None: no hinge or none recorded).
+    """
+    hands, trajectory, obj = build
+    data = mujoco.MjData(scene.model)
+    paths = hand_paths(scene, trajectory, data)
+    found = {p.body: p for p in passages(scene, paths, PASS_DEPTH, data)}
+    fitted = _fit_world(world, found, paths, first.at_start.com + first.world[:3])
+    data.qpos[:] = recorded_qpos(scene, trajectory, [0], clip=True)[0]
+    hinge: HingeStart | None = None
+    if scene.layout.objects[0].hinge_qpos >= 0 and trajectory.objects[track].articulation is not None:
+        hinge = settle_hinge(scene.model, data, scene.layout.objects[0])
+    excluded = {} if hinge is None else hinge.excluded
+    if fitted.notes or excluded:
+        spec = _spec(hands, trajectory, obj, first.placed, (fitted.outline, fitted.floor), excluded)
+        scene = compile_scene(spec, scene.setup)
+        data = mujoco.MjData(scene.model)
+        found = {p.body: p for p in passages(scene, paths, PASS_DEPTH, data)}
+        data.qpos[:] = recorded_qpos(scene, trajectory, [0], clip=True)[0]
+    if hinge is not None:
+        data.qpos[scene.layout.objects[0].hinge_qpos] = hinge.angle
+    return _Checked(scene, data, fitted, found, hinge)
+
+
+def _penetration_note(depths: Mapping[str, tuple[float, str, str]]) -> str:
+    """The note on each hand's starting penetration of the object."""
+    return "starting penetration (hands at their frame-0 targets, the object at its start): " + "; ".join(
+        f"{name or 'hand'} {d * 1000:.1f} mm" + (f" ({link} in {part})" if link else "")
+        for name, (d, link, part) in depths.items()
+    )
+
+
+def _found_before_run(checked: _Checked, support: dict, depths: Mapping[str, tuple[float, str, str]]) -> dict:
+    """What the checks before the run found, JSON-ready (the setup's ``checks``)."""
+    found, hinge = checked.found, checked.hinge
+    return {
+        "support": support,
+        "floor_m": checked.world.floor,
+        "passages": [_passage(p) for p in found.values()],
+        "pass_depth_mm": PASS_DEPTH * 1000.0,
+        "world_fits": all(p.depth <= PASS_DEPTH for p in found.values()),
+        "blocked": list(checked.world.blocked),
+        "hinge": None if hinge is None else hinge.to_dict(),
+        "start_penetration_mm": {name: d * 1000.0 for name, (d, _, _) in depths.items()},
+    }
+
+
 def arctic_scene(
     hands: Mapping[str, mujoco.MjSpec],
     trajectory: Trajectory,
@@ -250,87 +366,36 @@ def arctic_scene(
     Raises:
         TrajectoryError: A hand without a root pose, or the object's track missing.
     """
-    if track not in trajectory.objects:
-        raise TrajectoryError(
-            f"{trajectory.source or 'trajectory'}: no object track {track!r}; "
-            f"it has {list(trajectory.objects)}"
-        )
-    recorded = trajectory.objects[track]
-    start = np.asarray(recorded.pose[0], dtype=float)
-    first = None if recorded.articulation is None else float(recorded.articulation[0])
-    at_start = object_at_start(obj, start, first)
-    lowest = float(at_start.points[:, 2].min())
-    world = np.array([-start[0], -start[1], -lowest, 1.0, 0.0, 0.0, 0.0])
-    shift, placed = world[:3], compose(world, start)
-    notes = [
-        "gravity = world −z (ARCTIC's world is z-up; no axis snapped); the recording is shifted by "
-        f"{(world[:3] * 1000).round(1).tolist()} mm: the object's origin at frame 0 above the origin, the "
-        "support plane (z = 0) under its lowest point at frame 0",
-    ]
-    if first is not None and not math.isnan(at_start.angle) and at_start.angle != first:
-        notes.append(
-            f"the recorded articulation at frame 0 ({math.degrees(first):.1f}°) is outside the hinge's "
-            f"range: the object starts at {math.degrees(at_start.angle):.1f}°, its stop (drift is still "
-            "measured against the recording)"
-        )
-    outline, support = _support(trajectory, track, at_start, shift) if table else (None, {"kind": "none"})
+    first = _start(trajectory, obj, track)
+    notes = list(first.notes)
+    outline, support = (
+        _support(trajectory, track, first.at_start, first.world[:3]) if table else (None, {"kind": "none"})
+    )
     if "note" in support:
         notes.append(support.pop("note"))
-    fitted = _World(outline, -FLOOR_DEPTH if table else None, ())
+    world = _World(outline, -FLOOR_DEPTH if table else None, ())
     setup = SceneSetup(
-        scenario="recorded", world_from_recording=tuple(world.tolist()), object_tracks=(track,)
+        scenario="recorded", world_from_recording=tuple(first.world.tolist()), object_tracks=(track,)
     )
-    scene = compile_scene(_spec(hands, trajectory, obj, placed, (fitted.outline, fitted.floor), {}), setup)
+    scene = compile_scene(
+        _spec(hands, trajectory, obj, first.placed, (world.outline, world.floor), {}), setup
+    )
     if not checks:
         return replace(scene, setup=replace(setup, notes=tuple(notes)))
-    model, layout = scene.model, scene.layout
-    data = mujoco.MjData(model)
-    paths = hand_paths(scene, trajectory, data)
-    found = {p.body: p for p in passages(scene, paths, PASS_DEPTH, data)}
-    fitted = _fit_world(fitted, found, paths, at_start.com + shift)
-    data.qpos[:] = recorded_qpos(scene, trajectory, [0], clip=True)[0]
-    hinge: HingeStart | None = None
-    obj_layout = layout.objects[0]
-    if obj_layout.hinge_qpos >= 0 and recorded.articulation is not None:
-        hinge = settle_hinge(model, data, obj_layout)
-        notes.append(hinge.note("the object"))
-    excluded = {} if hinge is None else hinge.excluded
-    if fitted.notes or excluded:
-        world_bodies = (fitted.outline, fitted.floor)
-        scene = compile_scene(_spec(hands, trajectory, obj, placed, world_bodies, excluded), setup)
-        model, layout = scene.model, scene.layout
-        data = mujoco.MjData(model)
-        found = {p.body: p for p in passages(scene, paths, PASS_DEPTH, data)}
-        data.qpos[:] = recorded_qpos(scene, trajectory, [0], clip=True)[0]
-    notes += fitted.notes
-    if hinge is not None:
-        data.qpos[layout.objects[0].hinge_qpos] = hinge.angle
-    depths = hand_penetration(model, data, layout)
-    notes.append(
-        "starting penetration (hands at their frame-0 targets, the object at its start): "
-        + "; ".join(
-            f"{name or 'hand'} {d * 1000:.1f} mm" + (f" ({link} in {part})" if link else "")
-            for name, (d, link, part) in depths.items()
-        )
-    )
-    if outline is not None and fitted.outline is not None:
-        support["area_cm2"] = polygon_area(fitted.outline) * 1e4
-    found_before_run = {
-        "support": support,
-        "floor_m": fitted.floor,
-        "passages": [_passage(p) for p in found.values()],
-        "pass_depth_mm": PASS_DEPTH * 1000.0,
-        "world_fits": all(p.depth <= PASS_DEPTH for p in found.values()),
-        "blocked": list(fitted.blocked),
-        "hinge": None if hinge is None else hinge.to_dict(),
-        "start_penetration_mm": {name: d * 1000.0 for name, (d, _, _) in depths.items()},
-    }
+    checked = _check(scene, (hands, trajectory, obj), first, world, track)
+    if checked.hinge is not None:
+        notes.append(checked.hinge.note("the object"))
+    notes += checked.world.notes
+    depths = hand_penetration(checked.scene.model, checked.data, checked.scene.layout)
+    notes.append(_penetration_note(depths))
+    if outline is not None and checked.world.outline is not None:
+        support["area_cm2"] = polygon_area(checked.world.outline) * 1e4
     return replace(
-        scene,
+        checked.scene,
         setup=replace(
             setup,
             notes=tuple(notes),
-            start_articulation=() if hinge is None else (hinge.angle,),
-            checks=found_before_run,
+            start_articulation=() if checked.hinge is None else (checked.hinge.angle,),
+            checks=_found_before_run(checked, support, depths),
         ),
     )
