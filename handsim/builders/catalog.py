@@ -150,8 +150,7 @@ def resolve(
         mass: Total mass in kg instead of a density (the mesh may then be open).
         force: Accept a ``density`` or ``mass`` outside its documented range
             (:mod:`handsim.datatypes.physical_ranges`); checked before any file is read. The built object's
-            total
-            mass is checked again by :func:`handsim.builders.objects.prepare_object`.
+            total mass is checked again by :func:`handsim.builders.objects.prepare_object`.
 
     Returns:
         The object model.
@@ -172,6 +171,31 @@ def resolve(
     if path.is_dir():
         return arctic(path, density=density, mass=mass)
     suffix = path.suffix.lower()
+    _check_path(path, suffix)
+    if str(what) in ARCTIC_NAMES and str(what) not in names():
+        raise UnknownObjectError(
+            f"{what!r} is an ARCTIC object; ARCTIC's templates are not bundled (their licence forbids it): "
+            f"pass your template folder, e.g. arctic_data/data/meta/object_vtemplates/{what}"
+        )
+    if suffix == ".skel":
+        return _with_mass(read_tzionas_object(require_file(path)), density, mass)
+    if not suffix and path.is_file():
+        raise InputFileError(
+            f"{path}: a file without a mesh extension; handsim reads meshes {', '.join(MESH_SUFFIXES)} (give "
+            "their units), Tzionas object .SKEL files, ARCTIC template folders and catalogue names "
+            "(see `handsim catalog`)"
+        )
+    if suffix in MESH_SUFFIXES:
+        return _mesh_file_object(path, units, density, mass)
+    return _with_mass(get(str(what)), density, mass)
+
+
+def _check_path(path: Path, suffix: str) -> None:
+    """Refuse an extension handsim reads no object from, or a missing path that is no catalogue name.
+
+    Raises:
+        InputFileError: Either, naming what handsim reads (a not-found message says what kind of path).
+    """
     if suffix not in ("", ".skel", *MESH_SUFFIXES):
         raise InputFileError(
             f"{path}: unsupported mesh extension {path.suffix!r}; handsim reads meshes "
@@ -190,33 +214,28 @@ def resolve(
             f"{path}: {kind} not found; give a catalogue name (handsim catalog), a mesh file, an ARCTIC "
             "template folder (top.obj + bottom.obj, or mesh.obj + parts.json) or a Tzionas .SKEL"
         )
-    if str(what) in ARCTIC_NAMES and str(what) not in names():
-        raise UnknownObjectError(
-            f"{what!r} is an ARCTIC object; ARCTIC's templates are not bundled (their licence forbids it): "
-            f"pass your template folder, e.g. arctic_data/data/meta/object_vtemplates/{what}"
+
+
+def _mesh_file_object(
+    path: Path, units: str | None, density: float | None, mass: float | None
+) -> ObjectModel:
+    """An object from a mesh file in the given units; water's density when neither density nor mass is given.
+
+    The mesh must be watertight unless ``mass`` is given (:func:`handsim.io.mesh.read_mesh`).
+
+    Raises:
+        InputFileError: No ``units``.
+    """
+    if units is None:
+        raise InputFileError(f"{path}: give the mesh's units ('m' or 'mm'); a wrong guess scales it 1000×")
+    mesh = read_mesh(path, units, require_watertight=mass is None)
+    assumed = mass is None and density is None
+    model = mesh_object(mesh, density=DEFAULT_DENSITY if assumed else density, mass=mass)
+    if assumed:
+        model = replace(
+            model, notes=(*model.notes, f"no density or mass given; {DEFAULT_DENSITY:g} kg/m³ assumed")
         )
-    if suffix == ".skel":
-        return _with_mass(read_tzionas_object(require_file(path)), density, mass)
-    if not suffix and path.is_file():
-        raise InputFileError(
-            f"{path}: a file without a mesh extension; handsim reads meshes {', '.join(MESH_SUFFIXES)} (give "
-            "their units), Tzionas object .SKEL files, ARCTIC template folders and catalogue names "
-            "(see `handsim catalog`)"
-        )
-    if suffix in MESH_SUFFIXES:
-        if units is None:
-            raise InputFileError(
-                f"{path}: give the mesh's units ('m' or 'mm'); a wrong guess scales it 1000×"
-            )
-        mesh = read_mesh(path, units, require_watertight=mass is None)
-        assumed = mass is None and density is None
-        model = mesh_object(mesh, density=DEFAULT_DENSITY if assumed else density, mass=mass)
-        if assumed:
-            model = replace(
-                model, notes=(*model.notes, f"no density or mass given; {DEFAULT_DENSITY:g} kg/m³ assumed")
-            )
-        return model
-    return _with_mass(get(str(what)), density, mass)
+    return model
 
 
 def _with_mass(model: ObjectModel, density: float | None, mass: float | None) -> ObjectModel:

@@ -17,18 +17,26 @@ report how many samples fall outside).
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import mujoco
 import numpy as np
+import numpy.typing as npt
 from scipy.spatial import ConvexHull, QhullError
 
 from handsim.builders.geom_classes import add_geom_classes
-from handsim.builders.hand_geometry import Capsule, default_hand_mass, finger_chains, hand_geometry
+from handsim.builders.hand_geometry import (
+    Capsule,
+    HandGeometry,
+    default_hand_mass,
+    finger_chains,
+    hand_geometry,
+)
 from handsim.builders.surfaces import SKIN, Surface
 from handsim.datatypes.physical_ranges import HAND_MASS
 from handsim.datatypes.rotations import matrix_to_quat
-from handsim.datatypes.skeleton import Skeleton, mj_name
+from handsim.datatypes.skeleton import Joint, Skeleton, mj_name
 from handsim.errors import ModelError
 
 SKIN_RGBA = (0.87, 0.70, 0.60, 1.0)
@@ -158,19 +166,46 @@ def build_hand(
         HAND_MASS.check(mass, force=force)
     if collision not in ("capsules", "mesh"):
         raise ModelError(f"unknown collision option {collision!r}; expected 'capsules' or 'mesh'")
+    spec = _new_spec(name or mj_name(skeleton.name), timestep)
+    classes = _add_defaults(spec, bool(skeleton.dofs_of(skeleton.joints[0].name)), skin)
+    geometry = hand_geometry(skeleton, breadth)
+    hulls = _skinned_hulls(skeleton) if collision == "mesh" else {}
+    density = _density(skeleton, geometry, hulls, collision, mass)
+    bodies = _add_bodies(spec, skeleton, classes)
+    if collision == "capsules":
+        _add_capsule_collision(spec, skeleton, geometry, bodies, density, classes)
+    else:
+        _add_hull_collision(spec, skeleton, hulls, bodies, density, classes)
+    touching = _overlapping_hulls(hulls) if collision == "mesh" else set()
+    touching |= {(0, i) for i in geometry.palm_links if i in bodies}  # palm vs. metacarpal and proximal
+    _add_excludes(spec, skeleton, geometry.rigid_to_root, bodies, touching)
+    return spec
+
+
+def _new_spec(name: str, timestep: float) -> mujoco.MjSpec:
+    """An empty spec in radians with the hand's solver options: implicitfast, elliptic cones, impratio 10."""
     spec = mujoco.MjSpec()
     spec.compiler.degree = False
-    spec.modelname = name or mj_name(skeleton.name)
+    spec.modelname = name
     spec.option.timestep = timestep
     spec.option.integrator = mujoco.mjtIntegrator.mjINT_IMPLICITFAST
     spec.option.cone = mujoco.mjtCone.mjCONE_ELLIPTIC
     spec.option.impratio = 10.0
-    root_name = skeleton.joints[0].name
-    root_has_dofs = bool(skeleton.dofs_of(root_name))
-    classes = _add_defaults(spec, root_has_dofs, skin)
+    return spec
 
-    geometry = hand_geometry(skeleton, breadth)
-    hulls = _skinned_hulls(skeleton) if collision == "mesh" else {}
+
+def _density(
+    skeleton: Skeleton,
+    geometry: HandGeometry,
+    hulls: dict[int, ConvexHull],
+    collision: str,
+    mass: float | None,
+) -> float:
+    """The one density, kg/m³, that gives the collision geometry the hand's whole mass.
+
+    Raises:
+        ModelError: The mass or the collision geometry's volume is not positive.
+    """
     if collision == "mesh":
         total_volume = sum(hull.volume for hull in hulls.values())
     else:
@@ -178,17 +213,27 @@ def build_hand(
     total_mass = default_hand_mass(skeleton.hand_length) if mass is None else mass
     if total_mass <= 0 or total_volume <= 0:
         raise ModelError(f"hand {skeleton.name!r}: mass ({total_mass}) and volume must be positive")
-    density = total_mass / total_volume
+    return total_mass / total_volume
 
-    def to_local(index: int):
-        frame, origin = skeleton.joints[index].frame, skeleton.joints[index].position
-        return lambda p: (np.asarray(p) - origin) @ frame
 
+def _to_local(skeleton: Skeleton, index: int) -> Callable[[npt.ArrayLike], np.ndarray]:
+    """The map from world (rest pose) coordinates to the frame of joint ``index``'s body."""
+    frame, origin = skeleton.joints[index].frame, skeleton.joints[index].position
+    return lambda p: (np.asarray(p) - origin) @ frame
+
+
+def _add_bodies(
+    spec: mujoco.MjSpec, skeleton: Skeleton, classes: dict[str, mujoco.MjsDefault]
+) -> dict[int, mujoco.MjsBody]:
+    """One body per joint with children, in skeleton order, with its hinges and their actuators.
+
+    A leaf joint (a fingertip) is a site on its parent's body. Returns the bodies by joint index.
+    """
     has_children = {j.parent for j in skeleton.joints}
     bodies: dict[int, mujoco.MjsBody] = {}
     for i, joint in enumerate(skeleton.joints):
         if i not in has_children and joint.parent >= 0:  # a leaf (fingertip): a site on its parent
-            site_pos = to_local(joint.parent)(joint.position).tolist()
+            site_pos = _to_local(skeleton, joint.parent)(joint.position).tolist()
             bodies[joint.parent].add_site(name=mj_name(joint.name), pos=site_pos, size=[0.003, 0, 0])
             continue
         if joint.parent < 0:
@@ -196,65 +241,91 @@ def build_hand(
         else:
             parent = skeleton.joints[joint.parent]
             parent_body = bodies[joint.parent]
-            pos = to_local(joint.parent)(joint.position)
+            pos = _to_local(skeleton, joint.parent)(joint.position)
             rot = parent.frame.T @ joint.frame
         body = parent_body.add_body(
             name=mj_name(joint.name), pos=pos.tolist(), quat=matrix_to_quat(rot).tolist()
         )
         bodies[i] = body
         body.add_site(name=mj_name(joint.name), pos=[0.0, 0.0, 0.0], size=[0.003, 0, 0])
-        for dof in skeleton.dofs_of(joint.name):
-            cls = classes["wrist" if joint.parent < 0 else dof.kind]
-            body.add_joint(
-                cls,
-                name=dof.name,
-                type=mujoco.mjtJoint.mjJNT_HINGE,
-                axis=np.asarray(dof.axis).tolist(),
-                range=[dof.lower, dof.upper],
-            )
-            spec.add_actuator(
-                cls,
-                name=f"{dof.name}_act",
-                target=dof.name,
-                trntype=mujoco.mjtTrn.mjTRN_JOINT,
-                ctrlrange=[dof.lower, dof.upper],
-            )
+        _add_hinges(spec, body, skeleton, joint, classes)
+    return bodies
 
-    if collision == "capsules":
-        for capsule in geometry.capsules:
-            name_i = mj_name(skeleton.joints[capsule.joint].name)
-            _capsule_geoms(
-                bodies[capsule.joint],
-                capsule,
-                to_local(capsule.joint),
-                density * capsule.volume,
-                classes,
-                f"{name_i}_capsule",
-            )
-        if len(geometry.palm_vertices):
-            _add_mesh_geoms(
-                spec,
-                bodies[0],
-                "palm",
-                to_local(0)(geometry.palm_vertices),
-                density * geometry.palm_volume,
-                classes,
-            )
-    else:
-        for index, hull in hulls.items():
-            _add_mesh_geoms(
-                spec,
-                bodies[index],
-                f"{mj_name(skeleton.joints[index].name)}_hull",
-                to_local(index)(hull.points[hull.vertices]),
-                density * hull.volume,
-                classes,
-            )
 
-    touching = _overlapping_hulls(hulls) if collision == "mesh" else set()
-    touching |= {(0, i) for i in geometry.palm_links if i in bodies}  # palm vs. metacarpal and proximal
-    _add_excludes(spec, skeleton, geometry.rigid_to_root, bodies, touching)
-    return spec
+def _add_hinges(
+    spec: mujoco.MjSpec,
+    body: mujoco.MjsBody,
+    skeleton: Skeleton,
+    joint: Joint,
+    classes: dict[str, mujoco.MjsDefault],
+) -> None:
+    """A hinge per DoF of ``joint`` on its body and a position actuator whose ctrlrange is its range."""
+    for dof in skeleton.dofs_of(joint.name):
+        cls = classes["wrist" if joint.parent < 0 else dof.kind]
+        body.add_joint(
+            cls,
+            name=dof.name,
+            type=mujoco.mjtJoint.mjJNT_HINGE,
+            axis=np.asarray(dof.axis).tolist(),
+            range=[dof.lower, dof.upper],
+        )
+        spec.add_actuator(
+            cls,
+            name=f"{dof.name}_act",
+            target=dof.name,
+            trntype=mujoco.mjtTrn.mjTRN_JOINT,
+            ctrlrange=[dof.lower, dof.upper],
+        )
+
+
+def _add_capsule_collision(
+    spec: mujoco.MjSpec,
+    skeleton: Skeleton,
+    geometry: HandGeometry,
+    bodies: dict[int, mujoco.MjsBody],
+    density: float,
+    classes: dict[str, mujoco.MjsDefault],
+) -> None:
+    """Capsules per bone and the convex palm, each with its share of the mass."""
+    for capsule in geometry.capsules:
+        name_i = mj_name(skeleton.joints[capsule.joint].name)
+        _capsule_geoms(
+            bodies[capsule.joint],
+            capsule,
+            _to_local(skeleton, capsule.joint),
+            density * capsule.volume,
+            classes,
+            f"{name_i}_capsule",
+        )
+    if len(geometry.palm_vertices):
+        _add_mesh_geoms(
+            spec,
+            bodies[0],
+            "palm",
+            _to_local(skeleton, 0)(geometry.palm_vertices),
+            density * geometry.palm_volume,
+            classes,
+        )
+
+
+def _add_hull_collision(
+    spec: mujoco.MjSpec,
+    skeleton: Skeleton,
+    hulls: dict[int, ConvexHull],
+    bodies: dict[int, mujoco.MjsBody],
+    density: float,
+    classes: dict[str, mujoco.MjsDefault],
+) -> None:
+    """The convex hull of each bone's skin vertices, with its share of the mass."""
+    for index, hull in hulls.items():
+        _add_mesh_geoms(
+            spec,
+            bodies[index],
+            f"{mj_name(skeleton.joints[index].name)}_hull",
+            _to_local(skeleton, index)(hull.points[hull.vertices]),
+            density * hull.volume,
+            classes,
+        )
 
 
 def _add_mesh_geoms(

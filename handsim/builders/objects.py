@@ -34,7 +34,7 @@ from handsim.builders.geom_classes import add_geom_classes
 from handsim.builders.surfaces import CONTACT_CONDIM, OBJECT, Surface
 from handsim.datatypes.mesh import Mesh
 from handsim.datatypes.mesh_mass import mesh_mass
-from handsim.datatypes.object_model import Hinge, ObjectModel, Primitive
+from handsim.datatypes.object_model import Hinge, ObjectModel, ObjectPart, Primitive
 from handsim.datatypes.physical_ranges import DENSITY, OBJECT_MASS
 from handsim.datatypes.rotations import quat_to_matrix
 from handsim.errors import ModelError
@@ -237,52 +237,73 @@ def object_spec(
         else:
             hinge = model.hinge
             assert hinge is not None  # guaranteed by ObjectModel
-            joint = body.add_joint(
-                name="hinge",
-                type=mujoco.mjtJoint.mjJNT_HINGE,
-                axis=list(hinge.axis),
-                pos=list(hinge.pos),
-                damping=HINGE_DAMPING,
-                frictionloss=hinge_friction(hinge, prepared.mass_properties[part.name]),
-            )
-            if hinge.holds_pose:
-                joint.solref_friction = list(HOLD_SOLREF_FRICTION)
-                joint.solimp_friction = list(HOLD_SOLIMP_FRICTION)
-            if hinge.range is not None:
-                joint.limited = mujoco.mjtLimited.mjLIMITED_TRUE
-                joint.range = list(hinge.range)
-                joint.solref_limit = list(HINGE_STOP_SOLREF)
-        props = prepared.mass_properties[part.name]
-        body.explicitinertial = True
-        body.mass = props.mass
-        body.ipos = props.com.tolist()
-        i = props.inertia
-        body.fullinertia = [i[0, 0], i[1, 1], i[2, 2], i[0, 1], i[0, 2], i[1, 2]]
+            _add_hinge(body, hinge, prepared.mass_properties[part.name])
+        _set_inertia(body, prepared.mass_properties[part.name])
         prefix = "" if single else f"{part.name}_"
         _add_visual(spec, body, visual, part.mesh, f"{prefix}visual")
-        if part.primitives:
-            for k, prim in enumerate(part.primitives):
-                body.add_geom(
-                    collision,
-                    name=f"{prefix}prim_{k}",
-                    type=_PRIMITIVE_TYPES[prim.kind],
-                    size=_geom_size(prim),
-                    pos=list(prim.pos),
-                    quat=list(prim.quat),
-                )
-        else:
-            for k, hull in enumerate(prepared.decompositions[part.name].hulls):
-                name = f"{prefix}hull_{k}"
-                spec.add_mesh(
-                    name=name, uservert=hull.vertices.ravel().tolist(), userface=hull.faces.ravel().tolist()
-                )
-                body.add_geom(collision, name=name, type=mujoco.mjtGeom.mjGEOM_MESH, meshname=name)
+        _add_collision(spec, body, collision, prepared, part, prefix)
         parent = body
     if not single:
         spec.add_exclude(bodyname1=model.parts[0].name, bodyname2=model.parts[1].name)
         if model.hinge is not None and model.hinge.parts_collide:
             _add_part_pairs(spec, model.parts[0].name, model.parts[1].name, surface)
     return spec
+
+
+def _add_hinge(body: mujoco.MjsBody, hinge: Hinge, child: MassProperties) -> None:
+    """The hinge of an articulated object's second part: damped, with friction that holds it, its stops."""
+    joint = body.add_joint(
+        name="hinge",
+        type=mujoco.mjtJoint.mjJNT_HINGE,
+        axis=list(hinge.axis),
+        pos=list(hinge.pos),
+        damping=HINGE_DAMPING,
+        frictionloss=hinge_friction(hinge, child),
+    )
+    if hinge.holds_pose:
+        joint.solref_friction = list(HOLD_SOLREF_FRICTION)
+        joint.solimp_friction = list(HOLD_SOLIMP_FRICTION)
+    if hinge.range is not None:
+        joint.limited = mujoco.mjtLimited.mjLIMITED_TRUE
+        joint.range = list(hinge.range)
+        joint.solref_limit = list(HINGE_STOP_SOLREF)
+
+
+def _set_inertia(body: mujoco.MjsBody, props: MassProperties) -> None:
+    """Set a part's mass, centre of mass and full inertia explicitly (not summed from overlapping hulls)."""
+    body.explicitinertial = True
+    body.mass = props.mass
+    body.ipos = props.com.tolist()
+    i = props.inertia
+    body.fullinertia = [i[0, 0], i[1, 1], i[2, 2], i[0, 1], i[0, 2], i[1, 2]]
+
+
+def _add_collision(
+    spec: mujoco.MjSpec,
+    body: mujoco.MjsBody,
+    collision: mujoco.MjsDefault,
+    prepared: PreparedObject,
+    part: ObjectPart,
+    prefix: str,
+) -> None:
+    """A part's collision geoms: its primitives when it has them, else its convex hulls as meshes."""
+    if part.primitives:
+        for k, prim in enumerate(part.primitives):
+            body.add_geom(
+                collision,
+                name=f"{prefix}prim_{k}",
+                type=_PRIMITIVE_TYPES[prim.kind],
+                size=_geom_size(prim),
+                pos=list(prim.pos),
+                quat=list(prim.quat),
+            )
+        return
+    for k, hull in enumerate(prepared.decompositions[part.name].hulls):
+        name = f"{prefix}hull_{k}"
+        spec.add_mesh(
+            name=name, uservert=hull.vertices.ravel().tolist(), userface=hull.faces.ravel().tolist()
+        )
+        body.add_geom(collision, name=name, type=mujoco.mjtGeom.mjGEOM_MESH, meshname=name)
 
 
 def _add_part_pairs(spec: mujoco.MjSpec, parent: str, child: str, surface: Surface) -> None:

@@ -139,6 +139,21 @@ def build_scene(
         raise ModelError(f"unknown hand_root {hand_root!r}; expected one of {list(HAND_ROOT_OPTIONS)}")
     opts = options or SceneOptions()
     objs = [objects] if isinstance(objects, mujoco.MjSpec) else list(objects)
+    spec = _new_scene_spec(name, opts)
+    if table:
+        _add_table(spec, table_size, table_height)
+    _add_lights(spec.worldbody)
+    if hand is not None:
+        attach_hand(spec, hand, pos=hand_pos, quat=hand_quat, root=hand_root, options=opts)
+    _attach_objects(spec, objs, _object_poses(objs, object_poses), object_support)
+    target = np.asarray(hand_pos, dtype=float) if hand is not None else np.zeros(3)
+    _add_look_at_camera(spec, "hand_cam", target, eye=target + np.array([0.35, -0.35, 0.25]))
+    _add_look_at_camera(spec, "overview", np.zeros(3), eye=np.array([0.0, -0.9, 0.6]))
+    return spec
+
+
+def _new_scene_spec(name: str, opts: SceneOptions) -> mujoco.MjSpec:
+    """An empty scene in radians with the simulation options and an offscreen buffer for 1280 × 960 frames."""
     spec = mujoco.MjSpec()
     spec.compiler.degree = False
     spec.modelname = name
@@ -147,25 +162,32 @@ def build_scene(
     spec.visual.global_.offheight = 960
     spec.visual.headlight.ambient = [0.3, 0.3, 0.3]
     spec.visual.headlight.diffuse = [0.4, 0.4, 0.4]
-    world = spec.worldbody
+    return spec
 
-    if table:
-        half = [table_size[0] / 2, table_size[1] / 2, 0.02]
-        world.add_geom(
-            name="table", type=mujoco.mjtGeom.mjGEOM_BOX, size=half, pos=[0, 0, -half[2]],
-            rgba=list(TABLE_RGBA), friction=ENVIRONMENT.friction, priority=ENVIRONMENT.priority,
-            condim=CONTACT_CONDIM,
-        )  # fmt: skip
-        add_floor(spec, -table_height)
+
+def _add_table(spec: mujoco.MjSpec, table_size: tuple[float, float], table_height: float) -> None:
+    """The table, its top at z = 0, and the floor ``table_height`` below it."""
+    half = [table_size[0] / 2, table_size[1] / 2, 0.02]
+    spec.worldbody.add_geom(
+        name="table", type=mujoco.mjtGeom.mjGEOM_BOX, size=half, pos=[0, 0, -half[2]],
+        rgba=list(TABLE_RGBA), friction=ENVIRONMENT.friction, priority=ENVIRONMENT.priority,
+        condim=CONTACT_CONDIM,
+    )  # fmt: skip
+    add_floor(spec, -table_height)
+
+
+def _add_lights(world: mujoco.MjsBody) -> None:
+    """A key light casting shadows from the front right and a fill light from the back left."""
     world.add_light(name="key", pos=[0.4, -0.4, 1.2], dir=[-0.35, 0.35, -1.0], castshadow=True)
     world.add_light(name="fill", pos=[-0.5, 0.3, 1.0], dir=[0.5, -0.3, -1.0], castshadow=False)
 
-    if hand is not None:
-        attach_hand(spec, hand, pos=hand_pos, quat=hand_quat, root=hand_root, options=opts)
 
-    poses = _object_poses(objs, object_poses)
+def _attach_objects(
+    spec: mujoco.MjSpec, objs: list[mujoco.MjSpec], poses: list[np.ndarray], object_support: bool
+) -> None:
+    """Copies of the objects under their prefixes at their poses; welded in place if ``object_support``."""
     for prefix, obj, pose in zip(object_prefixes(len(objs)), objs, poses, strict=True):
-        frame = world.add_frame(pos=pose[:3].tolist(), quat=pose[3:].tolist())
+        frame = spec.worldbody.add_frame(pos=pose[:3].tolist(), quat=pose[3:].tolist())
         root_name = prefix + obj.worldbody.first_body().name
         spec.attach(obj.copy(), prefix=prefix, frame=frame)
         if object_support:
@@ -174,11 +196,6 @@ def build_scene(
                 name1=root_name, data=[*pose[:3].tolist(), *_AS_COMPILED_WELD[3:]],
                 solref=list(SUPPORT_SOLREF),
             )  # fmt: skip
-
-    target = np.asarray(hand_pos, dtype=float) if hand is not None else np.zeros(3)
-    _add_look_at_camera(spec, "hand_cam", target, eye=target + np.array([0.35, -0.35, 0.25]))
-    _add_look_at_camera(spec, "overview", np.zeros(3), eye=np.array([0.0, -0.9, 0.6]))
-    return spec
 
 
 def add_floor(spec: mujoco.MjSpec, height: float) -> None:

@@ -124,6 +124,38 @@ def validate_mesh(
         MeshError: Fewer than 4 vertices, no faces, non-finite vertices, face indices out of range,
             a flat or degenerate mesh, or (with ``require_watertight``) a mesh that stays open.
     """
+    v, f = _checked_arrays(vertices, faces, source)
+    mesh, notes = _repaired(v, f, source)
+    parts = separate_parts(np.asarray(mesh.vertices), np.asarray(mesh.faces))
+    if parts > 1:
+        notes.append(
+            f"the mesh has {parts} disconnected parts, apart from one another (no edge joins them and their "
+            "bounding boxes do not meet); they are simulated as one rigid object: split the file to get "
+            "separate objects"
+        )
+    if require_watertight and not mesh.is_watertight:
+        raise MeshError(
+            f"{source}: the mesh is not watertight after repair (open boundary or non-manifold edges), so "
+            "its volume and mass are undefined; close it, or give the object's mass explicitly"
+        )
+    return Mesh(
+        vertices=np.asarray(mesh.vertices, dtype=float),
+        faces=np.asarray(mesh.faces, dtype=np.int64),
+        source=source,
+        watertight=bool(mesh.is_watertight),
+        notes=tuple(notes),
+    )
+
+
+def _checked_arrays(
+    vertices: npt.ArrayLike, faces: npt.ArrayLike, source: str
+) -> tuple[np.ndarray, np.ndarray]:
+    """Vertices (V, 3) as floats and faces (F, 3) as integers, checked before any repair.
+
+    Raises:
+        MeshError: Fewer than 4 vertices, no faces, non-finite vertices, non-integer or out-of-range face
+            indices, or a flat or degenerate mesh.
+    """
     v = np.asarray(vertices, dtype=float)
     f = np.asarray(faces)
     if v.ndim != 2 or v.shape[1] != 3 or len(v) < 4:
@@ -148,7 +180,17 @@ def validate_mesh(
     singular = np.linalg.svd(centred, compute_uv=False)
     if singular[0] <= 0 or singular[-1] / singular[0] < FLATNESS_TOL:
         raise MeshError(f"{source}: the mesh is flat or degenerate (all vertices on a plane or a line)")
+    return v, f
 
+
+def _repaired(v: np.ndarray, f: np.ndarray, source: str) -> tuple[trimesh.Trimesh, list[str]]:
+    """The mesh with duplicates merged, bad faces removed, winding fixed, small holes capped, outward faces.
+
+    Returns the repaired trimesh and a note per repair made.
+
+    Raises:
+        MeshError: Fewer than 4 faces remain once the degenerate and duplicate ones are removed.
+    """
     import trimesh  # lazy: trimesh + SciPy; the Mesh type is used where no mesh operation is
 
     mesh = trimesh.Trimesh(v, f, process=False)
@@ -170,38 +212,31 @@ def validate_mesh(
         trimesh.repair.fix_winding(mesh)
         notes.append("made face winding consistent")
     if not mesh.is_watertight and mesh.is_winding_consistent:
-        loops = boundary_loops(mesh.faces)
-        if loops and all(len(loop) <= MAX_HOLE_EDGES for loop in loops):
-            capped_v, capped_f = cap_loops(mesh.vertices, mesh.faces, loops)
-            capped = trimesh.Trimesh(capped_v, capped_f, process=False)
-            if capped.is_watertight:
-                notes.append(
-                    f"filled {len(loops)} small holes (at most {MAX_HOLE_EDGES} edges each) with "
-                    f"{len(capped_f) - len(mesh.faces)} faces"
-                )
-                mesh = capped
+        mesh = _capped(mesh, notes)
     if mesh.is_watertight and mesh.volume < 0:
         trimesh.repair.fix_inversion(mesh)
         notes.append("inverted faces pointing inwards")
-    parts = separate_parts(np.asarray(mesh.vertices), np.asarray(mesh.faces))
-    if parts > 1:
-        notes.append(
-            f"the mesh has {parts} disconnected parts, apart from one another (no edge joins them and their "
-            "bounding boxes do not meet); they are simulated as one rigid object: split the file to get "
-            "separate objects"
-        )
-    if require_watertight and not mesh.is_watertight:
-        raise MeshError(
-            f"{source}: the mesh is not watertight after repair (open boundary or non-manifold edges), so "
-            "its volume and mass are undefined; close it, or give the object's mass explicitly"
-        )
-    return Mesh(
-        vertices=np.asarray(mesh.vertices, dtype=float),
-        faces=np.asarray(mesh.faces, dtype=np.int64),
-        source=source,
-        watertight=bool(mesh.is_watertight),
-        notes=tuple(notes),
-    )
+    return mesh, notes
+
+
+def _capped(mesh: trimesh.Trimesh, notes: list[str]) -> trimesh.Trimesh:
+    """The mesh with its holes capped when each has at most :data:`MAX_HOLE_EDGES` edges and that closes it.
+
+    Otherwise the mesh as it is; a capping is added to ``notes``.
+    """
+    import trimesh  # lazy: trimesh + SciPy
+
+    loops = boundary_loops(mesh.faces)
+    if loops and all(len(loop) <= MAX_HOLE_EDGES for loop in loops):
+        capped_v, capped_f = cap_loops(mesh.vertices, mesh.faces, loops)
+        capped = trimesh.Trimesh(capped_v, capped_f, process=False)
+        if capped.is_watertight:
+            notes.append(
+                f"filled {len(loops)} small holes (at most {MAX_HOLE_EDGES} edges each) with "
+                f"{len(capped_f) - len(mesh.faces)} faces"
+            )
+            return capped
+    return mesh
 
 
 def principal_extents(vertices: npt.ArrayLike) -> np.ndarray:

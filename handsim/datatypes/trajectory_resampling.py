@@ -204,26 +204,72 @@ def resample(trajectory: Trajectory, rate_hz: float, *, method: ResampleMethod =
     if method not in RESAMPLE_METHODS:
         raise ValueError(f"unknown resampling method {method!r}; methods are {list(RESAMPLE_METHODS)}")
     times = np.asarray(trajectory.times, dtype=float)
-    n = times.shape[0]
     t = uniform_times(float(times[0]), float(times[-1]), rate)
-    m = t.shape[0]
     i, j, w = _bracket(times, t)
-    prev = np.clip(np.searchsorted(times, t, side="right") - 1, 0, n - 1)
-
+    prev = np.clip(np.searchsorted(times, t, side="right") - 1, 0, times.shape[0] - 1)
     x = np.asarray(trajectory.targets, dtype=float)
     known = np.asarray(trajectory.valid, dtype=bool) & np.isfinite(x)
+    valid = _output_valid(known, i, j, w)
+    root, hand_roots = _resampled_roots(trajectory, times, t)
+    phases, dropped = _map_phases(trajectory.phases, times, t)
+    intervals = _Intervals.of(times)
+    notes = [
+        _resample_note(trajectory, intervals.gaps, t.shape[0], rate, method),
+        *_gap_notes(trajectory, intervals, rate),
+        *_loss_notes(valid, known, dropped, rate),
+    ]
+    new = replace(
+        trajectory,
+        times=t,
+        targets=_resampled_targets(times, x, known, t, (i, j, w)),
+        valid=valid,
+        switch=None if trajectory.switch is None else np.asarray(trajectory.switch)[prev].copy(),
+        root_pose=root,
+        hand_roots=hand_roots,
+        channels={name: np.asarray(v)[prev].copy() for name, v in trajectory.channels.items()},
+        filled=_resampled_filled(trajectory.filled, i, j, w),
+        phases=phases,
+        objects=_resampled_objects(trajectory.objects, times, t, (i, j, w)),
+        notes=(*trajectory.notes, *notes),
+    )
+    return ResampleResult(
+        trajectory=new, largest_gap_s=intervals.largest, largest_gap_at_s=intervals.at, notes=tuple(notes)
+    )
+
+
+def _resampled_targets(
+    times: np.ndarray,
+    x: np.ndarray,
+    known: np.ndarray,
+    t: np.ndarray,
+    bracket: tuple[np.ndarray, np.ndarray, np.ndarray],
+) -> np.ndarray:
+    """Targets at times ``t``: complete columns interpolated at once, the others between valid samples."""
+    i, j, w = bracket
     complete = np.flatnonzero(known.all(axis=0))
-    targets = np.empty((m, x.shape[1]))
+    targets = np.empty((t.shape[0], x.shape[1]))
     targets[:, complete] = _lerp(x[np.ix_(i, complete)], x[np.ix_(j, complete)], w)
     for c in np.flatnonzero(~known.all(axis=0)):
         targets[:, c] = _resample_column(times, x[:, c], known[:, c], t)
-    valid = _output_valid(known, i, j, w)
-    filled = None
-    if trajectory.filled is not None:
-        f = np.asarray(trajectory.filled, dtype=bool)
-        wc = w[:, None]
-        filled = (f[i] & (wc < 1)) | (f[j] & (wc > 0))
+    return targets
 
+
+def _resampled_filled(
+    filled: np.ndarray | None, i: np.ndarray, j: np.ndarray, w: np.ndarray
+) -> np.ndarray | None:
+    """The output samples that interpolate a filled input sample (with a non-zero weight), or None."""
+    if filled is None:
+        return None
+    f = np.asarray(filled, dtype=bool)
+    wc = w[:, None]
+    return (f[i] & (wc < 1)) | (f[j] & (wc > 0))
+
+
+def _resampled_roots(
+    trajectory: Trajectory, times: np.ndarray, t: np.ndarray
+) -> tuple[np.ndarray | None, dict[str, np.ndarray]]:
+    """The root pose and each hand's root pose at times ``t`` (positions interpolated, slerp)."""
+    n = times.shape[0]
     root = None
     if trajectory.root_pose is not None:
         root = _resample_pose(times, np.asarray(trajectory.root_pose, dtype=float), np.ones(n, bool), t)
@@ -231,9 +277,20 @@ def resample(trajectory: Trajectory, rate_hz: float, *, method: ResampleMethod =
         name: _resample_pose(times, np.asarray(pose, dtype=float), np.ones(n, bool), t)
         for name, pose in trajectory.hand_roots.items()
     }
+    return root, hand_roots
 
-    objects: dict[str, ObjectTrack] = {}
-    for name, track in trajectory.objects.items():
+
+def _resampled_objects(
+    objects: dict[str, ObjectTrack],
+    times: np.ndarray,
+    t: np.ndarray,
+    bracket: tuple[np.ndarray, np.ndarray, np.ndarray],
+) -> dict[str, ObjectTrack]:
+    """Each object's pose and articulation at times ``t``, between its valid and finite samples."""
+    i, j, w = bracket
+    n = times.shape[0]
+    out: dict[str, ObjectTrack] = {}
+    for name, track in objects.items():
         pose = np.asarray(track.pose, dtype=float)
         ok = np.ones(n, bool) if track.valid is None else np.asarray(track.valid, dtype=bool)
         ok = ok & np.all(np.isfinite(pose), axis=1)
@@ -241,41 +298,73 @@ def resample(trajectory: Trajectory, rate_hz: float, *, method: ResampleMethod =
         if track.articulation is not None:
             a = np.asarray(track.articulation, dtype=float)
             art = _resample_column(times, a, ok & np.isfinite(a), t)
-        objects[name] = ObjectTrack(
+        out[name] = ObjectTrack(
             pose=_resample_pose(times, pose, ok, t),
             articulation=art,
             valid=None if track.valid is None and ok.all() else _output_valid(ok, i, j, w),
         )
+    return out
 
-    phases, dropped = _map_phases(trajectory.phases, times, t)
-    gaps = np.diff(times)
-    k = int(np.argmax(gaps)) if n > 1 else 0
-    gap = float(gaps[k]) if n > 1 else 0.0
-    gap_at = float(times[k])
-    period = float(np.median(gaps)) if n > 1 else 0.0
 
+@dataclass(frozen=True)
+class _Intervals:
+    """The intervals between input samples: all of them, the largest, where it starts, the median (s)."""
+
+    gaps: np.ndarray
+    frame: int
+    largest: float
+    at: float
+    period: float
+
+    @classmethod
+    def of(cls, times: np.ndarray) -> _Intervals:
+        """The intervals of the input times (the largest and median 0 for a single sample)."""
+        n = times.shape[0]
+        gaps = np.diff(times)
+        k = int(np.argmax(gaps)) if n > 1 else 0
+        gap = float(gaps[k]) if n > 1 else 0.0
+        period = float(np.median(gaps)) if n > 1 else 0.0
+        return cls(gaps, k, gap, float(times[k]), period)
+
+
+def _resample_note(trajectory: Trajectory, gaps: np.ndarray, m: int, rate: float, method: str) -> str:
+    """What was resampled to what: sample counts, rates, the input's spacing and the rules applied."""
+    n = gaps.shape[0] + 1
     regular = n >= 2 and float(gaps.max() - gaps.min()) <= 1e-9 * max(1.0, float(gaps.max()))
     if regular or n < 2:
         spacing = "regular"
     else:
         spacing = f"intervals {gaps.min() * 1e3:.1f}–{gaps.max() * 1e3:.1f} ms"
-    notes = [
+    return (
         f"resampled {n} samples ({trajectory.mean_rate:.2f} Hz mean, {spacing}) to {m} samples at "
         f"{rate:g} Hz by {method} interpolation (targets between valid samples; an output sample is valid "
         "only where its bracketing input samples are; quaternions by slerp; switch and channels hold the "
         "previous sample)"
-    ]
+    )
+
+
+def _gap_notes(trajectory: Trajectory, intervals: _Intervals, rate: float) -> list[str]:
+    """Notes on a gap of more than :data:`GAP_FACTOR` median intervals and on downsampling's aliasing."""
+    n = intervals.gaps.shape[0] + 1
+    gap, period = intervals.largest, intervals.period
+    notes = []
     if n > 1 and gap > GAP_FACTOR * period:
         notes.append(
             f"largest gap between input samples: {gap * 1e3:.1f} ms ({gap / period:.2f} × the median "
-            f"interval, {period * 1e3:.1f} ms), from frame {k} at {gap_at:.4f} s ({gap * rate:.2f} output "
-            "periods)"
+            f"interval, {period * 1e3:.1f} ms), from frame {intervals.frame} at {intervals.at:.4f} s "
+            f"({gap * rate:.2f} output periods)"
         )
     if n > 1 and rate < trajectory.mean_rate:
         notes.append(
             f"downsampled without low-pass filtering: motion faster than {rate / 2:g} Hz (half the new "
             "rate) aliases"
         )
+    return notes
+
+
+def _loss_notes(valid: np.ndarray, known: np.ndarray, dropped: list[str], rate: float) -> list[str]:
+    """Notes on the output samples made invalid by invalid inputs and on phases too short to keep."""
+    notes = []
     invalid_out = int((~valid).sum())
     if invalid_out:
         notes.append(
@@ -284,19 +373,4 @@ def resample(trajectory: Trajectory, rate_hz: float, *, method: ResampleMethod =
         )
     if dropped:
         notes.append(f"phases holding no output frame at {rate:g} Hz were dropped: {', '.join(dropped)}")
-
-    new = replace(
-        trajectory,
-        times=t,
-        targets=targets,
-        valid=valid,
-        switch=None if trajectory.switch is None else np.asarray(trajectory.switch)[prev].copy(),
-        root_pose=root,
-        hand_roots=hand_roots,
-        channels={name: np.asarray(v)[prev].copy() for name, v in trajectory.channels.items()},
-        filled=filled,
-        phases=phases,
-        objects=objects,
-        notes=(*trajectory.notes, *notes),
-    )
-    return ResampleResult(trajectory=new, largest_gap_s=gap, largest_gap_at_s=gap_at, notes=tuple(notes))
+    return notes

@@ -7,6 +7,10 @@ episode. The dataset is written under Minari's datasets folder (``MINARI_DATASET
 layout. It is built aside and moved into place when complete (:mod:`handsim.export.staging`), so a killed
 export leaves no part of a dataset and an interrupted ``--overwrite`` keeps the dataset it would replace.
 
+An episode's observations are the environment's (``metadata["handsim"]["observation_names"]``), its
+actions the absolute joint targets applied (not the environment's residuals), its rewards and ``infos``
+the environment's, its episode metadata the trial and the record's plausibility numbers.
+
 The environment cannot be recreated from an id alone (its scene is built from the trial's files), so the
 dataset has no ``env_spec``: :func:`recover_replay_env` rebuilds an episode's environment from the trial
 stored in the episode's metadata.
@@ -22,10 +26,11 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from handsim.envs.replay_env import ReplayEnv
-from handsim.export.episode import EpisodeLayout, ReplayedEpisode, replay_config
+from handsim.export.episode import EpisodeLayout, ReplayedEpisode
 from handsim.export.episode_replays import EpisodeReplays, Outcome
 from handsim.export.errors import ExportError, MissingExtraError, RecordMismatchError
 from handsim.export.minari_writer import MinariWriter, check_layouts
+from handsim.export.record_checks import replay_config
 from handsim.export.run_records import read_run_records, select_records, skip_entry
 from handsim.export.staging import DatasetStage
 from handsim.runner.trial_record import sha256_file
@@ -94,18 +99,12 @@ def export_minari(
     on_note: Callable[[str], None] | None = None,
     command: Sequence[str] | None = None,
 ) -> minari.MinariDataset:
-    """Write the replayed trials of a dataset run as a Minari dataset.
+    """Write the replayed trials of a dataset run as a Minari dataset, one episode per trial.
 
-    Each exported trial is one episode, in the order of the trial ids: its observations are the
-    environment's (``metadata["handsim"]["observation_names"]``), its actions the absolute joint targets
-    applied (not the environment's residuals), its rewards and ``infos`` the environment's, its episode
-    metadata the trial and the record's plausibility numbers.
-
-    The dataset appears whole or not at all, even if the process is killed: it is built in a staging
-    folder and moved into place when complete (:mod:`handsim.export.staging`); a dataset it replaces stays
-    in place until then. Nothing is written unless every exported trial reproduces its record, and every
-    trial is loaded and its layout compared before any is replayed (when more than one is selected). One
-    export per dataset id runs at a time.
+    Episodes are in the order of the trial ids and hold what this module's docstring lists. Nothing is
+    written unless every exported trial reproduces its record, and every trial is loaded and its layout
+    compared before any is replayed (when more than one is selected). One export per dataset id runs at a
+    time.
 
     Args:
         out_dir: The folder ``handsim report DATASET -o OUT`` wrote (with ``records.jsonl``).
@@ -143,45 +142,88 @@ def export_minari(
         RecordsError: A line of it is not a record of this handsim's schema.
     """
     minari = require_minari()
-    from minari.storage.datasets_root_dir import get_dataset_path  # lazy: optional extra handsim[minari]
-
-    check_dataset_id(dataset_id)
-    if workers < 1:
-        raise ExportError(f"workers must be ≥ 1, got {workers}")
-    if not (rtol >= 0 and atol >= 0 and math.isfinite(rtol) and math.isfinite(atol)):
-        raise ExportError(f"rtol and atol must be finite numbers ≥ 0, got rtol={rtol}, atol={atol}")
-    records_path, records, notes, root = read_run_records(out_dir)
-    todo, skipped = select_records(records, only, include_failed)
-    if not todo:
-        reasons = "; ".join(f"{s['id']}: {s['reason']}" for s in skipped[:5])
-        raise ExportError(f"no trial to export: {len(skipped)} skipped ({reasons})")
+    _check_arguments(dataset_id, workers, rtol, atol)
+    records_path, notes, root, todo, skipped = _selected(out_dir, only, include_failed)
     stage = DatasetStage(
-        Path(get_dataset_path()), dataset_id, overwrite=overwrite, on_note=on_note or _warn, command=command
+        _datasets_folder(), dataset_id, overwrite=overwrite, on_note=on_note or _warn, command=command
     )
     with stage, EpisodeReplays(root, min(workers, len(todo)), rtol, atol, progress) as replays:
         if len(todo) > 1:  # every trial loaded and checked before any is replayed
             todo = _fitting(todo, replays.layouts(todo), skipped, skip_mismatched)
         writer = MinariWriter(minari, dataset_id, author, author_email, code_permalink, stage.build_root)
-        for record, outcome in zip(todo, replays.episodes(todo), strict=True):
-            if isinstance(outcome, ReplayedEpisode):
-                writer.add(outcome, record)
-            else:
-                _skip_or_refuse(record, outcome, skipped, skip_mismatched)
-        if writer.dataset is None:
-            reasons = "; ".join(f"{s['id']}: {s['reason']}" for s in skipped[:5])
-            raise ExportError(f"no trial could be exported: {reasons}")
-        writer.finish(
-            {
-                "records": str(records_path.resolve()),
-                "records_sha256": sha256_file(records_path),
-                "dataset_root": root,
-                "read_notes": list(notes),
-            },
-            skipped,
-            {"rtol": rtol, "atol": atol},
-        )
+        _write_episodes(writer, todo, replays.episodes(todo), skipped, skip_mismatched)
+        writer.finish(_source(records_path, root, notes), skipped, {"rtol": rtol, "atol": atol})
         stage.commit(lambda: _register_namespace(dataset_id))
     return minari.load_dataset(dataset_id)
+
+
+def _check_arguments(dataset_id: str, workers: int, rtol: float, atol: float) -> None:
+    """Refuse a malformed dataset id, no workers, or tolerances that are not finite numbers ≥ 0.
+
+    Raises:
+        ExportError: Any of these, naming the value.
+    """
+    check_dataset_id(dataset_id)
+    if workers < 1:
+        raise ExportError(f"workers must be ≥ 1, got {workers}")
+    if not (rtol >= 0 and atol >= 0 and math.isfinite(rtol) and math.isfinite(atol)):
+        raise ExportError(f"rtol and atol must be finite numbers ≥ 0, got rtol={rtol}, atol={atol}")
+
+
+def _selected(
+    out_dir: str | Path, only: str | Sequence[str] | None, include_failed: bool
+) -> tuple[Path, tuple[str, ...], str | None, list[dict], list[dict]]:
+    """The run's records file, its read notes and dataset root, and the records to export and to skip.
+
+    Raises:
+        ExportError: No record is left to export (the message names the first skipped and why).
+    """
+    records_path, records, notes, root = read_run_records(out_dir)
+    todo, skipped = select_records(records, only, include_failed)
+    if not todo:
+        reasons = "; ".join(f"{s['id']}: {s['reason']}" for s in skipped[:5])
+        raise ExportError(f"no trial to export: {len(skipped)} skipped ({reasons})")
+    return records_path, notes, root, todo, skipped
+
+
+def _datasets_folder() -> Path:
+    """Minari's datasets folder (``MINARI_DATASETS_PATH``, default ``~/.minari/datasets``)."""
+    from minari.storage.datasets_root_dir import get_dataset_path  # lazy: optional extra handsim[minari]
+
+    return Path(get_dataset_path())
+
+
+def _write_episodes(
+    writer: MinariWriter,
+    todo: list[dict],
+    outcomes: Iterable[ReplayedEpisode | Outcome],
+    skipped: list[dict],
+    skip_mismatched: bool,
+) -> None:
+    """Add each record's replayed episode to the dataset, skipping or refusing those that do not reproduce.
+
+    Raises:
+        RecordMismatchError: A trial no longer reproduces its record (unless ``skip_mismatched``).
+        ExportError: A record without what an episode needs, or no episode was written at all.
+    """
+    for record, outcome in zip(todo, outcomes, strict=True):
+        if isinstance(outcome, ReplayedEpisode):
+            writer.add(outcome, record)
+        else:
+            _skip_or_refuse(record, outcome, skipped, skip_mismatched)
+    if writer.dataset is None:
+        reasons = "; ".join(f"{s['id']}: {s['reason']}" for s in skipped[:5])
+        raise ExportError(f"no trial could be exported: {reasons}")
+
+
+def _source(records_path: Path, root: str | None, notes: tuple[str, ...]) -> dict:
+    """Where the exported records came from, for the dataset's metadata."""
+    return {
+        "records": str(records_path.resolve()),
+        "records_sha256": sha256_file(records_path),
+        "dataset_root": root,
+        "read_notes": list(notes),
+    }
 
 
 def _fitting(

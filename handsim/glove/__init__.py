@@ -36,8 +36,9 @@ annotation and spike checks on a recording.
 
 Grasp episodes (:mod:`handsim.glove.segmentation`): :func:`segment_grasps` turns a recording into
 :class:`GraspEpisode` s (approach, closure, hold, release; truncated or not; from the annotation or found
-automatically on the summed finger flexion), :class:`GraspSegmentation`; a calibration sequence is
-recognised by :func:`recognise_calibration_sequence` (:mod:`handsim.glove.calibration_sequence`) and has none.
+automatically on the summed finger flexion by :mod:`handsim.glove.grasp_hysteresis`),
+:class:`GraspSegmentation`; a calibration sequence is recognised by :func:`recognise_calibration_sequence`
+(:mod:`handsim.glove.calibration_sequence`) and has none.
 """
 
 from __future__ import annotations

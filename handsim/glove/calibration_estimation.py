@@ -13,6 +13,7 @@ from dataclasses import dataclass
 import numpy as np
 import numpy.typing as npt
 
+from handsim.datatypes.trajectory import Phase
 from handsim.errors import HandsimError
 from handsim.glove.calibration import NSENSORS, CalibrationError, GloveCalibration, sensor_index
 from handsim.glove.phases import SWITCH_ON, switch_segments
@@ -134,6 +135,37 @@ def estimate_calibration(
             pose naming a missing segment or unknown sensor, or a sensor whose counts do not change between
             reference angles (it does not respond).
     """
+    raw, sw = _checked_inputs(raw_sequence, switch, hold_frames, trim_frames)
+    segments, lengths = _calibration_segments(sw, provenance, expected_segments)
+    base = base if base is not None else GloveCalibration.default()
+    samples = _reference_samples(raw, segments, protocol, hold_frames, trim_frames)
+    gains, offsets, residuals, fitted = _fit_sensors(samples, base)
+    kept = [s for s in SENSOR_NAMES if s not in fitted]
+    notes = (
+        f"switch segments: {len(segments)}, of {lengths} frames",
+        f"gains fitted for {fitted}",
+        f"gains kept from the base calibration ({base.provenance}) for {kept}: the protocol does not move "
+        "these sensors through known angles",
+    )
+    return GloveCalibration(
+        gains=tuple(gains),
+        offsets=tuple(offsets),
+        coupling=base.coupling,
+        provenance=provenance,
+        residuals=tuple(residuals),
+        fitted=tuple(fitted),
+        notes=notes,
+    )
+
+
+def _checked_inputs(
+    raw_sequence: npt.ArrayLike, switch: npt.ArrayLike, hold_frames: int, trim_frames: int
+) -> tuple[np.ndarray, np.ndarray]:
+    """The raw counts (T, 23) as floats and the switch states (T,), checked.
+
+    Raises:
+        CalibrationError: Bad frame counts to hold or trim, or arrays of the wrong shape or not finite.
+    """
     if hold_frames < 1 or trim_frames < 0:
         raise CalibrationError(
             f"hold_frames must be >= 1 and trim_frames >= 0, got {hold_frames} and {trim_frames}"
@@ -146,6 +178,18 @@ def estimate_calibration(
     sw = np.asarray(switch)
     if sw.shape != (raw.shape[0],):
         raise CalibrationError(f"switch must have shape ({raw.shape[0]},), got {sw.shape}")
+    return raw, sw
+
+
+def _calibration_segments(
+    sw: np.ndarray, provenance: str, expected_segments: tuple[int, ...]
+) -> tuple[tuple[Phase, ...], list[int]]:
+    """The switch segments of a calibration sequence and their lengths in frames.
+
+    Raises:
+        CalibrationError: The switch is never ON, the sequence starts OFF, or it has a number of segments
+            not in ``expected_segments``.
+    """
     try:
         segments = switch_segments(sw)
     except HandsimError as exc:
@@ -166,8 +210,21 @@ def estimate_calibration(
             f"a calibration sequence has {' or '.join(map(str, expected_segments))} switch segments "
             f"(spec §3.5); this one has {len(segments)}, of {lengths} frames"
         )
-    base = base if base is not None else GloveCalibration.default()
+    return segments, lengths
 
+
+def _reference_samples(
+    raw: np.ndarray,
+    segments: tuple[Phase, ...],
+    protocol: tuple[ReferencePose, ...],
+    hold_frames: int,
+    trim_frames: int,
+) -> dict[int, list[tuple[str, np.ndarray, float]]]:
+    """Per sensor index, each reference pose's name, the raw counts held in it and its angle in radians.
+
+    Raises:
+        CalibrationError: A pose names a missing segment, an unknown hold or an unknown sensor.
+    """
     samples: dict[int, list[tuple[str, np.ndarray, float]]] = {i: [] for i in range(NSENSORS)}
     for pose in protocol:
         if not 0 <= pose.segment < len(segments):
@@ -187,7 +244,20 @@ def estimate_calibration(
             samples[sensor_index(sensor)].append(
                 (pose.name, raw[rows, sensor_index(sensor)], math.radians(degrees))
             )
+    return samples
 
+
+def _fit_sensors(
+    samples: dict[int, list[tuple[str, np.ndarray, float]]], base: GloveCalibration
+) -> tuple[list[float], list[float], list[float | None], list[str]]:
+    """Gains, offsets and RMS residuals (rad) per sensor, and the sensors whose gain was fitted.
+
+    A sensor with reference angles of two or more values gets a least-squares gain and offset; with one
+    value only its offset is fitted (``base``'s gain kept); without samples it keeps ``base``'s both.
+
+    Raises:
+        CalibrationError: A sensor whose mean counts at its reference angles differ by under 1 count.
+    """
     gains, offsets = list(base.gains), list(base.offsets)
     residuals: list[float | None] = [None] * NSENSORS
     fitted: list[str] = []
@@ -198,36 +268,29 @@ def estimate_calibration(
         y = np.concatenate([np.full(s[1].shape, s[2]) for s in samples[i]])
         refs = sorted({s[2] for s in samples[i]})
         if len(refs) >= 2:
-            means = {ref: np.mean([s[1].mean() for s in samples[i] if s[2] == ref]) for ref in refs}
-            if max(means.values()) - min(means.values()) < 1.0:
-                listing = ", ".join(f"{math.degrees(r):g}°: {m:.2f}" for r, m in means.items())
-                raise CalibrationError(
-                    f"sensor {name} does not respond to the calibration poses: its mean counts at the "
-                    f"reference angles differ by less than 1 count ({listing})"
-                )
+            _check_responds(name, samples[i], refs)
             gain, b = np.linalg.lstsq(np.column_stack([x, np.ones_like(x)]), y, rcond=None)[0]
             gains[i], offsets[i] = float(gain), float(-b / gain)
             fitted.append(name)
         else:
             offsets[i] = float(np.mean(x) - (refs[0] / gains[i] if gains[i] != 0.0 else 0.0))
         residuals[i] = float(np.sqrt(np.mean((gains[i] * (x - offsets[i]) - y) ** 2)))
+    return gains, offsets, residuals, fitted
 
-    kept = [s for s in SENSOR_NAMES if s not in fitted]
-    notes = (
-        f"switch segments: {len(segments)}, of {lengths} frames",
-        f"gains fitted for {fitted}",
-        f"gains kept from the base calibration ({base.provenance}) for {kept}: the protocol does not move "
-        "these sensors through known angles",
-    )
-    return GloveCalibration(
-        gains=tuple(gains),
-        offsets=tuple(offsets),
-        coupling=base.coupling,
-        provenance=provenance,
-        residuals=tuple(residuals),
-        fitted=tuple(fitted),
-        notes=notes,
-    )
+
+def _check_responds(name: str, samples: list[tuple[str, np.ndarray, float]], refs: list[float]) -> None:
+    """Refuse a sensor whose mean counts at its reference angles differ by less than one count.
+
+    Raises:
+        CalibrationError: The sensor does not respond (the message lists its mean count per angle).
+    """
+    means = {ref: np.mean([s[1].mean() for s in samples if s[2] == ref]) for ref in refs}
+    if max(means.values()) - min(means.values()) < 1.0:
+        listing = ", ".join(f"{math.degrees(r):g}°: {m:.2f}" for r, m in means.items())
+        raise CalibrationError(
+            f"sensor {name} does not respond to the calibration poses: its mean counts at the "
+            f"reference angles differ by less than 1 count ({listing})"
+        )
 
 
 __all__ = ["CALIBRATION_PROTOCOL", "EXPECTED_SEGMENTS", "ReferencePose", "estimate_calibration"]

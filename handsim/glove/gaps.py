@@ -55,7 +55,7 @@ Decisions where the thesis is silent or does not fit offline joint-angle data:
 from __future__ import annotations
 
 from collections import defaultdict
-from dataclasses import replace
+from dataclasses import dataclass, field, replace
 from typing import Literal, get_args
 
 import numpy as np
@@ -245,6 +245,37 @@ def fill_gaps(
         ValueError: If ``method`` is unknown (the message lists the methods), a reference method gets no
             skeleton, or ``max_gap`` is below 1.
     """
+    _check_arguments(method, skeleton, max_gap)
+    names = trajectory.dof_names
+    x = np.array(trajectory.targets, dtype=float)
+    known = np.asarray(trajectory.valid, dtype=bool) & np.isfinite(x)
+    avail = known.copy()
+    refs: dict[str, str | None] = {}
+    if skeleton is not None and method in REFERENCE_METHODS:
+        refs = reference_dofs(skeleton, method)
+    report = _GapReport()
+    for c, s, e in find_gaps(known):
+        if s == 0 and e == x.shape[0]:
+            report.empty.add(c)
+            continue
+        if max_gap is not None and e - s > max_gap:
+            report.too_long.append((c, s, e))
+            continue
+        reasons = _fill_gap(method, trajectory.times, x, known, avail, refs, names, (c, s, e))
+        avail[s:e, c] = True
+        report.add_filled((c, s, e), reasons)
+    new = avail & ~known
+    notes = [*trajectory.notes, *_fill_notes(report, int(new.sum()), names, method, max_gap)]
+    filled = new if trajectory.filled is None else new | np.asarray(trajectory.filled, dtype=bool)
+    return replace(trajectory, targets=x, valid=avail, filled=filled, notes=tuple(notes))
+
+
+def _check_arguments(method: str, skeleton: Skeleton | None, max_gap: int | None) -> None:
+    """Refuse an unknown method, a reference method without a skeleton, or a ``max_gap`` below 1.
+
+    Raises:
+        ValueError: Any of these.
+    """
     _check_method(method)
     if method in REFERENCE_METHODS and skeleton is None:
         raise ValueError(
@@ -254,74 +285,88 @@ def fill_gaps(
     if max_gap is not None and max_gap < 1:
         raise ValueError(f"max_gap must be at least 1 frame, got {max_gap}")
 
-    names = trajectory.dof_names
-    x = np.array(trajectory.targets, dtype=float)
-    known = np.asarray(trajectory.valid, dtype=bool) & np.isfinite(x)
-    avail = known.copy()
-    n = x.shape[0]
-    refs: dict[str, str | None] = {}
-    if skeleton is not None and method in REFERENCE_METHODS:
-        refs = reference_dofs(skeleton, method)
 
-    filled_gaps: list[tuple[int, int, int]] = []
-    too_long: list[tuple[int, int, int]] = []
-    empty: set[int] = set()
-    fallbacks: dict[str, set[int]] = defaultdict(set)
-    fallback_counts: dict[str, int] = defaultdict(int)
-    for c, s, e in find_gaps(known):
-        if s == 0 and e == n:
-            empty.add(c)
-            continue
-        if max_gap is not None and e - s > max_gap:
-            too_long.append((c, s, e))
-            continue
-        col = x[:, c]
-        if s == 0:
-            col[:e], reasons = col[e], ["start"] * e
-        elif method == "linear" and e == n:
-            col[s:], reasons = col[s - 1], ["end"] * (e - s)
-        elif method == "linear":
-            col[s:e] = np.interp(trajectory.times[s:e], trajectory.times[[s - 1, e]], col[[s - 1, e]])
-            reasons = [""] * (e - s)
-        else:
-            r_name = refs.get(names[c])
-            r = names.index(r_name) if r_name in names else None
-            ref, ref_ok = (None, None) if r is None else (x[:, r], known[:, r])
-            reasons = []
-            _extrapolate(method, col, avail[:, c], ref, ref_ok, (s, e), reasons)
-        avail[s:e, c] = True
-        filled_gaps.append((c, s, e))
+@dataclass
+class _GapReport:
+    """The gaps of a trajectory as filling went: filled, too long, empty columns, and the fallbacks used."""
+
+    filled: list[tuple[int, int, int]] = field(default_factory=list)
+    too_long: list[tuple[int, int, int]] = field(default_factory=list)
+    empty: set[int] = field(default_factory=set)
+    fallbacks: dict[str, set[int]] = field(default_factory=lambda: defaultdict(set))
+    fallback_counts: dict[str, int] = field(default_factory=lambda: defaultdict(int))
+
+    def add_filled(self, gap: tuple[int, int, int], reasons: list[str]) -> None:
+        """Count a filled gap (column, start, stop) and each sample's fallback reason ("" for none)."""
+        self.filled.append(gap)
         for reason in reasons:
             if reason:
-                fallbacks[reason].add(c)
-                fallback_counts[reason] += 1
+                self.fallbacks[reason].add(gap[0])
+                self.fallback_counts[reason] += 1
 
-    new = avail & ~known
-    notes = list(trajectory.notes)
-    if filled_gaps:
-        longest = max(e - s for _, s, e in filled_gaps)
+
+def _fill_gap(
+    method: str,
+    times: np.ndarray,
+    x: np.ndarray,
+    known: np.ndarray,
+    avail: np.ndarray,
+    refs: dict[str, str | None],
+    names: tuple[str, ...],
+    gap: tuple[int, int, int],
+) -> list[str]:
+    """Fill one gap (column, start, stop) of ``x`` in place; return each sample's fallback reason.
+
+    A gap at the start holds the first valid value; ``linear`` holds the last value at the end and
+    interpolates inside; the reference methods extrapolate from the reference DoF (:func:`_extrapolate`).
+    """
+    c, s, e = gap
+    col = x[:, c]
+    if s == 0:
+        col[:e], reasons = col[e], ["start"] * e
+    elif method == "linear" and e == x.shape[0]:
+        col[s:], reasons = col[s - 1], ["end"] * (e - s)
+    elif method == "linear":
+        col[s:e] = np.interp(times[s:e], times[[s - 1, e]], col[[s - 1, e]])
+        reasons = [""] * (e - s)
+    else:
+        r_name = refs.get(names[c])
+        r = names.index(r_name) if r_name in names else None
+        ref, ref_ok = (None, None) if r is None else (x[:, r], known[:, r])
+        reasons = []
+        _extrapolate(method, col, avail[:, c], ref, ref_ok, (s, e), reasons)
+    return reasons
+
+
+def _fill_notes(
+    report: _GapReport, new: int, names: tuple[str, ...], method: str, max_gap: int | None
+) -> list[str]:
+    """The notes on what was filled (``new`` samples), every fallback and what was left unfilled."""
+    notes = []
+    if report.filled:
+        longest = max(e - s for _, s, e in report.filled)
         notes.append(
-            f"filled {_count(int(new.sum()), 'sample')} in {_count(len(filled_gaps), 'gap')} "
+            f"filled {_count(new, 'sample')} in {_count(len(report.filled), 'gap')} "
             f"(longest {_count(longest, 'frame')}) of "
-            f"{_names({c for c, _, _ in filled_gaps}, names)} by {method}"
+            f"{_names({c for c, _, _ in report.filled}, names)} by {method}"
         )
-    elif not too_long and not empty:
+    elif not report.too_long and not report.empty:
         notes.append(f"no invalid samples to fill by {method}")
     for reason, text in _FALLBACKS.items():
-        if fallback_counts[reason]:
-            what = f"{_count(fallback_counts[reason], 'sample')} of {_names(fallbacks[reason], names)}"
-            notes.append(f"{method}: {what} {text}")
-    if too_long:
+        if report.fallback_counts[reason]:
+            counted = _count(report.fallback_counts[reason], "sample")
+            notes.append(f"{method}: {counted} of {_names(report.fallbacks[reason], names)} {text}")
+    if report.too_long:
+        too_long = report.too_long
         longest = max(e - s for _, s, e in too_long)
         notes.append(
             f"left unfilled: {_count(sum(e - s for _, s, e in too_long), 'sample')} in "
             f"{_count(len(too_long), 'gap')} longer than max_gap={max_gap} frames (longest {longest}) of "
             f"{_names({c for c, _, _ in too_long}, names)}"
         )
-    if empty:
-        notes.append(f"left unfilled: {_names(empty, names)} (no valid sample)")
-    filled = new if trajectory.filled is None else new | np.asarray(trajectory.filled, dtype=bool)
-    return replace(trajectory, targets=x, valid=avail, filled=filled, notes=tuple(notes))
+    if report.empty:
+        notes.append(f"left unfilled: {_names(report.empty, names)} (no valid sample)")
+    return notes
 
 
 __all__ = ["GAP_METHODS", "REFERENCE_METHODS", "GapMethod", "fill_gaps", "find_gaps", "reference_dofs"]

@@ -176,31 +176,14 @@ def mano_pose_to_trajectory(
         TrajectoryError: A side mismatch (e.g. a left-hand sequence for a right hand), a skeleton that is
             not MANO's, a non-positive ``fps``, or the pose errors of :func:`full_mano_pose`.
     """
-    side = _skeleton_side(skeleton)
-    if seq.side != side:
-        raise TrajectoryError(
-            f"a {seq.side}-hand MANO sequence cannot drive a {side} MANO hand: MANO's left model is the "
-            f"mirror image of the right one; build the hand with side={seq.side!r} "
-            f"(and MANO_{seq.side.upper()}.pkl)"
-        )
-    if not fps > 0:
-        raise TrajectoryError(f"fps must be positive, got {fps}")
+    _check_sequence(seq, skeleton, fps)
     n = seq.nframes
-    for name, arr in (("rot", seq.rot), ("trans", seq.trans)):
-        if np.shape(arr) != (n, 3):
-            raise TrajectoryError(f"{name} must have shape ({n}, 3), got {np.shape(arr)}")
     pose = full_mano_pose(
         seq, flat_hand_mean=flat_hand_mean, hands_mean=hands_mean, hands_components=hands_components
     ).reshape(n, 15, 3)
     rotations = axis_angle_to_matrix(pose)
-    names = [[f"{j}_{ax}" for ax, _ in HINGE_AXES] for j in MANO_JOINT_NAMES[1:]]
-    limits = {dof.name: (dof.lower, dof.upper) for dof in skeleton.dofs}
-    angles, moved = _within_ranges(continuous_zyx(rotations), np.array(names), limits)  # (n, 15, 3): z y x
+    targets, angles, moved = _hinge_targets(rotations, skeleton)
     residual = float(rotation_error(zyx_to_matrix(angles), rotations).max()) if n else 0.0
-    columns = {names[k][a]: angles[:, k, a] for k in range(15) for a in range(3)}
-    targets = np.zeros((n, skeleton.ndof))
-    for c, name in enumerate(skeleton.dof_names):
-        targets[:, c] = columns.get(name, 0.0)
     wrist = skeleton.joints[0].position
     root_pose = np.concatenate(
         [wrist + np.asarray(seq.trans, dtype=float), axis_angle_to_quat(seq.rot)], axis=1
@@ -229,6 +212,46 @@ def mano_pose_to_trajectory(
         sha256=seq.sha256,
         notes=notes,
     )
+
+
+def _check_sequence(seq: MANOSequence, skeleton: Skeleton, fps: float) -> None:
+    """Refuse a sequence of the other side, a non-positive frame rate, or rot and trans not (N, 3).
+
+    Raises:
+        TrajectoryError: Any of these, or a skeleton that is not MANO's.
+    """
+    side = _skeleton_side(skeleton)
+    if seq.side != side:
+        raise TrajectoryError(
+            f"a {seq.side}-hand MANO sequence cannot drive a {side} MANO hand: MANO's left model is the "
+            f"mirror image of the right one; build the hand with side={seq.side!r} "
+            f"(and MANO_{seq.side.upper()}.pkl)"
+        )
+    if not fps > 0:
+        raise TrajectoryError(f"fps must be positive, got {fps}")
+    n = seq.nframes
+    for name, arr in (("rot", seq.rot), ("trans", seq.trans)):
+        if np.shape(arr) != (n, 3):
+            raise TrajectoryError(f"{name} must have shape ({n}, 3), got {np.shape(arr)}")
+
+
+def _hinge_targets(
+    rotations: np.ndarray, skeleton: Skeleton
+) -> tuple[np.ndarray, np.ndarray, tuple[str, ...]]:
+    """Hinge targets (N, ndof) of the joints' rotations (N, 15, 3, 3), continuous and within the ranges.
+
+    Returns:
+        The targets in ``skeleton.dof_names`` order (DoFs MANO does not drive at 0), the Z·Y·X angles
+        (N, 15, 3) and the notes on joints moved by whole turns into their ranges.
+    """
+    names = [[f"{j}_{ax}" for ax, _ in HINGE_AXES] for j in MANO_JOINT_NAMES[1:]]
+    limits = {dof.name: (dof.lower, dof.upper) for dof in skeleton.dofs}
+    angles, moved = _within_ranges(continuous_zyx(rotations), np.array(names), limits)  # (n, 15, 3): z y x
+    columns = {names[k][a]: angles[:, k, a] for k in range(15) for a in range(3)}
+    targets = np.zeros((len(rotations), skeleton.ndof))
+    for c, name in enumerate(skeleton.dof_names):
+        targets[:, c] = columns.get(name, 0.0)
+    return targets, angles, moved
 
 
 def _within_ranges(

@@ -180,67 +180,11 @@ def read_graspdb_glove(
     p = Path(path)
     data = read_recording(p)
     _refuse_annotation(p)
-    named = filename_datatype(p)
-    if calibration is None:
-        if named == "raw":
-            raise FormatError(p, f"this is a raw-count file ('-raw-' in its name); {RAW_ADVICE}")
-        why = ", although its name says '-rad-'" if named == "rad" else ""
-        values, times, rows = parse_rows(p, data, "rad", why)
-        sensors = values[:, FIRST_SENSOR_COLUMN:]
-    else:
-        if named == "rad":
-            raise FormatError(
-                p,
-                "the file name says it holds joint angles in radians ('-rad-'), but a calibration was "
-                "given: a calibration converts raw-count files only; read it without one",
-            )
-        why = (
-            "the file name says raw ('-raw-'), but this value is not a count: is it a file of angles in "
-            "radians?"
-            if named == "raw"
-            else "a calibration was given, so the file must hold raw counts; a file of angles in radians is "
-            "read without a calibration"
-        )
-        values, times, rows = parse_rows(p, data, "raw", why)
-        sensors = apply_calibration(values[:, FIRST_SENSOR_COLUMN:], calibration)
-        _check_calibrated(p, data, values[:, FIRST_SENSOR_COLUMN:], sensors, calibration)
-
-    driven = driven_dofs()
-    by_dof = {s.dof: s for s in SENSORS if s.dof is not None}
-    notes = [f"times are seconds since the first row's time stamp {row_stamp(rows[0])}"]
-    if calibration is not None:
-        notes += _calibration_notes(calibration, values[:, FIRST_SENSOR_COLUMN:])
-    notes += [
-        "every sensor angle was negated (target = -file value), as in the GraspDB14 MATLAB tools",
-        "T-TMCJ drives th_tmc_pron (the thumb TMC joint's local y axis, as the GraspDB14 MATLAB code "
-        "does; the report's Table 5.1 says z)",
-        "I-AA and P-Arch drive no DoF (discarded by the GraspDB14 sensor map); their file values, not "
-        "negated, are kept in channels",
-    ]
-    if calibration is None:
-        notes.append(
-            f"{', '.join(s.name for s in _DIP_SENSORS)} are not measured by the 18-sensor glove "
-            "(the glove software infers them); their DoFs are listed as computed"
-        )
-    if skeleton is None:
-        dof_names = driven
-        targets = -sensors[:, [by_dof[d].index for d in driven]]
-    else:
-        dof_names = skeleton.dof_names
-        missing = [d for d in driven if d not in dof_names]
-        if missing:
-            raise TrajectoryError(
-                f"{p}: skeleton {skeleton.name!r} lacks DoFs the glove drives: {missing}; "
-                f"its DoFs are {list(dof_names)}"
-            )
-        targets = np.zeros((values.shape[0], len(dof_names)))
-        for col, name in enumerate(dof_names):
-            if name in by_dof:
-                targets[:, col] = -sensors[:, by_dof[name].index]
-        held = [d for d in dof_names if d not in by_dof]
-        if held:
-            notes.append(f"DoFs not driven by the glove are held at 0: {held}")
-
+    values, times, rows, sensors = _sensor_angles(p, data, calibration)
+    notes = _reading_notes(rows, calibration, values[:, FIRST_SENSOR_COLUMN:])
+    dof_names, targets, held = _glove_targets(p, skeleton, sensors)
+    if held:
+        notes.append(f"DoFs not driven by the glove are held at 0: {held}")
     trajectory = Trajectory(
         times=times,
         dof_names=tuple(dof_names),
@@ -254,6 +198,90 @@ def read_graspdb_glove(
         notes=tuple(notes),
     )
     return trajectory if skeleton is None else with_limit_note(trajectory, skeleton)
+
+
+def _sensor_angles(
+    p: Path, data: bytes, calibration: GloveCalibration | None
+) -> tuple[np.ndarray, np.ndarray, list[list[str]], np.ndarray]:
+    """The file's rows (values, times, raw rows) and its sensor angles in radians, calibrated if raw.
+
+    Raises:
+        FormatError: The file's name or values contradict whether a calibration was given, or a row is
+            malformed (:func:`handsim.io.graspdb.rows.parse_rows`).
+    """
+    named = filename_datatype(p)
+    if calibration is None:
+        if named == "raw":
+            raise FormatError(p, f"this is a raw-count file ('-raw-' in its name); {RAW_ADVICE}")
+        why = ", although its name says '-rad-'" if named == "rad" else ""
+        values, times, rows = parse_rows(p, data, "rad", why)
+        return values, times, rows, values[:, FIRST_SENSOR_COLUMN:]
+    if named == "rad":
+        raise FormatError(
+            p,
+            "the file name says it holds joint angles in radians ('-rad-'), but a calibration was "
+            "given: a calibration converts raw-count files only; read it without one",
+        )
+    why = (
+        "the file name says raw ('-raw-'), but this value is not a count: is it a file of angles in radians?"
+        if named == "raw"
+        else "a calibration was given, so the file must hold raw counts; a file of angles in radians is "
+        "read without a calibration"
+    )
+    values, times, rows = parse_rows(p, data, "raw", why)
+    sensors = apply_calibration(values[:, FIRST_SENSOR_COLUMN:], calibration)
+    _check_calibrated(p, data, values[:, FIRST_SENSOR_COLUMN:], sensors, calibration)
+    return values, times, rows, sensors
+
+
+def _reading_notes(
+    rows: list[list[str]], calibration: GloveCalibration | None, counts: np.ndarray
+) -> list[str]:
+    """The notes on how the file was read: the time origin, the calibration, the GraspDB14 conventions."""
+    notes = [f"times are seconds since the first row's time stamp {row_stamp(rows[0])}"]
+    if calibration is not None:
+        notes += _calibration_notes(calibration, counts)
+    notes += [
+        "every sensor angle was negated (target = -file value), as in the GraspDB14 MATLAB tools",
+        "T-TMCJ drives th_tmc_pron (the thumb TMC joint's local y axis, as the GraspDB14 MATLAB code "
+        "does; the report's Table 5.1 says z)",
+        "I-AA and P-Arch drive no DoF (discarded by the GraspDB14 sensor map); their file values, not "
+        "negated, are kept in channels",
+    ]
+    if calibration is None:
+        notes.append(
+            f"{', '.join(s.name for s in _DIP_SENSORS)} are not measured by the 18-sensor glove "
+            "(the glove software infers them); their DoFs are listed as computed"
+        )
+    return notes
+
+
+def _glove_targets(
+    p: Path, skeleton: Skeleton | None, sensors: np.ndarray
+) -> tuple[tuple[str, ...], np.ndarray, list[str]]:
+    """The DoF names, the negated sensor angles as targets, and the skeleton's DoFs held at 0.
+
+    Without a skeleton the columns are the driven DoFs in sensor order; with one, its DoFs.
+
+    Raises:
+        TrajectoryError: ``skeleton`` lacks a DoF the glove drives.
+    """
+    driven = driven_dofs()
+    by_dof = {s.dof: s for s in SENSORS if s.dof is not None}
+    if skeleton is None:
+        return driven, -sensors[:, [by_dof[d].index for d in driven]], []
+    dof_names = skeleton.dof_names
+    missing = [d for d in driven if d not in dof_names]
+    if missing:
+        raise TrajectoryError(
+            f"{p}: skeleton {skeleton.name!r} lacks DoFs the glove drives: {missing}; "
+            f"its DoFs are {list(dof_names)}"
+        )
+    targets = np.zeros((sensors.shape[0], len(dof_names)))
+    for col, name in enumerate(dof_names):
+        if name in by_dof:
+            targets[:, col] = -sensors[:, by_dof[name].index]
+    return dof_names, targets, [d for d in dof_names if d not in by_dof]
 
 
 def _check_calibrated(

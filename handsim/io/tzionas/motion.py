@@ -54,102 +54,14 @@ from handsim.datatypes.rotations import matrix_to_quat
 from handsim.datatypes.skeleton import Skeleton
 from handsim.datatypes.trajectory import ObjectTrack, Trajectory
 from handsim.datatypes.trajectory_ops import with_limit_note
-from handsim.errors import FormatError, InputFileError, TrajectoryError
-from handsim.io.text_files import numbered_lines, read_bytes, read_text, sha256_of
-from handsim.io.tzionas.configs import IndexBounds, config_dir_of, read_index_bounds
-from handsim.io.tzionas.motion_file import read_motion
+from handsim.errors import TrajectoryError
+from handsim.io.tzionas.configs import IndexBounds
+from handsim.io.tzionas.motion_recording import Recording, aligned_bounds, read_recording
 from handsim.io.tzionas.skel import SkelBone, read_skel
 from handsim.io.tzionas.skeleton import read_tzionas_skeleton
 
 DEFAULT_FPS = 30.0
 """Frame rate assumed when none is given, Hz: the dataset's Kinect-class RGB-D sensor streams at 30 Hz."""
-ROTATION_ERROR_TOL = 1e-3
-"""Largest ``max |RᵀR − I|`` of a ``.MOTION`` rotation that is repaired; beyond it the row is an error."""
-
-
-# --------------------------------------------------------------------------------------------------
-# Reading and checking a .MOTION file
-
-
-@dataclass(frozen=True)
-class _Recording:
-    """A checked ``.MOTION``: orthonormal rotations (z, 3, 3) and origins (z, 3) in metres per bone."""
-
-    path: Path
-    sha256: str
-    rotations: dict[str, np.ndarray]
-    origins: dict[str, np.ndarray]
-    notes: tuple[str, ...]
-
-
-def _sibling(path: Path, ext: str) -> Path:
-    upper, lower = path.with_suffix("." + ext.upper()), path.with_suffix("." + ext.lower())
-    first, second = (lower, upper) if path.suffix.islower() else (upper, lower)
-    return second if not first.is_file() and second.is_file() else first
-
-
-def _row_line(path: Path, bone: str, row: int) -> int:
-    """1-based line of row ``row`` of ``bone``'s block (the file is known to be well formed)."""
-    lines = numbered_lines(read_text(path))
-    start = next(i for i, (_, s) in enumerate(lines) if s == bone.strip())
-    return lines[start + 1 + row][0]
-
-
-def _read_recording(skel: Path, frames: int, bones: list[SkelBone]) -> _Recording:
-    motion = _sibling(skel, "MOTION")
-    if not motion.exists():
-        raise InputFileError(f"{motion}: file not found; a motion needs the .MOTION beside the .SKEL {skel}")
-    data = read_bytes(motion)
-    blocks = read_motion(motion, [b.name for b in bones], frames)
-    for b in bones:
-        if b.name not in blocks:
-            msg = f"no block for bone {b.name!r} ({skel}:{b.line}); expected one block per .SKEL bone"
-            raise FormatError(motion, msg, field="bone name")
-    rotations, origins, worst = {}, {}, 0.0
-    for name, (r, t) in blocks.items():
-        deviation = np.abs(np.einsum("kji,kjl->kil", r, r) - np.eye(3)).max(axis=(1, 2))
-        det = np.linalg.det(r)
-        bad = np.flatnonzero((deviation > ROTATION_ERROR_TOL) | ~np.isfinite(deviation) | (det <= 0))
-        if len(bad):
-            k = int(bad[0])
-            what = (
-                f"det R = {det[k]:.6g}, a reflection"
-                if deviation[k] <= ROTATION_ERROR_TOL
-                else f"max |RᵀR − I| = {deviation[k]:.3g} > {ROTATION_ERROR_TOL:g}"
-            )
-            msg = f"bone {name!r} row {k}: {what}; expected a rotation matrix (R row-major, then T)"
-            raise FormatError(motion, msg, line=_row_line(motion, name, k), field="R")
-        u, _, vt = np.linalg.svd(r)
-        rotations[name], origins[name] = u @ vt, t
-        worst = max(worst, float(deviation.max()))
-    note = (
-        f"{motion.name}: every R re-orthonormalised by SVD (max |RᵀR − I| {worst:.2g} ≤ "
-        f"{ROTATION_ERROR_TOL:g}, the file's printing precision)"
-    )
-    return _Recording(motion, sha256_of(data), rotations, origins, (note,) if worst > 1e-12 else ())
-
-
-def _bounds(
-    skel: Path, frames: int, index_bounds: str | Path | None, motion: str
-) -> tuple[IndexBounds, list[str]]:
-    """INDEX_BOUNDS given or found from ``Models/NN``; defaults (all rows after the rigging pose) else."""
-    path = Path(index_bounds) if index_bounds is not None else config_dir_of(skel.parent) / "INDEX_BOUNDS.txt"
-    if index_bounds is None and not path.is_file():
-        note = f"no {path}: aligned frame k = MOTION row k + 1 for every row after the rigging pose"
-        return IndexBounds(frames - 1, 1, 0), [note]
-    bounds = read_index_bounds(path)
-    needed = bounds.total_aligned + bounds.motion_offset
-    if needed > frames:
-        msg = (
-            f"TotalAlligned {bounds.total_aligned} + MotionnOffset {bounds.motion_offset} = {needed} rows "
-            f"needed, but {motion} has {frames} rows per bone (the .SKEL frame "
-            f"count); expected TotalAlligned + MotionnOffset ≤ {frames}"
-        )
-        raise FormatError(path, msg, line=bounds.lines[0], field="TotalAlligned")
-    notes = []
-    if bounds.motion_offset == 0:
-        notes.append(f"{path}: MotionnOffset 0 makes aligned frame 0 the rigging pose (the dataset uses 1)")
-    return bounds, notes
 
 
 # --------------------------------------------------------------------------------------------------
@@ -204,7 +116,7 @@ def _check_skeleton(skeleton: Skeleton, skel: Path, bones: list[SkelBone]) -> No
         )
 
 
-def _world_pose(skeleton: Skeleton, rec: _Recording, rows: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+def _world_pose(skeleton: Skeleton, rec: Recording, rows: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Recorded frames (T, nj, 3, 3) and positions (T, nj, 3) of every skeleton joint."""
     n = len(rows)
     frames = np.empty((n, skeleton.njoints, 3, 3))
@@ -230,7 +142,7 @@ def _continuous(quats: np.ndarray) -> np.ndarray:
     return out
 
 
-def _fit(skeleton: Skeleton, rec: _Recording, rows: np.ndarray) -> tuple[np.ndarray, np.ndarray, MotionFit]:
+def _fit(skeleton: Skeleton, rec: Recording, rows: np.ndarray) -> tuple[np.ndarray, np.ndarray, MotionFit]:
     """DoF angles (T, ndof), root pose (T, 7) and the fit of a checked recording at the given rows."""
     frames, positions = _world_pose(skeleton, rec, rows)
     targets = np.zeros((len(rows), skeleton.ndof))
@@ -279,7 +191,7 @@ def _fit_notes(fit: MotionFit) -> list[str]:
 class _Setup:
     path: Path
     skeleton: Skeleton
-    recording: _Recording
+    recording: Recording
     bounds: IndexBounds
     rows: np.ndarray
     notes: tuple[str, ...]
@@ -288,8 +200,8 @@ class _Setup:
 def _setup(skel_path: str | Path, index_bounds: str | Path | None, skeleton: Skeleton | None) -> _Setup:
     path = Path(skel_path)
     frames, bones = read_skel(path)
-    recording = _read_recording(path, frames, bones)
-    bounds, notes = _bounds(path, frames, index_bounds, recording.path.name)
+    recording = read_recording(path, frames, bones)
+    bounds, notes = aligned_bounds(path, frames, index_bounds, recording.path.name)
     if skeleton is None:
         skeleton = read_tzionas_skeleton(path)
     _check_skeleton(skeleton, path, bones)
@@ -402,7 +314,7 @@ def read_tzionas_motion(
     return fit_tzionas_motion(skel_path, fps=fps, index_bounds=index_bounds, skeleton=skeleton)[0]
 
 
-def _object_pose(recording: _Recording, root: str, rows: np.ndarray) -> np.ndarray:
+def _object_pose(recording: Recording, root: str, rows: np.ndarray) -> np.ndarray:
     """``M_k · M_0⁻¹`` of the root bone as position (m) + quaternion (w, x, y, z), shape (T, 7)."""
     r, t = recording.rotations[root], recording.origins[root]
     turn = r[rows] @ r[0].T
