@@ -71,7 +71,7 @@ def export(folder: Path) -> None:
     from handsim.sim.control import control_schedule
     from handsim.sim.replay import run_schedule
     from handsim.sim.specs import MetricSpec, StabilitySpec
-    from handsim.sim.stability.gravity import DIRECTIONS, _frozen_model, stability_test
+    from handsim.sim.stability.gravity import DIRECTIONS, frozen_model, stability_test
 
     folder.mkdir(parents=True, exist_ok=True)
     index = {}
@@ -118,7 +118,7 @@ def export(folder: Path) -> None:
             release = switches.release_frame
             stability_spec = StabilitySpec()
             result = stability_test(scene, qpos[release], schedule.ctrl[release], spec=stability_spec)
-            frozen = _frozen_model(scene.model, stability_spec)
+            frozen = frozen_model(scene.model, stability_spec)
             mujoco.mj_saveModel(frozen, str(folder / f"{key}_frozen.mjb"), None)
             weighted = np.array([b for o in layout.objects for b in o.part_bodies], dtype=np.int64)
             obman = np.asarray(stability_spec.obman_direction) / np.linalg.norm(

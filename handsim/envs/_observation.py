@@ -11,7 +11,7 @@ from collections.abc import Sequence
 import numpy as np
 
 from handsim.sim.scene.compiled import SimScene
-from handsim.sim.scene.layout import _SLOT, CONTACT_SLOTS
+from handsim.sim.scene.layout import CONTACT_SLOT_SIZE, CONTACT_SLOTS
 
 POSE_LABELS = ("x", "y", "z", "qw", "qx", "qy", "qz")
 VELOCITY_LABELS = ("vx", "vy", "vz", "wx", "wy", "wz")
@@ -101,7 +101,7 @@ class ContactSummary:
         adr = layout.contact_adr  # (links, parts)
         links = adr.shape[0]
         # normal force of every slot of every pair, link-major: (links, parts, slots)
-        slots = adr[..., None] + _SLOT * np.arange(CONTACT_SLOTS) + 1
+        slots = adr[..., None] + CONTACT_SLOT_SIZE * np.arange(CONTACT_SLOTS) + 1
         self._force = slots.reshape(-1).astype(np.int64)
         per_link = self._force.size // links if links else 0
         self._sum = np.kron(np.eye(links), np.ones(per_link)) if links else np.zeros((0, 0))

@@ -86,7 +86,7 @@ def control_schedule(scene: SimScene, trajectory: Trajectory, rate_hz: float) ->
         TrajectoryError: A trajectory DoF is not a hand DoF, the hand follows a root pose the trajectory
             lacks, a named object track is missing, or a target is not finite after resampling.
     """
-    layout, setup = scene.layout, scene.setup
+    setup = scene.setup
     substeps = substeps_for(rate_hz, scene.timestep)
     frame_dt = substeps * scene.timestep
     notes = []
@@ -94,58 +94,104 @@ def control_schedule(scene: SimScene, trajectory: Trajectory, rate_hz: float) ->
         notes.append(
             f"control rate {rate_hz:g} Hz rounded to {1.0 / frame_dt:g} Hz ({substeps} steps per frame)"
         )
+    _check_trajectory(scene, trajectory)
+    sampled = resample(trajectory, 1.0 / frame_dt) if trajectory.times.shape[0] > 1 else None
+    traj = sampled.trajectory if sampled is not None else trajectory
+    notes.extend(sampled.notes if sampled is not None else ())
+    ctrl, held = _targets(scene, traj, trajectory.source)
+    if held:
+        notes.append(
+            f"hand DoFs without a trajectory column, held at 0 rad (or their nearest limit): {list(held)}"
+        )
+    world = np.asarray(setup.world_from_recording, dtype=float)
+    roots = _root_poses(scene, traj, world, trajectory.source)
+    if roots is None and trajectory.root_pose is not None:
+        notes.append("the trajectory's root pose is not followed: the scene's hand root is fixed")
+    return ControlSchedule(
+        times=np.asarray(traj.times, dtype=float),
+        ctrl=ctrl,
+        root_pose=None if roots is None else roots[:, 0],
+        objects=_object_tracks(scene, traj, world),
+        substeps=substeps,
+        frame_dt=frame_dt,
+        held_dofs=held,
+        notes=tuple(notes),
+        root_poses=roots,
+    )
+
+
+def _welded(scene: SimScene) -> list[str]:
+    """Names of the hands whose root follows a recorded pose (on a mocap weld), in layout order."""
+    return [h.name for h in scene.layout.hands if h.mocap >= 0]
+
+
+def _check_trajectory(scene: SimScene, trajectory: Trajectory) -> None:
+    """Check that the trajectory has what the scene follows: its DoFs, root poses and object tracks.
+
+    Raises:
+        TrajectoryError: A trajectory DoF is not a hand DoF, the hand follows a root pose the trajectory
+            lacks, or a named object track is missing.
+    """
+    layout, source = scene.layout, trajectory.source or "trajectory"
     unknown = [n for n in trajectory.dof_names if n not in layout.dof_names]
     if unknown:
         raise TrajectoryError(
-            f"{trajectory.source or 'trajectory'}: DoFs {unknown} are not DoFs of the hand; the hand has "
-            f"{list(layout.dof_names)}"
+            f"{source}: DoFs {unknown} are not DoFs of the hand; the hand has {list(layout.dof_names)}"
         )
-    welded = [h.name for h in layout.hands if h.mocap >= 0]
-    several = len(layout.hands) > 1
-    if several:
-        lacking = [name for name in welded if name not in trajectory.hand_roots]
+    if len(layout.hands) > 1:
+        lacking = [name for name in _welded(scene) if name not in trajectory.hand_roots]
         if lacking:
             raise TrajectoryError(
-                f"{trajectory.source or 'trajectory'}: the hands {lacking} follow recorded root poses but "
+                f"{source}: the hands {lacking} follow recorded root poses but "
                 f"the trajectory has hand roots only for {list(trajectory.hand_roots)}"
             )
     elif layout.mocap >= 0 and trajectory.root_pose is None:
         raise TrajectoryError(
-            f"{trajectory.source or 'trajectory'}: the hand follows a recorded root pose "
-            "(hand_root='weld') but the trajectory has none"
+            f"{source}: the hand follows a recorded root pose (hand_root='weld') but the trajectory has none"
         )
-    missing = [k for k in setup.object_tracks if k and k not in trajectory.objects]
+    missing = [k for k in scene.setup.object_tracks if k and k not in trajectory.objects]
     if missing:
-        raise TrajectoryError(
-            f"{trajectory.source or 'trajectory'}: no object track {missing}; "
-            f"it has {list(trajectory.objects)}"
-        )
-    sampled = resample(trajectory, 1.0 / frame_dt) if trajectory.times.shape[0] > 1 else None
-    traj = sampled.trajectory if sampled is not None else trajectory
-    notes.extend(sampled.notes if sampled is not None else ())
+        raise TrajectoryError(f"{source}: no object track {missing}; it has {list(trajectory.objects)}")
 
+
+def _targets(scene: SimScene, traj: Trajectory, source: str | None) -> tuple[np.ndarray, tuple[str, ...]]:
+    """The actuator targets of each frame (N, nu), and the hand DoFs without a column (held at 0 rad).
+
+    Raises:
+        TrajectoryError: A target is not finite.
+    """
+    layout = scene.layout
     column = {name: i for i, name in enumerate(traj.dof_names)}
     held = tuple(n for n in layout.dof_names if n not in column)
     initial = np.clip(0.0, layout.ctrl_range[:, 0], layout.ctrl_range[:, 1])
     ctrl = np.tile(initial, (traj.times.shape[0], 1))
     actuators = [a for a, name in enumerate(layout.dof_names) if name in column]
     ctrl[:, actuators] = traj.targets[:, [column[layout.dof_names[a]] for a in actuators]]
-    check_controls(ctrl, f"{trajectory.source or 'trajectory'} targets after resampling")
-    if held:
-        notes.append(
-            f"hand DoFs without a trajectory column, held at 0 rad (or their nearest limit): {list(held)}"
-        )
+    check_controls(ctrl, f"{source or 'trajectory'} targets after resampling")
+    return ctrl, held
 
-    world = np.asarray(setup.world_from_recording, dtype=float)
-    roots = None
-    if welded:
-        recorded = [traj.hand_roots[n] for n in welded] if several else [traj.root_pose]
-        roots = np.stack([compose(world, np.asarray(r, dtype=float)) for r in recorded], axis=1)
-        check_controls(roots.reshape(len(roots), -1), f"{trajectory.source or 'trajectory'} root pose")
-    elif trajectory.root_pose is not None:
-        notes.append("the trajectory's root pose is not followed: the scene's hand root is fixed")
+
+def _root_poses(
+    scene: SimScene, traj: Trajectory, world: np.ndarray, source: str | None
+) -> np.ndarray | None:
+    """Every welded hand root's pose in the scene's world per frame (N, H, 7), or None (no welded root).
+
+    Raises:
+        TrajectoryError: A pose is not finite.
+    """
+    welded = _welded(scene)
+    if not welded:
+        return None
+    recorded = [traj.hand_roots[n] for n in welded] if len(scene.layout.hands) > 1 else [traj.root_pose]
+    roots = np.stack([compose(world, np.asarray(r, dtype=float)) for r in recorded], axis=1)
+    check_controls(roots.reshape(len(roots), -1), f"{source or 'trajectory'} root pose")
+    return roots
+
+
+def _object_tracks(scene: SimScene, traj: Trajectory, world: np.ndarray) -> dict[int, ObjectTrack]:
+    """The recorded object tracks in the scene's world, by scene object index (only objects with a track)."""
     objects = {}
-    for index, key in enumerate(setup.object_tracks):
+    for index, key in enumerate(scene.setup.object_tracks):
         if key:
             track = traj.objects[key]
             objects[index] = ObjectTrack(
@@ -153,14 +199,4 @@ def control_schedule(scene: SimScene, trajectory: Trajectory, rate_hz: float) ->
                 articulation=track.articulation,
                 valid=track.valid,
             )
-    return ControlSchedule(
-        times=np.asarray(traj.times, dtype=float),
-        ctrl=ctrl,
-        root_pose=None if roots is None else roots[:, 0],
-        objects=objects,
-        substeps=substeps,
-        frame_dt=frame_dt,
-        held_dofs=held,
-        notes=tuple(notes),
-        root_poses=roots,
-    )
+    return objects

@@ -191,49 +191,86 @@ def check_grip(
     start = sum(len(o.part_bodies) for o in layout.objects[:object_index])
     parts = slice(start, start + len(obj.part_bodies))
     begin = first if depth_since is None else min(first, int(np.searchsorted(t, depth_since - 1e-9)))
-    rows = sensors[begin : last + 1]
+    deepest, depth = _deepest(scene, sensors[begin : last + 1], t[begin : last + 1], parts, obj, spec)
+    normal = contact_slot_values(scene, sensors[first : last + 1], _NORMAL)[:, :, parts].sum(axis=(2, 3))
+    touching = (normal > 0).any(axis=0) | (depth[first - begin :] > 0).any(axis=0)
+    count = min(spec.frames, last - first + 1) if grip else 0
+    picks = np.unique(np.linspace(first, last, count).round().astype(int))
+    return GripCheck(
+        window=(float(t[first]), float(t[last])),
+        links=tuple(name for name, on in zip(layout.link_names, touching, strict=True) if on),
+        weight=weight,
+        **deepest,
+        **_grip_at(scene, obj, qpos[picks], normal[picks - first]),
+    )
+
+
+def _deepest(
+    scene: SimScene, rows: np.ndarray, times: np.ndarray, parts: slice, obj: ObjectLayout, spec: GripSpec
+) -> tuple[dict, np.ndarray]:
+    """The link deepest in the object relative to the limit where it is, and each link's depth per frame.
+
+    Args:
+        scene: The scene.
+        rows: Sensor data of the frames read (frames, nsensordata).
+        times: Their times, s.
+        parts: The object's parts among all objects' parts.
+        obj: The object.
+        spec: The depth limit.
+
+    Returns:
+        :class:`GripCheck`'s ``deepest_link``, ``max_depth``, ``deepest_at``, ``depth_limit`` and ``wall``
+        by name, and the depth of each link in any part of the object per frame (frames, links), m.
+    """
     depths = np.maximum(-contact_slot_values(scene, rows, _DIST)[:, :, parts], 0.0).max(axis=3)
     walls = np.array([thinnest_wall(scene.model, int(b)) for b in obj.part_bodies])
     allowed = np.maximum(np.minimum(spec.max_depth, walls), 1e-6)  # a degenerate geom still divides
     k, link, part = np.unravel_index(int(np.argmax(depths / allowed)), depths.shape)
     deepest = float(depths[k, link, part])
-    depth = depths.max(axis=2)
-    rows = sensors[first : last + 1]
-    normal = contact_slot_values(scene, rows, _NORMAL)[:, :, parts].sum(axis=(2, 3))  # (frames, links)
-    touching = (normal > 0).any(axis=0) | (depth[first - begin :] > 0).any(axis=0)
-    links = tuple(name for name, on in zip(layout.link_names, touching, strict=True) if on)
-    count = min(spec.frames, last - first + 1) if grip else 0
-    picks = np.unique(np.linspace(first, last, count).round().astype(int))
+    fields = {
+        "deepest_link": scene.layout.link_names[link] if deepest > 0.0 else None,
+        "max_depth": deepest,
+        "deepest_at": float(times[k]) if deepest > 0.0 else None,
+        "depth_limit": float(allowed[part]),
+        "wall": float(walls[part]) if deepest > 0.0 else None,
+    }
+    return fields, depths.max(axis=2)
+
+
+def _grip_at(scene: SimScene, obj: ObjectLayout, states: np.ndarray, normal: np.ndarray) -> dict:
+    """The opposition and the forces of the grip at the examined frames.
+
+    Args:
+        scene: The scene.
+        obj: The object.
+        states: The examined frames' ``qpos`` (frames, nq).
+        normal: The normal force of each link on the object at those frames (frames, links), N.
+
+    Returns:
+        :class:`GripCheck`'s ``frames``, ``opposition``, ``opposing_links``, ``grip_force``,
+        ``force_limit`` and ``torque_limit`` by name.
+    """
     probe = _Probe(scene, obj)
-    actuated = np.array([finger_of(name) != "palm" for name in layout.link_names])
+    actuated = np.array([finger_of(name) != "palm" for name in scene.layout.link_names])
     pairs: dict[tuple[str, str], int] = {}
     forces, limits, torque = [], [], 0.0
-    for frame in picks:
-        contacts = probe.contacts(qpos[frame])
+    for state, pressed in zip(states, normal, strict=True):
+        contacts = probe.contacts(state)
         pair = probe.opposing(contacts)
         if pair is not None:
             pairs[pair] = pairs.get(pair, 0) + 1
         limit, servo = probe.force_limit(contacts)
-        forces.append(float(normal[frame - first, actuated].sum()))
+        forces.append(float(pressed[actuated].sum()))
         limits.append(limit)
         torque = max(torque, servo)
-    best = max(pairs, key=lambda p: (pairs[p], p)) if pairs else None
-    return GripCheck(
-        window=(float(t[first]), float(t[last])),
-        frames=int(picks.size),
-        links=links,
-        opposition=sum(pairs.values()) / picks.size if picks.size else None,
-        opposing_links=best,
-        deepest_link=layout.link_names[link] if deepest > 0.0 else None,
-        max_depth=deepest,
-        deepest_at=float(t[begin + k]) if deepest > 0.0 else None,
-        depth_limit=float(allowed[part]),
-        wall=float(walls[part]) if deepest > 0.0 else None,
-        grip_force=float(np.median(forces)) if forces else 0.0,
-        force_limit=float(np.median(limits)) if limits else 0.0,
-        torque_limit=torque,
-        weight=weight,
-    )
+    return {
+        "frames": len(states),
+        "opposition": sum(pairs.values()) / len(states) if len(states) else None,
+        "opposing_links": max(pairs, key=lambda p: (pairs[p], p)) if pairs else None,
+        "grip_force": float(np.median(forces)) if forces else 0.0,
+        "force_limit": float(np.median(limits)) if limits else 0.0,
+        "torque_limit": torque,
+    }
 
 
 def thinnest_wall(model: mujoco.MjModel, body: int) -> float:

@@ -20,7 +20,7 @@ from handsim.datatypes.rotations import quat_angle
 from handsim.sim.control import ControlSchedule
 from handsim.sim.scene.clearance import site_positions
 from handsim.sim.scene.compiled import SimScene
-from handsim.sim.scene.layout import _SLOT, CONTACT_SLOTS
+from handsim.sim.scene.layout import CONTACT_SLOT_SIZE, CONTACT_SLOTS
 from handsim.sim.self_contact import self_penetration_track
 
 
@@ -133,7 +133,7 @@ def contact_slot_values(scene: SimScene, sensors: np.ndarray, offset: int) -> np
     """
     adr = scene.layout.contact_adr
     found = sensors[:, adr]  # every slot repeats the count
-    slots = adr[..., None] + _SLOT * np.arange(CONTACT_SLOTS) + offset
+    slots = adr[..., None] + CONTACT_SLOT_SIZE * np.arange(CONTACT_SLOTS) + offset
     used = np.arange(CONTACT_SLOTS) < np.minimum(found, CONTACT_SLOTS)[..., None]
     return np.where(used, sensors[:, slots], 0.0)
 
@@ -147,7 +147,8 @@ def _contacts(scene: SimScene, sensors: np.ndarray) -> tuple[np.ndarray, np.ndar
     normal = np.zeros(found.shape)
     frame, link, part = np.nonzero(found)  # contacts are sparse: read the slots of touching pairs only
     if frame.size:
-        slots = adr[link, part][:, None] + _SLOT * np.arange(CONTACT_SLOTS) + 1  # normal of each slot
+        # the normal force of each slot
+        slots = adr[link, part][:, None] + CONTACT_SLOT_SIZE * np.arange(CONTACT_SLOTS) + 1
         used = np.arange(CONTACT_SLOTS) < np.minimum(found[frame, link, part], CONTACT_SLOTS)[:, None]
         normal[frame, link, part] = np.where(used, sensors[frame[:, None], slots], 0.0).sum(axis=-1)
     truncated = (found > CONTACT_SLOTS).sum(axis=(1, 2)).astype(np.int32)

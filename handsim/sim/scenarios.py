@@ -31,7 +31,7 @@ from handsim.datatypes.rotations import quat_multiply, quat_rotate, rotation_ont
 from handsim.datatypes.trajectory import Trajectory
 from handsim.errors import ModelError, TrajectoryError
 from handsim.sim.control import DEFAULT_CONTROL_RATE
-from handsim.sim.placement.candidates import Candidate
+from handsim.sim.placement.candidates import Candidate, Placement
 from handsim.sim.placement.grasp_frame import GraspFrame, grasp_frame
 from handsim.sim.placement.hand_pose import hand_frame
 from handsim.sim.placement.place import place_object
@@ -286,6 +286,48 @@ def glove_scene(
     """
     spec = spec or MetricSpec()
     grasp = grasp or grasp_frame(trajectory)
+    quat, placement = _placed(hand, trajectory, obj, grasp, spec, control_rate)
+    best = placement.best
+    down, down_note = hold_down(best, spec.hold_orientation)
+    turn = rotation_onto(AXES[down], np.array([0.0, 0.0, -1.0]))
+    world = _hold_world(best, turn, placement.object_points)  # search world → scene world
+    scene = build_scene(
+        hand, obj, hand_pos=tuple(world[:3]), hand_quat=quat_multiply(turn, quat),
+        object_poses=[compose(world, best.pose)], object_support=True,
+    )  # fmt: skip
+    times = trajectory.times
+    setup = SceneSetup(
+        scenario="glove",
+        contact_time=float(times[best.contact_frame]),
+        release_time=float(times[grasp.closed]),
+        grasp_time=float(times[grasp.frame]),
+        hold_window=(float(times[grasp.window[0]]), float(times[grasp.window[1]])),
+        placement={
+            **placement.to_dict(),
+            "grasp": grasp.to_dict(),
+            "contact_trajectory_frame": best.contact_frame,
+            "ensemble": _ensemble(placement, world, times),
+            "gravity_along": down,
+        },
+        notes=(
+            grasp.note,
+            placement.note,
+            _contact_note(best, times),
+            f"{down_note}; the object's lowest point {HOLD_HEIGHT} m up",
+        ),
+    )
+    return compile_scene(scene, setup)
+
+
+def _placed(
+    hand: mujoco.MjSpec,
+    trajectory: Trajectory,
+    obj: mujoco.MjSpec,
+    grasp: GraspFrame,
+    spec: MetricSpec,
+    control_rate: float,
+) -> tuple[np.ndarray, Placement]:
+    """The hand's orientation in the placement search's world (fingers +x, palm −z) and the placement."""
     probe = compile_scene(build_scene(hand, table=False))  # the hand alone: its frame needs no object
     quat = hand_frame(probe)
     search = compile_scene(
@@ -301,19 +343,18 @@ def glove_scene(
         shift=spec.robustness_shift,
         turn_deg=spec.robustness_turn_deg,
     )
-    best = placement.best
-    down, down_note = hold_down(best, spec.hold_orientation)
-    turn = rotation_onto(AXES[down], np.array([0.0, 0.0, -1.0]))
-    lowest = transform_points(
-        compose(np.concatenate([[0.0, 0.0, 0.0], turn]), best.pose), placement.object_points
-    )
-    world = np.concatenate([[0.0, 0.0, HOLD_HEIGHT - lowest[:, 2].min()], turn])  # search world → scene world
-    scene = build_scene(
-        hand, obj, hand_pos=tuple(world[:3]), hand_quat=quat_multiply(turn, quat),
-        object_poses=[compose(world, best.pose)], object_support=True,
-    )  # fmt: skip
-    times = trajectory.times
-    ensemble = [
+    return quat, placement
+
+
+def _hold_world(best: Candidate, turn: np.ndarray, object_points: np.ndarray) -> np.ndarray:
+    """The search world's pose in the scene's world: turned by ``turn``, the object :data:`HOLD_HEIGHT` up."""
+    lowest = transform_points(compose(np.concatenate([[0.0, 0.0, 0.0], turn]), best.pose), object_points)
+    return np.concatenate([[0.0, 0.0, HOLD_HEIGHT - lowest[:, 2].min()], turn])
+
+
+def _ensemble(placement: Placement, world: np.ndarray, times: np.ndarray) -> list[dict]:
+    """The robustness ensemble's poses in the scene's world: the alternatives, then the perturbations."""
+    return [
         {
             "label": label,
             "pose": compose(world, c.pose).tolist(),
@@ -324,31 +365,14 @@ def glove_scene(
             *placement.perturbations,
         )
     ]
-    contact_note = (
-        f"hand–object contacts act from frame {best.contact_frame} ({times[best.contact_frame]:.3f} s); at "
-        f"frame {best.contact_frame - 1} the hand at its targets is "
-        f"{best.depth_before_contact * 1000:.1f} mm inside the placed object"
-        if best.contact_frame > 0
-        else "the hand is clear of the placed object from frame 0"
-    )
-    setup = SceneSetup(
-        scenario="glove",
-        contact_time=float(times[best.contact_frame]),
-        release_time=float(times[grasp.closed]),
-        grasp_time=float(times[grasp.frame]),
-        hold_window=(float(times[grasp.window[0]]), float(times[grasp.window[1]])),
-        placement={
-            **placement.to_dict(),
-            "grasp": grasp.to_dict(),
-            "contact_trajectory_frame": best.contact_frame,
-            "ensemble": ensemble,
-            "gravity_along": down,
-        },
-        notes=(
-            grasp.note,
-            placement.note,
-            contact_note,
-            f"{down_note}; the object's lowest point {HOLD_HEIGHT} m up",
-        ),
-    )
-    return compile_scene(scene, setup)
+
+
+def _contact_note(best: Candidate, times: np.ndarray) -> str:
+    """When the hand–object contacts start acting, and how deep the hand is in the object just before."""
+    if best.contact_frame > 0:
+        return (
+            f"hand–object contacts act from frame {best.contact_frame} ({times[best.contact_frame]:.3f} s); "
+            f"at frame {best.contact_frame - 1} the hand at its targets is "
+            f"{best.depth_before_contact * 1000:.1f} mm inside the placed object"
+        )
+    return "the hand is clear of the placed object from frame 0"

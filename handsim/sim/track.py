@@ -207,6 +207,7 @@ def _how(
 
 
 def _hands(names: tuple[str, ...]) -> str:
+    """``the left hand and the right hand`` (``the hand`` for a scene's only hand)."""
     return " and ".join(f"the {n} hand" if n else "the hand" for n in names)
 
 
@@ -327,23 +328,30 @@ def track_flags(
     if verdict is None:
         return []
     spec = spec or TrackSpec()
-    flags = []
-    checks = scene.setup.checks
-    if checks and checks.get("world_fits") is False:
-        deepest = max(checks.get("passages", []), key=lambda p: p["depth_mm"], default=None)
-        where = "" if deepest is None else (
-            f": the recorded {deepest['site']} goes {deepest['depth_mm']:.0f} mm into the "
-            f"{deepest['body']} at {deepest['time_s']:.2f} s"
-        )  # fmt: skip
-        flags.append(
-            Flag(
-                "static_body_in_path",
-                True,
-                f"no placement of the static bodies fits the recorded hands{where} (the scene's notes say "
-                "which): the hands are pushed off their recording there",
-                {"passages": checks.get("passages", []), "blocked": checks.get("blocked", [])},
-            )
-        )
+    invalid = (_static_body_flag(scene.setup.checks), _deep_penetration_flag(frames, spec))
+    return [flag for flag in invalid if flag is not None] + _note_flags(verdict, frames, spec)
+
+
+def _static_body_flag(checks: dict) -> Flag | None:
+    """``static_body_in_path`` when the scene's checks found the world does not fit the recorded hands."""
+    if not (checks and checks.get("world_fits") is False):
+        return None
+    deepest = max(checks.get("passages", []), key=lambda p: p["depth_mm"], default=None)
+    where = "" if deepest is None else (
+        f": the recorded {deepest['site']} goes {deepest['depth_mm']:.0f} mm into the "
+        f"{deepest['body']} at {deepest['time_s']:.2f} s"
+    )  # fmt: skip
+    return Flag(
+        "static_body_in_path",
+        True,
+        f"no placement of the static bodies fits the recorded hands{where} (the scene's notes say "
+        "which): the hands are pushed off their recording there",
+        {"passages": checks.get("passages", []), "blocked": checks.get("blocked", [])},
+    )
+
+
+def _deep_penetration_flag(frames: FrameMetrics, spec: TrackSpec) -> Flag | None:
+    """``deep_penetration`` when a hand goes deeper than ``spec.max_penetration`` inside an object."""
     deep = []
     names = frames.hand_names or ("",)
     penetration = (
@@ -355,27 +363,32 @@ def track_flags(
             k = int(np.argmax(depth))
             over = int((depth > spec.max_penetration).sum())
             deep.append((name, float(depth.max()), float(frames.times[k]), over))
-    if deep:
-        text = "; ".join(
-            f"{_hands((name,))} {d * 1000:.1f} mm at {t:.2f} s ({over} frames over)"
-            for name, d, t, over in deep
-        )
-        flags.append(
-            Flag(
-                "deep_penetration",
-                True,
-                f"a hand passes through an object, deeper than {spec.max_penetration * 1000:g} mm (more than "
-                f"any grip presses a finger in): {text}",
-                {
-                    "hands": {
-                        n or "hand": {"depth_mm": d * 1000, "at_s": t, "frames": o} for n, d, t, o in deep
-                    },
-                    "threshold_mm": spec.max_penetration * 1000,
-                },
-            )
-        )
+    if not deep:
+        return None
+    text = "; ".join(
+        f"{_hands((name,))} {d * 1000:.1f} mm at {t:.2f} s ({over} frames over)" for name, d, t, over in deep
+    )
+    return Flag(
+        "deep_penetration",
+        True,
+        f"a hand passes through an object, deeper than {spec.max_penetration * 1000:g} mm (more than "
+        f"any grip presses a finger in): {text}",
+        {
+            "hands": {n or "hand": {"depth_mm": d * 1000, "at_s": t, "frames": o} for n, d, t, o in deep},
+            "threshold_mm": spec.max_penetration * 1000,
+        },
+    )
+
+
+def _note_flags(verdict: TrackVerdict, frames: FrameMetrics, spec: TrackSpec) -> list[Flag]:
+    """The flags that are notes, not invalid verdicts.
+
+    ``object_on_floor``: an object ends on the floor where its recording does not put it;
+    ``hand_never_touches``: the hands that never touch a recorded object, by name.
+    """
+    notes = []
     if verdict.on_floor:
-        flags.append(
+        notes.append(
             Flag(
                 "object_on_floor",
                 False,
@@ -385,7 +398,7 @@ def track_flags(
             )
         )
     if verdict.untouched_hands:
-        flags.append(
+        notes.append(
             Flag(
                 "hand_never_touches",
                 False,
@@ -394,4 +407,4 @@ def track_flags(
                 {"hands": [n or "hand" for n in verdict.untouched_hands]},
             )
         )
-    return flags
+    return notes

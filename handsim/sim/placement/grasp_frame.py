@@ -1,7 +1,8 @@
 """When a glove recording's grasp closes: the closing ramp, the closed frame and the hold window.
 
 A glove records the hand alone. What the recording says about the grasp is its finger flexion over time:
-the sum of the flexion targets (every DoF named ``…flex…`` except the wrist's ``root_…``). From it:
+the sum of the flexion targets (every DoF named ``…flex…`` except the wrist's ``root_…``;
+:func:`handsim.glove.segmentation.summed_flexion`). From it:
 
 * the **closed** frame: the first frame of the hold window whose flexion has risen :data:`CLOSED_FRACTION`
   of the way from the window's first frame to its peak;
@@ -24,7 +25,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from handsim.datatypes.trajectory import Trajectory
-from handsim.errors import TrajectoryError
+from handsim.glove.segmentation import summed_flexion
 
 GRASP_PHASE = "grasp"
 EPISODE_PHASES = ("closure", "hold")
@@ -74,21 +75,6 @@ class GraspFrame:
         }
 
 
-def flexion(trajectory: Trajectory) -> np.ndarray:
-    """Sum of the finger flexion targets per frame, rad (N,).
-
-    Raises:
-        TrajectoryError: No finger flexion DoFs (names containing ``flex``, not the wrist's ``root_…``).
-    """
-    cols = [i for i, n in enumerate(trajectory.dof_names) if "flex" in n and not n.startswith("root")]
-    if not cols:
-        raise TrajectoryError(
-            f"{trajectory.source or 'trajectory'}: no finger flexion DoFs (names containing 'flex') "
-            "to find the grasp frame from; annotate a 'grasp' phase"
-        )
-    return np.asarray(trajectory.targets, dtype=float)[:, cols].sum(axis=1)
-
-
 def grasp_frame(trajectory: Trajectory) -> GraspFrame:
     """The grasp frame, the closing ramp and the hold window of a glove recording.
 
@@ -102,9 +88,10 @@ def grasp_frame(trajectory: Trajectory) -> GraspFrame:
     within :data:`OPEN_SEARCH_S` before the closed frame.
 
     Raises:
-        TrajectoryError: No flexion DoFs (names containing ``flex``).
+        TrajectoryError: No finger flexion DoFs (names containing ``flex``, not the wrist's ``root_…``), or
+            a non-finite flexion target (:func:`~handsim.glove.segmentation.summed_flexion`).
     """
-    flex = flexion(trajectory)
+    flex = summed_flexion(trajectory)
     times = np.asarray(trajectory.times, dtype=float)
     for phase in trajectory.phases:
         if phase.name.strip(".") == GRASP_PHASE and phase.stop > phase.start:
@@ -160,7 +147,7 @@ def flexion_fraction(trajectory: Trajectory, grasp: GraspFrame, frame: int) -> f
 
     Returns 1.0 for a grasp without a rise (the open frame is the closed frame).
     """
-    flex = flexion(trajectory)
+    flex = summed_flexion(trajectory)
     rise = flex[grasp.closed] - flex[grasp.open]
     return 1.0 if rise <= 0 else float((flex[frame] - flex[grasp.open]) / rise)
 
@@ -177,7 +164,7 @@ def closing_frames(trajectory: Trajectory, grasp: GraspFrame, fractions: tuple[f
         Frames in ``[grasp.open, grasp.closed]``, each the first whose fraction reaches one of
         ``fractions``, without repeats, the most closed first.
     """
-    flex = flexion(trajectory)[grasp.open : grasp.closed + 1]
+    flex = summed_flexion(trajectory)[grasp.open : grasp.closed + 1]
     rise = flex[-1] - flex[0]
     frames = set()
     for s in fractions:

@@ -55,6 +55,7 @@ import pickle
 import threading
 from collections.abc import Iterator
 from dataclasses import replace
+from functools import partial
 from pathlib import Path
 
 import numpy as np
@@ -172,95 +173,13 @@ def _place(
         search, ranked = _searched(scene, trajectory, grasp, spec, screen=False)
     times = np.asarray(trajectory.times, dtype=float)
     bench = GripBench(scene, trajectory, control_rate, float(times[grasp.closed]) + release_delay)
-
-    # Directions held by each ranked candidate's finished grip test (-1: not finished). A candidate whose
-    # grip can no longer resist as many directions as an earlier one's is neither the winner nor an
-    # alternative, nor does it count towards the stop (it does not resist all six): its test ends there.
-    # So that such a test ends sooner, the directions that failed most often in the tests so far run first
-    # (the directions are independent: the whole tests are the same in any order).
-    held = [-1] * len(ranked)
-    failures = dict.fromkeys(DIRECTIONS, 0)
-    counting = threading.Lock()
-
-    def with_grip(candidate: Candidate, **stop) -> Candidate:
-        """The candidate with its grip test (``stop``: :meth:`GripBench.grip`'s ``needed`` and ``first``)."""
-        contact = float(times[candidate.contact_frame])
-        return replace(candidate, grip=bench.grip(candidate.pose, contact, spec.grip, **stop))
-
-    def gripped(ranked_candidate: tuple[int, Candidate]) -> Candidate:
-        rank, candidate = ranked_candidate
-
-        def needed() -> int:  # asked before each direction: on threads, earlier tests may finish meanwhile
-            return max(held[:rank], default=0)
-
-        first = sorted(DIRECTIONS, key=lambda label: -failures[label])
-        result = with_grip(candidate, needed=needed, first=first)
-        with counting:
-            for d in result.grip.stability.directions:
-                failures[d.direction] += not d.success and d.simulated_time > 0  # the runs made
-        held[rank] = result.grip.directions_held
-        return result
-
-    drawn = []  # the collider's query count after each candidate drawn
-
-    def candidates() -> Iterator[tuple[int, Candidate]]:
-        for rank, (_, _, pose) in enumerate(ranked):
-            candidate = search.with_contact(search.candidate(pose))
-            drawn.append(search.collider.queries)
-            yield rank, candidate
-
-    def enough(grips: list[Candidate]) -> bool:
-        return sum(c.grip.directions_held == len(DIRECTIONS) for c in grips) > spec.alternatives
-
-    # in rank order, until enough grips resist every direction; the next candidates' grip tests run on the
-    # other threads meanwhile (each is independent: the same result as testing them one after the other)
-    tested = map_until(gripped, candidates(), enough)
-    if tested:  # the candidates drawn past the stop leave no trace in the count of poses tried
-        search.collider.queries = drawn[len(tested) - 1]
-    tested.sort(key=Candidate.score, reverse=True)
-    queries = search.collider.queries + search.screened
-    if tested:
-        best = tested[0]
-        note = (
-            f"object placed where it fits at frame {best.fit_frame} (flexion fraction "
-            f"{best.fit_fraction:.2f} of the closing {grasp.open}–{grasp.closed}), touching "
-            f"{len(best.links)} links ({', '.join(best.links)}), penetration {best.depth * 1000:.2f} mm; the "
-            f"recorded closing grips it against {best.grip.directions_held} of 6 gravity directions; best of "
-            f"{len(tested)} grip tests, {queries} poses tried, {search.feasible_poses} within "
-            f"{spec.penetration * 1000:g} mm"
-        )
-        feasible = True
-    elif search.nearest is not None:
-        best = with_grip(search.with_contact(search.candidate(search.nearest[1])))  # the whole test
-        note = (
-            f"no object pose within {spec.penetration * 1000:g} mm of penetration touches the hand on the "
-            f"closing ramp: placed nearest the fingertips' centre without penetration ({queries} poses tried)"
-        )
-        feasible = True
-    else:
-        depth, pose = (
-            search.least if search.least is not None else (np.inf, np.array([0, 0, 0, 1, 0, 0, 0.0]))
-        )
-        best = search.with_contact(search.candidate(pose))
-        note = (
-            f"no object pose on the closing ramp penetrates the hand less than "
-            f"{spec.penetration * 1000:g} mm: the least penetrating of {queries} poses tried goes "
-            f"{depth * 1000:.1f} mm deep; placement infeasible, the hold is not judged"
-        )
-        feasible = False
-    perturbations = []
-    if feasible and (shift > 0 or turn_deg > 0):
-        points = None if search.round else search.points
-        for label, pose in perturbed_poses(best.pose, shift, turn_deg, points):
-            perturbations.append((label, search.with_contact(search.candidate(pose))))
+    grips = _GripTests(bench, times, spec, len(ranked))
+    tested, queries = _grip_tested(search, ranked, grips)
+    best, feasible, note = _winner(search, tested, grips, queries)
     return Placement(
         best=best,
-        alternatives=tuple(c for c in tested[1:] if c.grip.directions_held == best.grip.directions_held)[
-            : spec.alternatives
-        ]
-        if tested
-        else (),
-        perturbations=tuple(perturbations),
+        alternatives=_alternatives(tested, best, spec.alternatives),
+        perturbations=_perturbations(search, best, shift, turn_deg) if feasible else (),
         feasible=feasible,
         queries=queries,
         grip_tests=len(tested) + (1 if not tested and feasible else 0),
@@ -269,4 +188,140 @@ def _place(
         self_penetration=SelfCollider(scene)(targets_qpos(scene, trajectory, grasp.closed)),
         spec=spec.to_dict(),
         note=note,
+    )
+
+
+class _GripTests:
+    """The grip tests of the ranked candidates, each ended once it cannot matter.
+
+    A candidate whose grip can no longer resist as many directions as an earlier one's is neither the
+    winner nor an alternative, nor does it count towards the stop (it does not resist all six): its test
+    ends there. So that such a test ends sooner, the directions that failed most often in the tests so far
+    run first (the directions are independent: the whole tests are the same in any order). The tests may
+    run on several threads (:func:`~handsim.sim.parallel.map_until`): the counts they share live here.
+    """
+
+    def __init__(self, bench: GripBench, times: np.ndarray, spec: PlacementSpec, count: int) -> None:
+        """Tests on ``bench`` (trajectory ``times``, s) with ``spec``'s grip test, of ``count`` candidates."""
+        self._bench, self._times, self._spec = bench, times, spec
+        self._held = [-1] * count  # directions held by each ranked candidate's finished test (-1: not yet)
+        self._failures = dict.fromkeys(DIRECTIONS, 0)  # the runs made that failed, per direction
+        self._counting = threading.Lock()
+
+    def whole(self, candidate: Candidate) -> Candidate:
+        """The candidate with its whole grip test."""
+        return self._with_grip(candidate)
+
+    def ranked(self, ranked_candidate: tuple[int, Candidate]) -> Candidate:
+        """The candidate of rank ``ranked_candidate[0]`` with its grip test, ended once it cannot matter."""
+        rank, candidate = ranked_candidate
+        first = sorted(DIRECTIONS, key=lambda label: -self._failures[label])
+        result = self._with_grip(candidate, needed=partial(self._needed, rank), first=first)
+        with self._counting:
+            for d in result.grip.stability.directions:
+                self._failures[d.direction] += not d.success and d.simulated_time > 0  # the runs made
+        self._held[rank] = result.grip.directions_held
+        return result
+
+    def enough(self, grips: list[Candidate]) -> bool:
+        """Whether more of ``grips`` resist every direction than the alternatives kept besides the best."""
+        return sum(c.grip.directions_held == len(DIRECTIONS) for c in grips) > self._spec.alternatives
+
+    def _needed(self, rank: int) -> int:
+        """Directions the test of rank ``rank`` must still be able to resist to matter.
+
+        Asked before each direction: on threads, earlier tests may finish meanwhile.
+        """
+        return max(self._held[:rank], default=0)
+
+    def _with_grip(self, candidate: Candidate, **stop) -> Candidate:
+        """The candidate with its grip test (``stop``: :meth:`GripBench.grip`'s ``needed`` and ``first``)."""
+        contact = float(self._times[candidate.contact_frame])
+        return replace(candidate, grip=self._bench.grip(candidate.pose, contact, self._spec.grip, **stop))
+
+
+class _Draws:
+    """The ranked candidates, drawn lazily in rank order, with the collider's query count after each draw."""
+
+    def __init__(self, search: PlacementSearch, ranked: list[tuple[tuple, int, np.ndarray]]) -> None:
+        """Draws of the ranked seeds (key, level, pose) of ``search``."""
+        self._search, self._ranked = search, ranked
+        self.queries: list[int] = []  # the collider's query count after each candidate drawn
+
+    def __iter__(self) -> Iterator[tuple[int, Candidate]]:
+        """(rank, candidate with its fit and contact frames) of each seed, best ranked first."""
+        search = self._search
+        for rank, (_, _, pose) in enumerate(self._ranked):
+            candidate = search.with_contact(search.candidate(pose))
+            self.queries.append(search.collider.queries)
+            yield rank, candidate
+
+
+def _grip_tested(
+    search: PlacementSearch, ranked: list[tuple[tuple, int, np.ndarray]], grips: _GripTests
+) -> tuple[list[Candidate], int]:
+    """The ranked candidates with their grip tests, best first, and the count of poses tried.
+
+    In rank order, until enough grips resist every direction; the next candidates' grip tests run on the
+    other threads meanwhile (each is independent: the same result as testing them one after the other).
+    The candidates drawn past the stop leave no trace in the count of poses tried.
+    """
+    draws = _Draws(search, ranked)
+    tested = map_until(grips.ranked, draws, grips.enough)
+    queries = draws.queries[len(tested) - 1] if tested else search.collider.queries
+    tested.sort(key=Candidate.score, reverse=True)
+    return tested, queries + search.screened
+
+
+def _winner(
+    search: PlacementSearch, tested: list[Candidate], grips: _GripTests, queries: int
+) -> tuple[Candidate, bool, str]:
+    """The placed candidate, whether it is feasible, and the placement's note.
+
+    The best grip test's candidate; without one, the feasible pose nearest the fingertips' centre (with its
+    whole grip test); without that, the least penetrating pose seen (infeasible).
+    """
+    grasp, tolerance = search.grasp, search.spec.penetration
+    if tested:
+        best = tested[0]
+        note = (
+            f"object placed where it fits at frame {best.fit_frame} (flexion fraction "
+            f"{best.fit_fraction:.2f} of the closing {grasp.open}–{grasp.closed}), touching "
+            f"{len(best.links)} links ({', '.join(best.links)}), penetration {best.depth * 1000:.2f} mm; the "
+            f"recorded closing grips it against {best.grip.directions_held} of 6 gravity directions; best of "
+            f"{len(tested)} grip tests, {queries} poses tried, {search.feasible_poses} within "
+            f"{tolerance * 1000:g} mm"
+        )
+        return best, True, note
+    if search.nearest is not None:
+        best = grips.whole(search.with_contact(search.candidate(search.nearest[1])))
+        note = (
+            f"no object pose within {tolerance * 1000:g} mm of penetration touches the hand on the "
+            f"closing ramp: placed nearest the fingertips' centre without penetration ({queries} poses tried)"
+        )
+        return best, True, note
+    depth, pose = search.least if search.least is not None else (np.inf, np.array([0, 0, 0, 1, 0, 0, 0.0]))
+    note = (
+        f"no object pose on the closing ramp penetrates the hand less than "
+        f"{tolerance * 1000:g} mm: the least penetrating of {queries} poses tried goes "
+        f"{depth * 1000:.1f} mm deep; placement infeasible, the hold is not judged"
+    )
+    return search.with_contact(search.candidate(pose)), False, note
+
+
+def _alternatives(tested: list[Candidate], best: Candidate, count: int) -> tuple[Candidate, ...]:
+    """Up to ``count`` of the tested candidates after the best that resist as many directions as it."""
+    return tuple(c for c in tested[1:] if c.grip.directions_held == best.grip.directions_held)[:count]
+
+
+def _perturbations(
+    search: PlacementSearch, best: Candidate, shift: float, turn_deg: float
+) -> tuple[tuple[str, Candidate], ...]:
+    """The robustness ensemble: the winner moved by ``shift`` (m) and turned by ``turn_deg`` (degrees)."""
+    if not (shift > 0 or turn_deg > 0):
+        return ()
+    points = None if search.round else search.points
+    return tuple(
+        (label, search.with_contact(search.candidate(pose)))
+        for label, pose in perturbed_poses(best.pose, shift, turn_deg, points)
     )

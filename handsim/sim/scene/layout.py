@@ -17,7 +17,8 @@ from handsim.errors import ModelError
 
 CONTACT_SLOTS = 8
 """Contacts read per hand link × object part and step; more are counted (and reported) but not summed."""
-_SLOT = 5  # found, force (3, contact frame: normal first), dist
+CONTACT_SLOT_SIZE = 5
+"""sensordata values per contact slot: found, force (3, in the contact frame: normal first), distance."""
 _FOUND, _FORCE, _DIST = 1, 2, 8  # mjtConDataField bits
 _REDUCE_NONE, _REDUCE_MINDIST = 0, 1
 CONTACT_PREFIX = "contact/"
@@ -240,87 +241,22 @@ def scene_layout(model: mujoco.MjModel) -> SceneLayout:
     Raises:
         ModelError: An actuator does not drive a hand joint, or the scene has no hand.
     """
-    names = [model.actuator(i).name for i in range(model.nu)]
-    dof_names, actuators, dof_qpos, dof_qvel = [], [], [], []
-    for i, name in enumerate(names):
-        if not name.startswith(HAND_PREFIX) or int(model.actuator_trntype[i]) != int(
-            mujoco.mjtTrn.mjTRN_JOINT
-        ):
-            raise ModelError(
-                f"actuator {name!r} is not a hand joint actuator (expected '{HAND_PREFIX}<dof>_act')"
-            )
-        joint = int(model.actuator_trnid[i, 0])
-        dof_names.append(model.joint(joint).name.removeprefix(HAND_PREFIX))
-        actuators.append(i)
-        dof_qpos.append(int(model.jnt_qposadr[joint]))
-        dof_qvel.append(int(model.jnt_dofadr[joint]))
-    hand_bodies = [i for i in range(model.nbody) if model.body(i).name.startswith(HAND_PREFIX)]
-    if not hand_bodies:
-        raise ModelError(f"the scene has no hand (no body named {HAND_PREFIX}…)")
-    roots = [b for b in hand_bodies if int(model.body_parentid[b]) == 0]
-    colliding = {
-        int(model.geom_bodyid[g])
-        for g in range(model.ngeom)
-        if model.geom_contype[g] or model.geom_conaffinity[g]
-    }
-    links = [b for b in hand_bodies if b in colliding]
-
-    tips = []
-    for s in range(model.nsite):
-        name, body = model.site(s).name, int(model.site_bodyid[s])
-        if name.startswith(HAND_PREFIX) and name != model.body(body).name:
-            tips.append(s)
-
-    objects = []
-    parts_all = []
-    for b in range(1, model.nbody):
-        name = model.body(b).name
-        if not (name.startswith("obj") and "/" in name) or int(model.body_parentid[b]) != 0:
-            continue
-        prefix = name[: name.index("/") + 1]
-        parts = [c for c in range(model.nbody) if model.body(c).name.startswith(prefix)]
-        jnt = int(model.body_jntadr[b])
-        hinge = [j for j in range(model.njnt) if model.joint(j).name == prefix + "hinge"]
-        support = _id(model, mujoco.mjtObj.mjOBJ_EQUALITY, prefix + SUPPORT_SUFFIX)
-        objects.append(
-            ObjectLayout(
-                prefix=prefix,
-                root_body=b,
-                free_qpos=int(model.jnt_qposadr[jnt]) if jnt >= 0 else -1,
-                free_dof=int(model.jnt_dofadr[jnt]) if jnt >= 0 else -1,
-                hinge_qpos=int(model.jnt_qposadr[hinge[0]]) if hinge else -1,
-                hinge_dof=int(model.jnt_dofadr[hinge[0]]) if hinge else -1,
-                part_bodies=tuple(parts),
-                part_names=tuple(model.body(c).name.removeprefix(prefix) for c in parts),
-                support_eq=support,
-                collision_geoms=tuple(
-                    int(g)
-                    for g in range(model.ngeom)
-                    if int(model.geom_bodyid[g]) in parts
-                    and (model.geom_contype[g] or model.geom_conaffinity[g])
-                ),
-            )
-        )
-        parts_all.extend(model.body(c).name for c in parts)
-
-    contact = np.full((len(links), len(parts_all)), -1, dtype=np.int64)
-    for j, part in enumerate(parts_all):
-        for i, link in enumerate(links):
-            contact[i, j] = _sensor_adr(model, f"{CONTACT_PREFIX}{model.body(link).name}|{part}")
+    dof_names, actuators, dof_qpos, dof_qvel = _actuated_dofs(model)
+    roots, links = _hand_bodies(model)
+    tips = _tip_sites(model)
+    objects = _object_layouts(model)
+    parts_all = [model.body(c).name for o in objects for c in o.part_bodies]
     link_names = tuple(model.body(b).name.removeprefix(HAND_PREFIX) for b in links)
     tip_names = tuple(model.site(s).name.removeprefix(HAND_PREFIX) for s in tips)
+    contact = _contact_adr(model, links, parts_all)
     hands = tuple(
-        _hand_layout(model, root, parts_all, len(roots) > 1, tuple(dof_names), link_names, tip_names)
+        _hand_layout(model, root, parts_all, len(roots) > 1, dof_names, link_names, tip_names)
         for root in roots
     )
     first = hands[0]
-    pose_adr = np.array(
-        [[_sensor_adr(model, POSITION_PREFIX + model.body(o.root_body).name),
-          _sensor_adr(model, ORIENTATION_PREFIX + model.body(o.root_body).name)] for o in objects],
-        dtype=np.int64,
-    ).reshape(-1, 2)  # fmt: skip
+    pose_adr = _object_pose_adr(model, objects)
     return SceneLayout(
-        dof_names=tuple(dof_names),
+        dof_names=dof_names,
         actuators=np.asarray(actuators, dtype=np.int64),
         dof_qpos=np.asarray(dof_qpos, dtype=np.int64),
         dof_qvel=np.asarray(dof_qvel, dtype=np.int64),
@@ -333,7 +269,7 @@ def scene_layout(model: mujoco.MjModel) -> SceneLayout:
         mocap=first.mocap,
         tip_names=tip_names,
         tip_sites=np.asarray(tips, dtype=np.int64),
-        objects=tuple(objects),
+        objects=objects,
         contact_adr=contact,
         penetration_adr=first.penetration_adr,
         tip_adr=np.array(
@@ -343,6 +279,108 @@ def scene_layout(model: mujoco.MjModel) -> SceneLayout:
         object_pose_adr=pose_adr,
         hands=hands,
     )
+
+
+def _actuated_dofs(model: mujoco.MjModel) -> tuple[tuple[str, ...], list[int], list[int], list[int]]:
+    """The hand's DoF names, actuator ids, qpos and qvel addresses, in actuator order.
+
+    Raises:
+        ModelError: An actuator does not drive a hand joint.
+    """
+    dof_names, actuators, dof_qpos, dof_qvel = [], [], [], []
+    for i in range(model.nu):
+        name = model.actuator(i).name
+        if not name.startswith(HAND_PREFIX) or int(model.actuator_trntype[i]) != int(
+            mujoco.mjtTrn.mjTRN_JOINT
+        ):
+            raise ModelError(
+                f"actuator {name!r} is not a hand joint actuator (expected '{HAND_PREFIX}<dof>_act')"
+            )
+        joint = int(model.actuator_trnid[i, 0])
+        dof_names.append(model.joint(joint).name.removeprefix(HAND_PREFIX))
+        actuators.append(i)
+        dof_qpos.append(int(model.jnt_qposadr[joint]))
+        dof_qvel.append(int(model.jnt_dofadr[joint]))
+    return tuple(dof_names), actuators, dof_qpos, dof_qvel
+
+
+def _hand_bodies(model: mujoco.MjModel) -> tuple[list[int], list[int]]:
+    """Body ids of the hands' roots and of their links (hand bodies with collision geoms), in body order.
+
+    Raises:
+        ModelError: The scene has no hand.
+    """
+    hand_bodies = [i for i in range(model.nbody) if model.body(i).name.startswith(HAND_PREFIX)]
+    if not hand_bodies:
+        raise ModelError(f"the scene has no hand (no body named {HAND_PREFIX}…)")
+    roots = [b for b in hand_bodies if int(model.body_parentid[b]) == 0]
+    colliding = {
+        int(model.geom_bodyid[g])
+        for g in range(model.ngeom)
+        if model.geom_contype[g] or model.geom_conaffinity[g]
+    }
+    return roots, [b for b in hand_bodies if b in colliding]
+
+
+def _tip_sites(model: mujoco.MjModel) -> list[int]:
+    """Site ids of the fingertips: hand sites not named for their body."""
+    return [
+        s
+        for s in range(model.nsite)
+        if model.site(s).name.startswith(HAND_PREFIX)
+        and model.site(s).name != model.body(int(model.site_bodyid[s])).name
+    ]
+
+
+def _object_layouts(model: mujoco.MjModel) -> tuple[ObjectLayout, ...]:
+    """The objects: one per world child body named ``obj…/…``, in body order."""
+    objects = []
+    for b in range(1, model.nbody):
+        name = model.body(b).name
+        if (name.startswith("obj") and "/" in name) and int(model.body_parentid[b]) == 0:
+            objects.append(_object_layout(model, b, name[: name.index("/") + 1]))
+    return tuple(objects)
+
+
+def _object_layout(model: mujoco.MjModel, root: int, prefix: str) -> ObjectLayout:
+    """The object whose root body is ``root``, its parts the bodies named ``prefix…``."""
+    parts = [c for c in range(model.nbody) if model.body(c).name.startswith(prefix)]
+    jnt = int(model.body_jntadr[root])
+    hinge = [j for j in range(model.njnt) if model.joint(j).name == prefix + "hinge"]
+    return ObjectLayout(
+        prefix=prefix,
+        root_body=root,
+        free_qpos=int(model.jnt_qposadr[jnt]) if jnt >= 0 else -1,
+        free_dof=int(model.jnt_dofadr[jnt]) if jnt >= 0 else -1,
+        hinge_qpos=int(model.jnt_qposadr[hinge[0]]) if hinge else -1,
+        hinge_dof=int(model.jnt_dofadr[hinge[0]]) if hinge else -1,
+        part_bodies=tuple(parts),
+        part_names=tuple(model.body(c).name.removeprefix(prefix) for c in parts),
+        support_eq=_id(model, mujoco.mjtObj.mjOBJ_EQUALITY, prefix + SUPPORT_SUFFIX),
+        collision_geoms=tuple(
+            int(g)
+            for g in range(model.ngeom)
+            if int(model.geom_bodyid[g]) in parts and (model.geom_contype[g] or model.geom_conaffinity[g])
+        ),
+    )
+
+
+def _contact_adr(model: mujoco.MjModel, links: list[int], parts: list[str]) -> np.ndarray:
+    """(links, parts) sensordata address of each link × part contact sensor."""
+    contact = np.full((len(links), len(parts)), -1, dtype=np.int64)
+    for j, part in enumerate(parts):
+        for i, link in enumerate(links):
+            contact[i, j] = _sensor_adr(model, f"{CONTACT_PREFIX}{model.body(link).name}|{part}")
+    return contact
+
+
+def _object_pose_adr(model: mujoco.MjModel, objects: tuple[ObjectLayout, ...]) -> np.ndarray:
+    """(objects, 2) sensordata addresses of each object root's world position and quaternion."""
+    return np.array(
+        [[_sensor_adr(model, POSITION_PREFIX + model.body(o.root_body).name),
+          _sensor_adr(model, ORIENTATION_PREFIX + model.body(o.root_body).name)] for o in objects],
+        dtype=np.int64,
+    ).reshape(-1, 2)  # fmt: skip
 
 
 def _hand_layout(

@@ -30,10 +30,10 @@ import numpy as np
 import numpy.typing as npt
 
 from handsim.datatypes.rotations import quat_angle
-from handsim.errors import SimulationError
 from handsim.sim.parallel import map_on_workers, sim_threads
 from handsim.sim.scene.compiled import SimScene
 from handsim.sim.specs import StabilitySpec
+from handsim.sim.stability.inputs import check_request, checked_array, mocap_pose
 from handsim.sim.stepper import Stepper
 
 CHECK_STEPS = 10
@@ -204,53 +204,25 @@ def stability_test(
             the state or replace the control).
     """
     spec = spec or StabilitySpec()
-    layout = scene.layout
+    check_request(scene.layout, object_index, first, needed, DIRECTIONS)
     model = scene.model
-    objects = layout.objects
-    if len(layout.hands) > 1:
-        raise ValueError(
-            f"the stability tests hold one hand; the scene has {len(layout.hands)} "
-            f"({[h.name for h in layout.hands]})"
-        )
-    if not 0 <= object_index < len(objects):
-        raise ValueError(f"object_index {object_index} names no object; the scene has {len(objects)}")
-    unknown = [label for label in first if label not in DIRECTIONS]
-    if unknown:
-        raise ValueError(f"first: unknown directions {unknown}; expected labels of {list(DIRECTIONS)}")
-    if first and not callable(needed) and needed <= 0:
-        raise ValueError("first orders the runs of a test with needed; without it the runs go to threads")
-    qpos = _array(qpos, (model.nq,), "qpos")
-    ctrl = _array(ctrl, (model.nu,), "ctrl")
-    mocap = _mocap_pose(scene, qpos, mocap_pos, mocap_quat)
-
-    frozen = _frozen_model(model, spec)
+    qpos = checked_array(qpos, (model.nq,), "qpos")
+    ctrl = checked_array(ctrl, (model.nu,), "ctrl")
+    mocap = mocap_pose(scene, qpos, mocap_pos, mocap_quat)
+    frozen = frozen_model(model, spec)
     run = _Run(replace(scene, model=frozen), qpos, ctrl, mocap, object_index)
-    steps = max(1, round(spec.duration / frozen.opt.timestep))
-    obman_dir = np.asarray(spec.obman_direction) / np.linalg.norm(spec.obman_direction)
-    obman_steps = max(1, round(spec.obman_duration / frozen.opt.timestep))
-    jobs = [(label, spec.gravity * np.asarray(unit), steps) for label, unit in DIRECTIONS.items()]
-    jobs.append(("obman", spec.gravity * obman_dir, obman_steps))
-    if callable(needed) or needed > 0:  # one after the other, the directions named first ahead, ObMan's last
-        by_label = {job[0]: job for job in jobs}
-        order = [*dict.fromkeys([*first, *DIRECTIONS]), "obman"]
-        bound = needed if callable(needed) else lambda: needed
-        ran = {
-            r.direction: r
-            for r in _until_out_of_reach(run, [by_label[d] for d in order], spec, stop_at_failure, bound)
-        }
-        results = [ran[label] for label, _, _ in jobs]
-    else:  # the runs are independent (each starts from the same state): on threads, each on its own MjData
-        runs = [run, *(run.fork() for _ in range(min(sim_threads(), len(jobs)) - 1))]
-        results = map_on_workers(
-            lambda worker, job: worker.direction(*job, spec, stop_at_failure), jobs, runs
-        )
+    jobs = _jobs(spec, frozen.opt.timestep)
+    if callable(needed) or needed > 0:
+        results = _until_out_of_reach(run, jobs, spec, stop_at_failure, needed, first)
+    else:
+        results = _on_threads(run, jobs, spec, stop_at_failure)
     directions, obman = tuple(results[:-1]), results[-1]
     return StabilityResult(
         directions=directions,
         success=all(d.success for d in directions),
         simulation_displacement=obman.displacement,
         obman=obman,
-        object=objects[object_index].prefix,
+        object=scene.layout.objects[object_index].prefix,
         in_contact_at_start=run.start_contact,
         initial_penetration=run.start_penetration,
         spec=spec.to_dict(),
@@ -258,80 +230,84 @@ def stability_test(
     )
 
 
+def _jobs(spec: StabilitySpec, timestep: float) -> list[tuple[str, np.ndarray, int]]:
+    """(label, gravity vector, steps) of each run: the six directions in order, then ObMan's."""
+    steps = max(1, round(spec.duration / timestep))
+    obman_dir = np.asarray(spec.obman_direction) / np.linalg.norm(spec.obman_direction)
+    obman_steps = max(1, round(spec.obman_duration / timestep))
+    jobs = [(label, spec.gravity * np.asarray(unit), steps) for label, unit in DIRECTIONS.items()]
+    jobs.append(("obman", spec.gravity * obman_dir, obman_steps))
+    return jobs
+
+
+def _on_threads(
+    run: _Run, jobs: list[tuple[str, np.ndarray, int]], spec: StabilitySpec, stop_at_failure: bool
+) -> list[DirectionResult]:
+    """Every run of ``jobs``, in their order; independent (each starts from the same state), so on threads."""
+    runs = [run, *(run.fork() for _ in range(min(sim_threads(), len(jobs)) - 1))]
+    return map_on_workers(lambda worker, job: worker.direction(*job, spec, stop_at_failure), jobs, runs)
+
+
 def _until_out_of_reach(
     run: _Run,
     jobs: list[tuple[str, np.ndarray, int]],
     spec: StabilitySpec,
     stop_at_failure: bool,
-    needed: Callable[[], int],
+    needed: int | Callable[[], int],
+    first: Sequence[str],
 ) -> list[DirectionResult]:
-    """The runs of ``jobs`` (ObMan's last) in the order given, until ``needed()`` directions are out of reach.
+    """The runs of ``jobs`` one after the other until ``needed`` directions are out of reach, in jobs order.
 
-    Each run made is the one :meth:`_Run.direction` makes alone; once fewer directions than ``needed()``
-    (asked before each run until then) can still succeed, the rest are reported as failures not run.
+    They run in the order of ``first``, then the other directions, ObMan's last. Each run made is the one
+    :meth:`_Run.direction` makes alone; once fewer directions than ``needed`` (asked before each run until
+    then, when a function) can still succeed, the rest are reported as failures not run.
     """
-    results: list[DirectionResult] = []
+    by_label = {job[0]: job for job in jobs}
+    order = [*dict.fromkeys([*first, *DIRECTIONS]), "obman"]
+    bound = needed if callable(needed) else lambda: needed
+    results: dict[str, DirectionResult] = {}
     directions = len(jobs) - 1
     stop = 0  # the count out of reach, once the test has stopped
-    for label, gravity, steps in jobs:
+    for label in order:
+        _, gravity, steps = by_label[label]
         if not stop:
-            failed = sum(not r.success for r in results[:directions])
-            count = needed()
+            failed = sum(not r.success for r in list(results.values())[:directions])
+            count = bound()
             stop = count if directions - failed < count else 0
         if stop:
-            results.append(
-                DirectionResult(
-                    direction=label,
-                    gravity=tuple(float(x) for x in gravity),
-                    success=False,
-                    displacement=None,
-                    rotation_deg=None,
-                    in_contact_at_end=False,
-                    links_in_contact=(),
-                    simulated_time=0.0,
-                    failure=f"not run: fewer than {stop} directions could still be resisted",
-                    warnings=(),
-                )
-            )
+            results[label] = _not_run(label, gravity, stop)
         else:
-            results.append(run.direction(label, gravity, steps, spec, stop_at_failure))
-    return results
+            results[label] = run.direction(label, gravity, steps, spec, stop_at_failure)
+    return [results[label] for label, _, _ in jobs]
 
 
-def _array(value: npt.ArrayLike, shape: tuple[int, ...], what: str) -> np.ndarray:
-    array = np.asarray(value, dtype=float)
-    if array.shape != shape:
-        raise ValueError(f"{what} must have shape {shape}, got {array.shape}")
-    if not np.all(np.isfinite(array)):
-        raise SimulationError(
-            f"stability test {what}: non-finite value at index {int(np.flatnonzero(~np.isfinite(array))[0])}"
-        )
-    return array.copy()
+def _not_run(label: str, gravity: np.ndarray, out_of_reach: int) -> DirectionResult:
+    """The failure of a run not made: fewer than ``out_of_reach`` directions could still be resisted."""
+    return DirectionResult(
+        direction=label,
+        gravity=tuple(float(x) for x in gravity),
+        success=False,
+        displacement=None,
+        rotation_deg=None,
+        in_contact_at_end=False,
+        links_in_contact=(),
+        simulated_time=0.0,
+        failure=f"not run: fewer than {out_of_reach} directions could still be resisted",
+        warnings=(),
+    )
 
 
-def _mocap_pose(
-    scene: SimScene, qpos: np.ndarray, pos: npt.ArrayLike | None, quat: npt.ArrayLike | None
-) -> tuple[np.ndarray, np.ndarray] | None:
-    layout = scene.layout
-    if layout.mocap < 0:
-        if pos is not None or quat is not None:
-            raise ValueError(
-                "mocap_pos/mocap_quat given, but the scene's hand has no mocap target (hand_root='fixed')"
-            )
-        return None
-    root = qpos[layout.root_free_qpos : layout.root_free_qpos + 7]
-    position = root[:3] if pos is None else _array(pos, (3,), "mocap_pos")
-    orientation = root[3:] if quat is None else _array(quat, (4,), "mocap_quat")
-    norm = np.linalg.norm(orientation)
-    if not norm > 0:
-        raise ValueError("mocap_quat must be a non-zero quaternion (w, x, y, z)")
-    return position.copy(), orientation / norm
-
-
-def _frozen_model(model: mujoco.MjModel, spec: StabilitySpec) -> mujoco.MjModel:
+def frozen_model(model: mujoco.MjModel, spec: StabilitySpec) -> mujoco.MjModel:
     """A copy of the model without gravity and, unless the spec keeps them, without environment contacts.
 
     The objects' weight is applied as a force instead (:meth:`_Run._start`), so the hand is weightless.
+
+    Args:
+        model: The scene's model (not modified).
+        spec: The test's parameters (``environment_contacts``).
+
+    Returns:
+        The copy the runs of :func:`stability_test` simulate.
     """
     frozen = copy.deepcopy(model)
     frozen.opt.gravity[:] = 0.0
@@ -393,11 +369,13 @@ class _Run:
         mujoco.mj_forward(model, data)
 
     def _links_in_contact(self) -> tuple[str, ...]:
+        """Hand links touching the judged object in the current state (names without ``hand/``)."""
         layout = self.scene.layout
         found = self.stepper.data.sensordata[layout.contact_adr[:, self.parts]]
         return tuple(name for name, n in zip(layout.link_names, found.sum(axis=1), strict=True) if n > 0)
 
     def _pose(self) -> tuple[np.ndarray, np.ndarray]:
+        """The judged object's centre of mass (its subtree's) and orientation in the current state."""
         data = self.stepper.data
         root = self.object.root_body
         return data.subtree_com[root].copy(), data.xquat[root].copy()
@@ -405,6 +383,7 @@ class _Run:
     def direction(
         self, label: str, gravity: np.ndarray, steps: int, spec: StabilitySpec, stop_at_failure: bool = False
     ) -> DirectionResult:
+        """One run: from the start state, ``steps`` steps with the objects weighted by ``gravity``, judged."""
         self._start(gravity)
         com0, quat0 = self._pose()
         warnings: list[str] = []
