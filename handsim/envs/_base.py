@@ -1,19 +1,25 @@
 """What both environments share: a stepper on a private model copy, checks, rendering, pickling.
 
-The stepper is :class:`~handsim.sim.stepper.Stepper`, the one stepping loop of the replay core.
+The stepper is :class:`~handsim.sim.stepper.Stepper`, the one stepping loop of the replay core. A subclass
+hands the base what it needs through two calls and one method, never through attributes the base would
+look up by name: :meth:`HandEnv._setup_sim` (the scene and stepper), :meth:`HandEnv._setup_observation`
+(where the state goes in the observation, an :class:`ObservedState`) and :meth:`HandEnv._action_description`
+(for the message of a wrong action).
 """
 
 from __future__ import annotations
 
+import abc
 import copy
 import dataclasses
-from typing import Any
+from typing import Any, NamedTuple, Protocol
 
 import gymnasium as gym
 import mujoco
 import numpy as np
 import numpy.typing as npt
 
+from handsim.envs._observation import ContactSummary
 from handsim.envs._render import OffscreenRenderer
 from handsim.sim.scene.compiled import SimScene
 from handsim.sim.stepper import Stepper
@@ -24,11 +30,50 @@ DEFAULT_SIZE = 480
 DEFAULT_CAMERA = "hand_cam"
 
 
-class HandEnv(gym.Env[np.ndarray, np.ndarray]):
+class ObservedState(Protocol):
+    """Where an observation holds the state the base gathers (:meth:`HandEnv._observe_state`).
+
+    Attributes:
+        pos_slice: The positions' slice; ``obs[pos_slice] = qpos[qpos_adr]``.
+        qpos_adr: The positions' qpos addresses.
+        vel_slice: The velocities' slice; ``obs[vel_slice] = qvel[qvel_adr]``.
+        qvel_adr: The velocities' qvel addresses.
+        contacts: The contact summary whose forces and penetration fill ``force_slice`` and ``pen_index``.
+        force_slice: The per-link contact forces' slice.
+        pen_index: The penetration's index.
+    """
+
+    pos_slice: slice
+    qpos_adr: np.ndarray
+    vel_slice: slice
+    qvel_adr: np.ndarray
+    contacts: ContactSummary
+    force_slice: slice
+    pen_index: int
+
+
+class DataViews(NamedTuple):
+    """Views into the simulation data and the observation buffer, made once per (un)pickled environment.
+
+    Views unpickle as copies, so they are never pickled: :meth:`HandEnv.__setstate__` makes them again.
+    """
+
+    qpos: np.ndarray
+    qvel: np.ndarray
+    sensordata: np.ndarray
+    ctrl: np.ndarray
+    obs_pos: np.ndarray
+    obs_vel: np.ndarray
+    obs_force: np.ndarray
+
+
+class HandEnv(gym.Env[np.ndarray, np.ndarray], abc.ABC):
     """Base of the handsim environments (not registered).
 
-    Subclasses call :meth:`_setup_sim` in ``__init__`` and rebuild their views into ``self.data`` and
-    the observation buffer in :meth:`_bind` (called again after unpickling).
+    Subclasses call :meth:`_setup_sim` and then :meth:`_setup_observation` in ``__init__`` (again for
+    another scene), and describe their action in :meth:`_action_description`. The base pickles every
+    attribute but its views (:class:`DataViews`), which it makes again after unpickling: a subclass keeps
+    no views of its own.
     """
 
     metadata: dict[str, Any] = {"render_modes": list(RENDER_MODES), "render_fps": 100}  # noqa: RUF012
@@ -90,21 +135,46 @@ class HandEnv(gym.Env[np.ndarray, np.ndarray]):
         return self._stepper.substeps * float(self._scene.model.opt.timestep)
 
     # ---- helpers ----------------------------------------------------------------------------------------
-    def _bind(self) -> None:
-        """(Re)create views into ``self.data`` and the observation buffer."""
+    def _setup_observation(self, observed: ObservedState, size: int) -> None:
+        """Allocate the observation buffer (``self._obs``, zeros) and the views into it and the data.
+
+        Args:
+            observed: Where the state the base gathers goes in the observation.
+            size: Number of observation elements.
+        """
+        self._observed = observed
+        self._obs = np.zeros(size)
+        self._views = self._make_views()
+
+    def _make_views(self) -> DataViews:
+        data, obs, observed = self._stepper.data, self._obs, self._observed
+        return DataViews(
+            qpos=data.qpos,
+            qvel=data.qvel,
+            sensordata=data.sensordata,
+            ctrl=data.ctrl,
+            obs_pos=obs[observed.pos_slice],
+            obs_vel=obs[observed.vel_slice],
+            obs_force=obs[observed.force_slice],
+        )
 
     def _observe_state(self) -> float:
         """Fill the observation's state, contact forces and penetration; returns the penetration, m.
 
-        Uses the views :meth:`_bind` made (``_obs_pos``/``_obs_vel``/``_obs_force``) and the index arrays
-        of :func:`~handsim.envs._observation.add_state`.
+        Gathers by the index arrays of :func:`~handsim.envs._observation.add_state` into the places the
+        :class:`ObservedState` of :meth:`_setup_observation` gives.
         """
-        self._obs_pos[:] = self._qpos[self._qpos_adr]
-        self._obs_vel[:] = self._qvel[self._qvel_adr]
-        self._contacts.link_forces(self._sensordata, self._obs_force)
-        penetration = self._contacts.penetration(self._sensordata)
-        self._obs[self._pen_index] = penetration
+        views, observed = self._views, self._observed
+        views.obs_pos[:] = views.qpos[observed.qpos_adr]
+        views.obs_vel[:] = views.qvel[observed.qvel_adr]
+        observed.contacts.link_forces(views.sensordata, views.obs_force)
+        penetration = observed.contacts.penetration(views.sensordata)
+        self._obs[observed.pen_index] = penetration
         return penetration
+
+    @abc.abstractmethod
+    def _action_description(self) -> str:
+        """What an action holds, for the message of an action of the wrong shape."""
 
     def _action(self, action: npt.ArrayLike) -> tuple[np.ndarray, float, int]:
         """The action as float64 clipped to the action space, its sum of squares, and how many clipped.
@@ -120,7 +190,7 @@ class HandEnv(gym.Env[np.ndarray, np.ndarray]):
         if a.shape != self.action_space.shape:
             raise ValueError(
                 f"{type(self).__name__}: action must have shape {self.action_space.shape} "
-                f"({self._action_doc}), got shape {a.shape}"
+                f"({self._action_description()}), got shape {a.shape}"
             )
         low, high = self.action_space.low, self.action_space.high
         if ((a >= low) & (a <= high)).all():  # the usual case in one reduction (NaN fails both tests)
@@ -132,8 +202,6 @@ class HandEnv(gym.Env[np.ndarray, np.ndarray]):
         if clipped:
             a = np.clip(a, low, high)
         return a, float(np.dot(a, a)), clipped
-
-    _action_doc = ""
 
     # ---- rendering --------------------------------------------------------------------------------------
     def render(self) -> np.ndarray | None:  # type: ignore[override]
@@ -156,13 +224,17 @@ class HandEnv(gym.Env[np.ndarray, np.ndarray]):
 
     # ---- pickling ---------------------------------------------------------------------------------------
     def __getstate__(self) -> dict:
+        """Every attribute but the views, which would unpickle as copies of what they view.
+
+        The stepper pickles with its data (the whole state, the warnings seen) and the private model with
+        whatever was changed in it (domain randomisation, a scenario's contact switch), so a copy goes on
+        bitwise like the original.
+        """
         state = self.__dict__.copy()
-        # the stepper pickles with its data (state, warnings seen); views into data and buffers would
-        # unpickle as copies: _bind() recreates them
-        for name in getattr(self, "_views", ()):
-            state.pop(name, None)
+        del state["_views"]
         return state
 
     def __setstate__(self, state: dict) -> None:
+        """Restore the attributes and make the views into the restored data and buffer again."""
         self.__dict__.update(state)
-        self._bind()
+        self._views = self._make_views()

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import math
 import numbers
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 from typing import Any
 
 
@@ -30,6 +30,22 @@ def positive(name: str, value: float) -> float:
     if not (math.isfinite(value) and value > 0):
         raise ValueError(f"{name} must be a finite number > 0, got {value}")
     return value
+
+
+def set_checked(instance: object, checks: Mapping[str, Callable[[str, float], float]]) -> None:
+    """Replace named numbers of a frozen dataclass by their checked floats (:func:`nonnegative`, …).
+
+    For a ``__post_init__``: the keywords an environment takes are checked where they are grouped.
+
+    Args:
+        instance: The dataclass instance.
+        checks: Field name → its check, called with the name (for the message) and the value.
+
+    Raises:
+        ValueError: A value fails its check (the message names the field).
+    """
+    for name, check in checks.items():
+        object.__setattr__(instance, name, check(name, getattr(instance, name)))
 
 
 def reset_options(options: object, allowed: Mapping[str, str], owner: str) -> Mapping[str, Any]:

@@ -141,8 +141,6 @@ class ReplayEnv(HandEnv):
             :func:`~handsim.sim.control.control_schedule`).
     """
 
-    _action_doc = "one residual in [-1, 1] per hand DoF"
-
     def __init__(
         self,
         scene: SimScene | None = None,
@@ -228,26 +226,17 @@ class ReplayEnv(HandEnv):
         self._task = task
         self._driver, self._last, self._times = task.driver, task.last, task.times
         observation = task.observation
-        # what HandEnv._observe_state gathers
-        self._qpos_adr, self._qvel_adr = observation.qpos_adr, observation.qvel_adr
-        self._contacts, self._pen_index = observation.contacts, observation.pen_index
         # the recorded targets and fingertip positions of every frame (the observation's references)
         self._ref_ctrl, self._ref_tips = task.ref_ctrl, observation.ref_tips
         self.observation_names = observation.names
         self.observation_slices = observation.slices
         self.observation_space = spaces.Box(-np.inf, np.inf, (observation.size,), np.float64)
         self.action_space = spaces.Box(-1.0, 1.0, (len(self.dof_names),), np.float32)
-        self._obs = np.zeros(observation.size)
+        self._setup_observation(observation, observation.size)
         self._started = False
-        self._views = ("_qpos", "_qvel", "_sensordata", "_data_ctrl", "_obs_pos", "_obs_vel", "_obs_force")
-        self._bind()
 
-    def _bind(self) -> None:
-        data, obs, observation = self._stepper.data, self._obs, self._task.observation
-        self._qpos, self._qvel, self._sensordata = data.qpos, data.qvel, data.sensordata
-        self._data_ctrl = data.ctrl
-        self._obs_pos, self._obs_vel = obs[observation.pos_slice], obs[observation.vel_slice]
-        self._obs_force = obs[observation.force_slice]
+    def _action_description(self) -> str:
+        return "one residual in [-1, 1] per hand DoF"
 
     # ---- public facts -----------------------------------------------------------------------------------
     @property
@@ -361,7 +350,7 @@ class ReplayEnv(HandEnv):
                 else "call reset() before step()"
             )
         n = k + 1
-        self._task.controls(a, n, self._data_ctrl)
+        self._task.controls(a, n, self._views.ctrl)
         events = self._driver.advance()  # the controls are in data.ctrl already
         penetration = self._observe()
         reward, numbers = self._task.reward(self._obs, n, squares, penetration)
@@ -384,6 +373,6 @@ class ReplayEnv(HandEnv):
         obs, observation = self._obs, self._task.observation
         penetration = self._observe_state()
         frame = self._driver.frame
-        observation.features(obs, frame, self._sensordata)
+        observation.features(obs, frame, self._views.sensordata)
         obs[observation.progress_index] = frame / self._last
         return penetration

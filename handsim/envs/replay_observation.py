@@ -59,15 +59,10 @@ class ReplayObservation:
         names: One name per element, ``<group>/<label>``.
         slices: The slice of each group.
         size: Number of elements.
-        pos_slice: The positions' slice; ``obs[pos_slice] = qpos[qpos_adr]``.
-        qpos_adr: The positions' qpos addresses.
-        vel_slice: The velocities' slice; ``obs[vel_slice] = qvel[qvel_adr]``.
-        qvel_adr: The velocities' qvel addresses.
+        pos_slice, qpos_adr, vel_slice, qvel_adr, contacts, force_slice, pen_index: Where the state goes
+            (:class:`~handsim.envs._base.ObservedState`).
         ref_tips: The fingertip sites' world positions in each frame's recorded state (frames, tips · 3), m.
         tracks: The recorded objects (:class:`ObjectTrack`).
-        contacts: The contact summary whose forces and penetration fill ``force_slice`` and ``pen_index``.
-        force_slice: The per-link contact forces' slice.
-        pen_index: The penetration's index.
         contact_index: The index of ``contact_state/touching_links`` (``held`` follows it).
         progress_index: The progress's index.
         err_hand: The slice of ``err_hand_qpos``.

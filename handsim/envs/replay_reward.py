@@ -13,7 +13,7 @@ import math
 
 import numpy as np
 
-from handsim.envs._checks import nonnegative, positive
+from handsim.envs._checks import nonnegative, positive, set_checked
 from handsim.envs.replay_observation import ReplayObservation
 
 STEP_NUMBERS = (
@@ -62,9 +62,8 @@ class RewardWeights:
     action_weight: float
 
     def __post_init__(self) -> None:
-        for field in dataclasses.fields(self):
-            check = positive if field.name.endswith("_sigma") else nonnegative
-            object.__setattr__(self, field.name, check(field.name, getattr(self, field.name)))
+        names = [field.name for field in dataclasses.fields(self)]
+        set_checked(self, {name: positive if name.endswith("_sigma") else nonnegative for name in names})
 
 
 class ReplayReward:
