@@ -22,7 +22,7 @@ import numpy as np
 import pytest
 
 import handsim  # noqa: F401  (registers the environments)
-from handsim.assets import ASSETS_DIR, TZIONAS_DIR
+from handsim.assets import TZIONAS_DIR
 from handsim.cli import main
 from handsim.correct import CorrectionConfig, CorrectionError, correct, write_corrected
 from handsim.correct.backend import CpuRollout, rollout_backend, start_of
@@ -175,13 +175,6 @@ def test_the_files_header_records_the_provenance(corrected, tmp_path):
     assert header["backend"] == "cpu"
     assert set(header["versions"]) == {"handsim", "mujoco", "numpy"}
     assert header["score"]["status"] == corrected.score.status
-
-
-def test_a_trial_without_a_recorded_object_is_refused():
-    with pytest.raises(
-        CorrectionError, match=r"tennis_ball\.grasp\.json: the scene has objects without a recorded"
-    ):
-        correct(load_trial(ASSETS_DIR / "demo" / "tennis_ball.grasp.json"), FAST)
 
 
 def test_a_hand_only_sequence_is_refused(tmp_path):

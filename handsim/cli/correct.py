@@ -14,20 +14,24 @@ import argparse
 import math
 import sys
 import time
+from pathlib import Path
 from typing import TYPE_CHECKING
 
 from handsim.cli._common import (
+    EXIT_INTERRUPTED,
     Commands,
     add_arctic_options,
     add_force,
     add_object_mass_options,
     non_negative_int,
+    output_dir,
     output_file,
     positive_int,
     usage_error,
     write_text,
 )
 from handsim.correct.config import BUDGETS, CorrectionConfig
+from handsim.errors import HandsimError
 
 if TYPE_CHECKING:
     from handsim.correct import Correction, CorrectionScore
@@ -40,7 +44,12 @@ def _line(label: str, text: str) -> None:
     print(f"{label:<{LABEL}}{text}")
 
 
-def _tracking_text(t) -> str:
+def _tracking_text(t, objective: str) -> str:
+    if objective == "hold":  # a glove grasp: the object against where the grasp placed it, over the hold
+        return (
+            f"{t.track} ({t.track_reason}); within 1 cm of its placement in {t.within_1cm * 100:.1f} % of "
+            f"the hold's frames, mean displacement {t.mean_drift_mm:.1f} mm (max {t.max_drift_mm:.1f})"
+        )
     return (
         f"within 1 cm in {t.within_1cm * 100:.1f} % of frames, mean drift {t.mean_drift_mm:.1f} mm "
         f"(max {t.max_drift_mm:.1f}), rotation {t.mean_rotation_deg:.1f}° mean; track {t.track}"
@@ -63,8 +72,8 @@ def print_score(score: CorrectionScore) -> None:
             f"{score.wrist_position_rms_mm:.1f} mm RMS ({score.wrist_position_max_mm:.1f} max), "
             f"{score.wrist_rotation_rms_deg:.2f}° RMS ({score.wrist_rotation_max_deg:.2f}° max)",
         )
-    _line("before", _tracking_text(score.before))
-    _line("after", _tracking_text(score.after))
+    _line("before", _tracking_text(score.before, score.objective))
+    _line("after", _tracking_text(score.after, score.objective))
     for i, m in enumerate(score.largest):
         _line(
             "largest" if i == 0 else "",
@@ -73,24 +82,34 @@ def print_score(score: CorrectionScore) -> None:
         )
     _line(score.status, score.reason)
     if score.large:
-        _line("implausible", f"the recording needs a large correction: {score.large_reason}")
+        # lazy: the score module (the simulation stack), loaded by the correction already
+        from handsim.correct.score import implausible_text
+
+        _line("implausible", implausible_text(score))
 
 
-def _correct(args: argparse.Namespace) -> int:
-    if not args.output.name.lower().endswith(SUFFIX):
-        return usage_error("correct", f"-o {args.output}: a corrected trial's name ends in {SUFFIX!r}")
-    # lazy: the simulation stack (MuJoCo), only when correcting
-    from handsim.correct import correct, write_corrected
-    from handsim.trials import TrialError, load_trial
-
+def _config(args: argparse.Namespace) -> CorrectionConfig:
     budget = BUDGETS[args.budget]
-    config = CorrectionConfig(
+    return CorrectionConfig(
         samples=args.samples or budget.samples,
         iterations=args.iterations or budget.iterations,
         horizon=args.horizon,
         wrist=not args.no_wrist,
         seed=args.seed,
     )
+
+
+def _correct(args: argparse.Namespace) -> int:
+    name = args.output.name.lower()
+    if Path(args.trial).is_dir() and not name.endswith(".npz"):
+        return _correct_dataset(args, _config(args))
+    if not name.endswith(SUFFIX):
+        return usage_error("correct", f"-o {args.output}: a corrected trial's name ends in {SUFFIX!r}")
+    # lazy: the simulation stack (MuJoCo), only when correcting
+    from handsim.correct import correct, write_corrected
+    from handsim.trials import TrialError, load_trial
+
+    config = _config(args)
     try:
         loaded = load_trial(
             args.trial,
@@ -100,6 +119,7 @@ def _correct(args: argparse.Namespace) -> int:
             force=args.force,
             mano_dir=args.mano_dir,
             templates=args.templates,
+            grasp=args.grasp,
         )
     except TrialError as exc:
         return usage_error("correct", str(exc))
@@ -129,6 +149,69 @@ def _correct(args: argparse.Namespace) -> int:
     return 0
 
 
+def _correct_dataset(args: argparse.Namespace, config: CorrectionConfig) -> int:
+    """``handsim correct DATASET -o OUTDIR``: every trial corrected by the dataset runner, then the report."""
+    # lazy: the runner (MuJoCo) and the trial loaders, only for a run
+    from handsim.runner.correction_job import CorrectionJob
+    from handsim.runner.execute import run_dataset
+    from handsim.runner.records import read_records
+    from handsim.trials import TrialOptions, discover, select
+
+    discovery = discover(args.trial, TrialOptions(mano_dir=args.mano_dir, templates=args.templates))
+    entries = select(discovery.entries, args.only, args.limit)
+    if not entries:
+        return usage_error(
+            "correct", f"no trial{f' matching {args.only!r}' if args.only else ''} in {args.trial}"
+        )
+    _line("dataset", f"{discovery.root}: {len(discovery.entries)} trials; correcting {len(entries)}")
+    out = args.output
+    try:
+        summary = run_dataset(
+            discovery if len(entries) == len(discovery.entries) else entries, out, workers=args.workers,
+            backend=args.backend, address=args.address, job=CorrectionJob(config),
+            command=["handsim", *sys.argv[1:]], progress=True,
+        )  # fmt: skip
+    except KeyboardInterrupt:
+        print(f"handsim correct: interrupted; run the same command to resume ({out})", file=sys.stderr)
+        return EXIT_INTERRUPTED
+    for note in summary.notes:
+        _line("note", note)
+    _line("records", f"{out / 'records.jsonl'} ({len(summary.ran)} corrected now, {summary.skipped} resumed)")
+    ids = {e.id for e in entries}
+    records = [r for r in read_records(out) if r["id"] in ids]
+    for record in records:
+        _line("", _record_line(record))
+    try:
+        # lazy: the report (matplotlib for the plots), only after a run
+        from handsim.report.correction import write_correction_report
+
+        _line("report", str(write_correction_report(out)))
+    except HandsimError as exc:
+        _line("note", f"no report: {exc}")
+    if summary.all_failed:
+        print(
+            f"handsim correct: error: every trial failed ({summary.failed} of {summary.trials})",
+            file=sys.stderr,
+        )
+        return 1
+    return 0
+
+
+def _record_line(record: dict) -> str:
+    """One line for a dataset trial's record: its verdict and size, or why it was not corrected."""
+    c = record.get("correction") or {}
+    if record["status"] == "error":
+        error = record.get("error") or {}
+        return f"{record['id']}: failed: {error.get('type')}: {error.get('message')}"
+    if "finger_rms_deg" not in c:
+        return f"{record['id']}: {c.get('status')}: {c.get('reason')}"
+    text = f"{record['id']}: {c['status']}; fingers {c['finger_rms_deg']:.2f}° RMS"
+    text += f" ({c['finger_max_deg']:.2f}° max)"
+    if c.get("wrist_position_rms_mm") is not None:
+        text += f"; wrist {c['wrist_position_rms_mm']:.1f} mm, {c['wrist_rotation_rms_deg']:.2f}° RMS"
+    return text + (f"; implausible: {c['implausible']}" if c.get("implausible") else "")
+
+
 def _print_correction(correction: Correction, seconds: float) -> None:
     plan, config = correction.plan, correction.config
     recorded = float(correction.reference.schedule.times[-1] - correction.reference.schedule.times[0])
@@ -155,19 +238,25 @@ def register(commands: Commands) -> None:
         "to the recording (sampling-based optimisation in receding horizon on MuJoCo rollouts; "
         "docs/correct.md). Writes the corrected trial (replay it with `handsim replay OUT.corrected.npz`) "
         "and prints how large the correction had to be: a recording that needs a large one is implausible. "
-        "For trials whose objects follow recorded tracks (Tzionas sequences with objects, ARCTIC sequences). "
+        "For trials whose objects follow recorded tracks (Tzionas sequences with objects, ARCTIC sequences) "
+        "and glove grasps (a GraspDB14 recording or episode, a scripted grasp: the placed object held "
+        "through the hold window). Given a dataset folder and an output folder, corrects every trial through "
+        "the dataset runner (resumable; local cores or Ray) and writes OUT/correction.html. "
         "Deterministic for a seed; the result does not depend on the threads.",
     )
     parser.add_argument(
-        "trial", metavar="TRIAL", help="Tzionas Model_Hand_*.MOTION (or Models/NN), ARCTIC .mano.npy"
+        "trial",
+        metavar="TRIAL",
+        help="Tzionas Model_Hand_*.MOTION (or Models/NN), ARCTIC .mano.npy, GraspDB14 recording, "
+        "NAME.grasp.json; or a dataset folder (with -o OUTDIR)",
     )
     parser.add_argument(
         "-o",
         "--output",
-        type=output_file,
+        type=_output,
         required=True,
         metavar="OUT",
-        help="the corrected trial, NAME.corrected.npz",
+        help="the corrected trial, NAME.corrected.npz; for a dataset folder, an output folder",
     )
     parser.add_argument(
         "--seed", type=non_negative_int, default=0, metavar="N", help="seed of the sampling (default 0)"
@@ -211,4 +300,32 @@ def register(commands: Commands) -> None:
     add_object_mass_options(parser, forced=True)
     add_force(parser)
     add_arctic_options(parser)
+    _add_dataset_options(parser)
     parser.set_defaults(func=_correct, simulates=True, command_parser=parser)
+
+
+def _output(text: str) -> Path:
+    """An argparse type: a corrected trial's file (``….npz``), else a dataset run's output folder."""
+    return output_file(text) if text.lower().endswith(".npz") else output_dir(text)
+
+
+def _add_dataset_options(parser: argparse.ArgumentParser) -> None:
+    """The options of a glove episode and of a dataset run."""
+    options = {
+        "--grasp": dict(
+            type=positive_int, metavar="K",
+            help="glove recordings: correct grasp episode K (1, 2 …; `handsim replay FILE` lists them)",
+        ),
+        "--workers": dict(
+            type=positive_int, metavar="N", help="dataset: trials at once (default: all cores)"
+        ),
+        "--backend": dict(choices=("local", "ray"), default="local", help="dataset: process pool or Ray"),
+        "--address": dict(
+            metavar="ADDR",
+            help="dataset with --backend ray: a Ray cluster (HOST:PORT or 'auto'); default: start one",
+        ),
+        "--only": dict(metavar="GLOB", help="dataset: correct only trials whose id matches"),
+        "--limit": dict(type=non_negative_int, metavar="N", help="dataset: only the first N trials (by id)"),
+    }  # fmt: skip
+    for flag, settings in options.items():
+        parser.add_argument(flag, **settings)

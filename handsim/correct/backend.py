@@ -32,6 +32,17 @@ CONTROLS = (
     mujoco.mjtState.mjSTATE_CTRL | mujoco.mjtState.mjSTATE_MOCAP_POS | mujoco.mjtState.mjSTATE_MOCAP_QUAT
 )
 """What a rollout's controls set before each step: actuator targets, then every mocap body's pose."""
+SWITCHED_CONTROLS = CONTROLS | mujoco.mjtState.mjSTATE_EQ_ACTIVE
+"""The controls of a scene that releases supports during the run (a glove scene): actuator targets, every
+equality's active flag (a support switched off at the release), then every mocap body's pose."""
+
+
+def control_spec(model: mujoco.MjModel, length: int) -> int:
+    """What a control vector of ``length`` elements sets: :data:`CONTROLS`, else :data:`SWITCHED_CONTROLS`.
+
+    The two differ by the equalities' flags; without equalities they are the same vector.
+    """
+    return int(CONTROLS if length == mujoco.mj_stateSize(model, CONTROLS) else SWITCHED_CONTROLS)
 
 
 @dataclass(frozen=True)
@@ -43,18 +54,21 @@ class Start:
         warmstart: Its ``qacc_warmstart`` (MuJoCo's solver starts from it: part of the state for bitwise
             rollouts).
         mocap: Every mocap body's pose (nmocap, 7).
+        eq_active: Every equality's active flag (neq,): a support released or not.
     """
 
     state: np.ndarray
     warmstart: np.ndarray
     mocap: np.ndarray
+    eq_active: np.ndarray
 
 
 def start_of(model: mujoco.MjModel, data: mujoco.MjData) -> Start:
     """The planning start of the simulation in ``data``."""
     state = np.empty(mujoco.mj_stateSize(model, STATE))
     mujoco.mj_getState(model, data, state, STATE)
-    return Start(state, data.qacc_warmstart.copy(), np.concatenate([data.mocap_pos, data.mocap_quat], axis=1))
+    mocap = np.concatenate([data.mocap_pos, data.mocap_quat], axis=1)
+    return Start(state, data.qacc_warmstart.copy(), mocap, data.eq_active.astype(float))
 
 
 class RolloutBackend(Protocol):
@@ -77,7 +91,8 @@ class RolloutBackend(Protocol):
             model: The model (not changed).
             state: The start, ``mj_getState(…, mjSTATE_FULLPHYSICS)`` (nstate,).
             warmstart: The start's ``qacc_warmstart`` (nv,).
-            controls: Per sequence and step, the :data:`CONTROLS` vector (N, nstep, ncontrol).
+            controls: Per sequence and step, the :data:`CONTROLS` vector, or the :data:`SWITCHED_CONTROLS`
+                one (N, nstep, ncontrol): their lengths tell them apart (:func:`control_spec`).
 
         Returns:
             States (N, nstep, nstate) in the layout of :data:`STATE`.
@@ -123,7 +138,7 @@ class CpuRollout:
             self._datas(model),
             np.ascontiguousarray(starts),
             np.ascontiguousarray(controls),
-            control_spec=CONTROLS,
+            control_spec=control_spec(model, controls.shape[-1]),
             initial_warmstart=np.ascontiguousarray(warm),
             # four chunks per thread: a thread slowed by other work on the machine hands its last chunks to
             # the others (24 rollouts on 2 threads of a loaded 2-core machine: chunks of 3 ran 1.24× as fast

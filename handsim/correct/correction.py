@@ -62,7 +62,8 @@ def correct(
     """Correct a loaded trial.
 
     Args:
-        loaded: The trial (:func:`handsim.trials.load_trial`): a scene whose objects follow recorded tracks.
+        loaded: The trial (:func:`handsim.trials.load_trial`): a scene whose objects follow recorded tracks,
+            or a glove scene whose placed object the hand must hold (:mod:`handsim.correct.hold`).
         config: The parameters (default :class:`CorrectionConfig`).
         backend: The rollout backend (:data:`~handsim.correct.backend.BACKENDS`).
         threads: Its threads; None: ``$HANDSIM_THREADS``, else every core. The result does not depend on it.
@@ -72,12 +73,13 @@ def correct(
         The correction.
 
     Raises:
-        CorrectionError: The trial has no recorded object, or its scene switches contacts or supports.
+        CorrectionError: The trial has neither a recorded object nor a hold to judge.
         TrajectoryError: The recording does not fit the scene.
     """
     config = config or CorrectionConfig()
-    reference = build_reference(loaded.scene, loaded.trajectory, config)
-    replay_config = ReplayConfig(control_rate=config.control_rate, keep_states=True)
+    # the hold (a glove scene) is judged on the committed simulation alone, not the robustness ensemble
+    replay_config = ReplayConfig(control_rate=config.control_rate, keep_states=True, ensemble=False)
+    reference = build_reference(loaded.scene, loaded.trajectory, config, replay_config.metrics)
     before = replay(loaded.scene, loaded.trajectory, replay_config)
     rollouts = rollout_backend(backend, threads)
     try:

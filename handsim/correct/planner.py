@@ -6,7 +6,10 @@ each planning step asks :class:`~handsim.correct.sampler.AnnealedSampler` for th
 the corrected recording, turns that into its control schedule with
 :func:`~handsim.sim.control.control_schedule` (as ``handsim replay`` will), and steps the replay core's own
 :class:`~handsim.sim.drive.ScheduleDriver` through them. The next step plans from the state that reached,
-starting from the previous plan shifted by the frames committed (warm start).
+starting from the previous plan shifted by the frames committed (warm start). Planning covers the
+reference's ``plan_start … plan_stop`` (every frame for recorded tracks; a glove scene's from the first frame
+after contacts switch on to the hold window's end, :mod:`handsim.correct.hold`); the frames outside keep the
+recording, stepped by the same driver with the scene's own switches (contacts on, the supports' release).
 
 So the committed simulation is the replay of the corrected recording, frame by frame: the states this loop
 records are bitwise those of :func:`handsim.sim.replay.replay` of the final corrected recording (pinned in
@@ -27,7 +30,7 @@ from handsim.correct.reference import Reference
 from handsim.correct.sampler import AnnealedSampler, interpolate, knot_count
 from handsim.datatypes.trajectory import Trajectory
 from handsim.sim.control import control_schedule
-from handsim.sim.drive import ScenarioSwitches, ScheduleDriver
+from handsim.sim.drive import ScheduleDriver
 from handsim.sim.stepper import Stepper
 
 
@@ -69,7 +72,7 @@ def committed_driver(
     replay`` drives when it replays the corrected file.
     """
     schedule = control_schedule(reference.scene, reference.corrected(residual), config.control_rate)
-    return ScheduleDriver(stepper, schedule, ScenarioSwitches())
+    return ScheduleDriver(stepper, schedule, reference.switches)
 
 
 def optimise(
@@ -90,18 +93,12 @@ def optimise(
         The plan and its committed simulation.
 
     Raises:
-        CorrectionError: The scene switches contacts or supports during the run (a glove scene), or the
-            committed simulation diverged.
+        CorrectionError: The committed simulation diverged.
     """
-    scene, schedule = reference.scene, reference.schedule
-    setup = scene.setup
-    if setup.contact_time is not None or setup.release_time is not None:
-        raise CorrectionError(
-            "the scene switches contacts or releases a support during the run (a glove scene); corrections "
-            "are made for scenes whose objects follow recorded tracks from the start"
-        )
+    schedule = reference.schedule
     frames, size = reference.frames, reference.size
-    stepper = Stepper(scene, schedule.substeps)
+    # a private model where contacts switch on during the run (the replay core's own choice)
+    stepper = Stepper(reference.scene, schedule.substeps, own_model=reference.switches.contact_frame > 0)
     model, data = stepper.model, stepper.data
     sampler = AnnealedSampler(reference, config, backend, model, np.random.default_rng(config.seed))
     residual = np.zeros((frames, size))
@@ -109,36 +106,34 @@ def optimise(
     driver.reset()
     qpos = np.empty((frames, model.nq))
     qpos[0] = data.qpos
+    _commit(driver, qpos, 0, reference.plan_start)  # the recording's, until the hand can act on the object
     knot = config.knot
     nominal = np.zeros((knot_count(config.horizon, knot), size))
     costs, nominal_costs = [], []
     rollouts = steps = 0
     started = time.perf_counter()
-    k = 0
-    while k < frames - 1:
+    k, stop = reference.plan_start, reference.plan_stop
+    while k < stop:
         ahead = min(config.horizon, frames - 1 - k)
         step = sampler.plan(k, ahead, nominal[: knot_count(ahead, knot)], start_of(model, data))
         costs.append(step.cost)
         nominal_costs.append(step.nominal_cost)
         rollouts += step.rollouts
         steps += step.rollouts * ahead * schedule.substeps
-        commit = min(config.commit, frames - 1 - k)
+        commit = min(config.commit, stop - k)
         ahead_frames = np.arange(1, commit + 1)
         residual[k + 1 : k + 1 + commit] = reference.in_range(
             interpolate(step.knots, knot, ahead_frames), k + ahead_frames
         )
         driver = committed_driver(reference, config, residual, stepper)
         driver.frame = k  # the state is the committed one at k: the driver goes on from there
-        for f in range(k, k + commit):
-            stop = next((e for e in driver.advance(driver.schedule.ctrl[f + 1]) if e.diverged), None)
-            if stop is not None:
-                raise CorrectionError(f"the committed simulation diverged: {stop.describe()}")
-            qpos[f + 1] = data.qpos
+        _commit(driver, qpos, k, k + commit)
         nominal = interpolate(step.knots[None], knot, commit + knot * np.arange(nominal.shape[0]))[0]
         nominal[0] = residual[k + commit]  # the next plan starts from what was committed
         k += commit
         if progress is not None:
             progress(k, frames - 1)
+    _commit(driver, qpos, k, frames - 1)  # after the hold window: the recording's
     return Plan(
         residual=residual,
         trajectory=reference.corrected(residual),
@@ -150,3 +145,17 @@ def optimise(
         costs=np.asarray(costs),
         nominal_costs=np.asarray(nominal_costs),
     )
+
+
+def _commit(driver: ScheduleDriver, qpos: np.ndarray, start: int, stop: int) -> None:
+    """Step the committed simulation from frame ``start`` to ``stop``, recording ``qpos`` per frame.
+
+    Raises:
+        CorrectionError: The committed simulation diverged.
+    """
+    data = driver.stepper.data
+    for f in range(start, stop):
+        stop_event = next((e for e in driver.advance(driver.schedule.ctrl[f + 1]) if e.diverged), None)
+        if stop_event is not None:
+            raise CorrectionError(f"the committed simulation diverged: {stop_event.describe()}")
+        qpos[f + 1] = data.qpos

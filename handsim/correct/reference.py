@@ -23,12 +23,15 @@ from dataclasses import dataclass
 import numpy as np
 
 from handsim.correct.config import CorrectionConfig, CorrectionError
+from handsim.correct.hold import HoldGoal, hold_goal, is_hold_scene
 from handsim.datatypes.poses import compose
 from handsim.datatypes.rotations import axis_angle_to_quat, quat_multiply
 from handsim.datatypes.trajectory import Trajectory
 from handsim.datatypes.trajectory_ops import resample
 from handsim.sim.control import ControlSchedule, control_schedule
+from handsim.sim.drive import ScenarioSwitches, scenario_switches
 from handsim.sim.scene.compiled import SimScene
+from handsim.sim.specs import MetricSpec
 
 
 @dataclass(frozen=True)
@@ -73,6 +76,11 @@ class Reference:
         bounds: Bounds of the residual vector's parts (D,): per finger element its largest absolute value;
             per wrist ``Δp`` and ``Δr`` (all three elements alike) the largest norm of the 3-vector
             (:meth:`clip`).
+        switches: When the scene switches contacts on and releases its supports (as the replay does).
+        goal: A glove scene's hold goal (:mod:`handsim.correct.hold`; its object's "track" is its placed
+            pose over the hold), or None where the objects follow recorded tracks.
+        plan_start: First frame planned from (earlier frames keep the recording).
+        plan_stop: Last frame planned (later frames keep the recording).
     """
 
     scene: SimScene
@@ -86,6 +94,10 @@ class Reference:
     objects: tuple[ObjectReference, ...]
     ctrl_range: np.ndarray
     bounds: np.ndarray
+    switches: ScenarioSwitches
+    goal: HoldGoal | None
+    plan_start: int
+    plan_stop: int
 
     @property
     def frames(self) -> int:
@@ -189,21 +201,34 @@ def world_roots(world: np.ndarray, roots: np.ndarray) -> np.ndarray:
     return compose(world, out)
 
 
-def build_reference(scene: SimScene, trajectory: Trajectory, config: CorrectionConfig) -> Reference:
+def build_reference(
+    scene: SimScene, trajectory: Trajectory, config: CorrectionConfig, metrics: MetricSpec | None = None
+) -> Reference:
     """The reference of a trial: its schedule, its recording at the control rate and the residual layout.
 
+    Args:
+        scene: The scene.
+        trajectory: The recording.
+        config: The correction's parameters.
+        metrics: The replay's metric parameters (its release delay places a glove scene's release); default
+            :class:`~handsim.sim.specs.MetricSpec`.
+
     Raises:
-        CorrectionError: The scene has no recorded object to follow (the message names the recording).
+        CorrectionError: The scene has no recorded object to follow and no hold to judge (the message names
+            the recording).
         TrajectoryError: The trajectory does not fit the scene (:func:`control_schedule`).
     """
     source = trajectory.source or "the trajectory"
     schedule = control_schedule(scene, trajectory, config.control_rate)
+    switches = scenario_switches(scene, schedule, (metrics or MetricSpec()).release_delay)
     layout = scene.layout
-    if not schedule.objects:
-        what = "no object" if not layout.objects else "objects without a recorded track"
+    hold = not schedule.objects and is_hold_scene(scene)
+    if not schedule.objects and not hold:
+        what = "no object" if not layout.objects else "objects without a recorded track and no hold to judge"
         raise CorrectionError(
-            f"{source}: the scene has {what}; a correction makes a recorded object follow its track, so it "
-            "needs a trial whose objects are recorded (a Tzionas sequence with an object, an ARCTIC sequence)"
+            f"{source}: the scene has {what}; a correction makes a recorded object follow its track, or a "
+            "placed object stay in the hand, so it needs a trial whose objects are recorded (a Tzionas "
+            "sequence with an object, an ARCTIC sequence) or a glove grasp (GraspDB14, a scripted grasp)"
         )
     if trajectory.times.shape[0] < 2:
         raise CorrectionError(f"{source}: one sample; a correction needs a motion of at least two frames")
@@ -213,20 +238,7 @@ def build_reference(scene: SimScene, trajectory: Trajectory, config: CorrectionC
     columns = np.array([column[layout.dof_names[a]] for a in actuators], dtype=np.int64)
     welded = [h for h in layout.hands if h.mocap >= 0]
     hands = tuple(h.name for h in welded) if config.wrist else ()
-    objects = []
-    for index, track in schedule.objects.items():
-        obj = layout.objects[index]
-        frames = track.pose.shape[0]
-        objects.append(
-            ObjectReference(
-                name=scene.setup.object_tracks[index],
-                qpos=obj.free_qpos,
-                hinge=obj.hinge_qpos if track.articulation is not None else -1,
-                pose=np.asarray(track.pose, dtype=float),
-                valid=np.ones(frames, bool) if track.valid is None else np.asarray(track.valid, bool),
-                articulation=None if track.articulation is None else np.asarray(track.articulation, float),
-            )
-        )
+    goal = hold_goal(scene, schedule, switches, source) if hold else None
     bounds = np.concatenate(
         [
             np.full(actuators.shape[0], config.finger_bound),
@@ -244,7 +256,43 @@ def build_reference(scene: SimScene, trajectory: Trajectory, config: CorrectionC
         welded=tuple(h.name for h in welded),
         mocap=np.array([h.mocap for h in welded], dtype=np.int64),
         hands=hands,
-        objects=tuple(objects),
+        objects=_objects(scene, schedule) if goal is None else (_held_object(goal, schedule.frames),),
         ctrl_range=np.asarray(layout.ctrl_range, dtype=float)[actuators],
         bounds=bounds,
+        switches=switches,
+        goal=goal,
+        plan_start=0 if goal is None else goal.plan_start,
+        plan_stop=schedule.frames - 1 if goal is None else goal.plan_stop,
+    )
+
+
+def _objects(scene: SimScene, schedule: ControlSchedule) -> tuple[ObjectReference, ...]:
+    """The recorded objects of a scene whose objects follow recorded tracks."""
+    layout = scene.layout
+    objects = []
+    for index, track in schedule.objects.items():
+        obj = layout.objects[index]
+        frames = track.pose.shape[0]
+        objects.append(
+            ObjectReference(
+                name=scene.setup.object_tracks[index],
+                qpos=obj.free_qpos,
+                hinge=obj.hinge_qpos if track.articulation is not None else -1,
+                pose=np.asarray(track.pose, dtype=float),
+                valid=np.ones(frames, bool) if track.valid is None else np.asarray(track.valid, bool),
+                articulation=None if track.articulation is None else np.asarray(track.articulation, float),
+            )
+        )
+    return tuple(objects)
+
+
+def _held_object(goal: HoldGoal, frames: int) -> ObjectReference:
+    """A glove scene's object as the cost reads it: its placed pose is its track over the hold."""
+    return ObjectReference(
+        name="",
+        qpos=goal.qpos,
+        hinge=-1,
+        pose=np.broadcast_to(goal.placed, (frames, 7)),
+        valid=goal.valid,
+        articulation=None,
     )

@@ -110,26 +110,40 @@ class AnnealedSampler:
         self.world = np.asarray(reference.scene.setup.world_from_recording, dtype=float)
         self.roots = reference.recorded_roots()
         self.nmocap = model.nmocap
+        # a scene that releases supports sets every equality's flag at every step (the release on its frame)
+        self.release = reference.switches.release_frame
+        layout = reference.scene.layout
+        self.supports = np.array([o.support_eq for o in layout.objects if o.support_eq >= 0], dtype=np.int64)
 
-    def controls(self, residual: np.ndarray, frames: np.ndarray, mocap: np.ndarray) -> np.ndarray:
+    def controls(self, residual: np.ndarray, frames: np.ndarray, start: Start) -> np.ndarray:
         """Per-step rollout controls of residual sequences.
 
         Args:
             residual: (N, h, D) for the frames ``frames`` (h,): frame ``f``'s targets are held during the
                 step from ``f − 1`` to ``f``.
             frames: Control frames.
-            mocap: Every mocap body's current pose (nmocap, 7): bodies not corrected keep it.
+            start: The state planned from: mocap bodies not corrected keep its poses, equalities its flags
+                (a support goes off in the steps after the release frame, as the replay core switches it).
 
         Returns:
-            (N, h · substeps, nu + 7 · nmocap): ``ctrl``, then every mocap position, then every quaternion.
+            (N, h · substeps, nu [+ neq] + 7 · nmocap): ``ctrl``, every equality's flag where the scene
+            releases supports (:data:`~handsim.correct.backend.SWITCHED_CONTROLS`), then every mocap
+            position, then every quaternion.
         """
         ref = self.reference
         count, h, _ = residual.shape
         nu = self.model.nu
-        out = np.empty((count, h, nu + 7 * self.nmocap))
+        neq = self.model.neq if self.release >= 0 else 0
+        mocap = start.mocap
+        out = np.empty((count, h, nu + neq + 7 * self.nmocap))
         ctrl = np.broadcast_to(ref.schedule.ctrl[frames], (count, h, nu)).copy()
         ctrl[..., ref.actuators] += residual[..., : ref.fingers]
         out[..., :nu] = ctrl
+        if neq:
+            active = np.broadcast_to(start.eq_active, (h, neq)).copy()
+            active[np.ix_(frames > self.release, self.supports)] = 0.0
+            out[..., nu : nu + neq] = active
+        nu += neq  # the mocap columns follow
         pos = np.broadcast_to(mocap[:, :3], (count, h, self.nmocap, 3)).copy()
         quat = np.broadcast_to(mocap[:, 3:], (count, h, self.nmocap, 4)).copy()
         if ref.welded:  # the welded roots follow the recording, moved where the wrists are corrected
@@ -145,7 +159,7 @@ class AnnealedSampler:
 
     def simulate(self, start: Start, residual: np.ndarray, frames: np.ndarray) -> np.ndarray:
         """``qpos`` at the end of each frame of each residual sequence (N, h, nq) from ``start``."""
-        controls = self.controls(residual, frames, start.mocap)
+        controls = self.controls(residual, frames, start)
         states = self.backend.rollout(self.model, start.state, start.warmstart, controls)
         ends = states[:, self.substeps - 1 :: self.substeps]
         return ends[..., 1 : 1 + self.model.nq]  # the state's layout: time, qpos, qvel, …

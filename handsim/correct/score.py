@@ -25,6 +25,7 @@ from dataclasses import asdict, dataclass
 import numpy as np
 
 from handsim.correct.config import CorrectionConfig
+from handsim.correct.hold import HELD, NOT_HELD, hold_measures
 from handsim.correct.reference import Reference
 from handsim.sim.replay import ReplayResult
 from handsim.sim.track import FOLLOWED, LOST
@@ -107,6 +108,9 @@ class CorrectionScore:
         before: Pure replay's tracking.
         after: The corrected replay's tracking.
         largest: The moments of largest correction, largest first.
+        objective: ``"track"`` (the objects follow their recorded tracks) or ``"hold"`` (a glove scene's
+            object stays in the hand through the hold window; ``before``/``after`` then measure its
+            displacement from where the grasp placed it, and their ``track`` is the hold verdict).
     """
 
     status: str
@@ -123,6 +127,7 @@ class CorrectionScore:
     before: Tracking
     after: Tracking
     largest: tuple[Moment, ...]
+    objective: str = "track"
 
     def to_dict(self) -> dict:
         """JSON-ready fields."""
@@ -159,9 +164,14 @@ def frame_sizes(reference: Reference, residual: np.ndarray) -> FrameSizes:
     )
 
 
-def tracking(result: ReplayResult, reference: Reference, residual: np.ndarray) -> Tracking:
-    """The object's tracking in a replay of the recording corrected by ``residual`` (F, D; 0: pure replay)."""
-    s = result.summary
+def tracking(
+    result: ReplayResult, reference: Reference, residual: np.ndarray, tolerance: float = 0.01
+) -> Tracking:
+    """The object's tracking in a replay of the recording corrected by ``residual`` (F, D; 0: pure replay).
+
+    A glove scene's (``reference.goal``): the object's displacement from its placed pose over the hold,
+    ``tolerance`` (m) the "within" distance, and the replay's hold verdict as its ``track``.
+    """
     n = result.frames.times.shape[0]
     act = reference.actuators
     low, high = (reference.scene.layout.ctrl_range[act, i] for i in (0, 1))
@@ -169,6 +179,13 @@ def tracking(result: ReplayResult, reference: Reference, residual: np.ndarray) -
     own = recorded + residual[:n, : reference.fingers]
     # the replay's error is against its own (clipped) targets: moved onto the recording's
     against = result.frames.tracking_error[:, act] + np.clip(own, low, high) - np.clip(recorded, low, high)
+    joints = math.degrees(float(np.sqrt(np.mean(against[1:] ** 2))))
+    if reference.goal is not None:
+        m = hold_measures(result, reference.goal, tolerance)
+        return Tracking(
+            m.within_1cm, m.mean_drift_mm, m.max_drift_mm, m.mean_rotation_deg, m.track, m.reason, joints
+        )
+    s = result.summary
     return Tracking(
         within_1cm=float(s["within_tolerance"]),
         mean_drift_mm=float(s["mean_drift_mm"]),
@@ -176,7 +193,7 @@ def tracking(result: ReplayResult, reference: Reference, residual: np.ndarray) -
         mean_rotation_deg=float(s["mean_rotation_drift_deg"]),
         track=str(s.get("track")),
         track_reason=str(s.get("track_reason")),
-        joint_tracking_rms_deg=math.degrees(float(np.sqrt(np.mean(against[1:] ** 2)))),
+        joint_tracking_rms_deg=joints,
     )
 
 
@@ -201,7 +218,9 @@ def score(
     fingers = residual[:, :nf]
     finger_rms = math.degrees(float(np.sqrt(np.mean(fingers**2)))) if nf else 0.0
     finger_max = math.degrees(float(np.max(np.abs(fingers)))) if nf else 0.0
-    was, now = tracking(before, reference, np.zeros_like(residual)), tracking(after, reference, residual)
+    scale = config.position_scale
+    was = tracking(before, reference, np.zeros_like(residual), scale)
+    now = tracking(after, reference, residual, scale)
     ratio = finger_rms / was.joint_tracking_rms_deg if was.joint_tracking_rms_deg > 0 else math.inf
     wrist = bool(reference.hands)
     wp = 1000.0 * sizes.wrist_position if wrist else None
@@ -218,7 +237,9 @@ def score(
         large.append(f"wrist moved {wp_rms:.1f} mm RMS (small is ≤ {PLAUSIBLE_WRIST_MM:g} mm)")
     if wr_rms is not None and wr_rms > PLAUSIBLE_WRIST_DEG:
         large.append(f"wrist turned {wr_rms:.1f}° RMS (small is ≤ {PLAUSIBLE_WRIST_DEG:g}°)")
-    status, reason = _verdict(now, config, wrist)
+    status, reason = (
+        _verdict(now, config, wrist) if reference.goal is None else _hold_verdict(was, now, config)
+    )
     return CorrectionScore(
         status=status,
         reason=reason,
@@ -234,6 +255,7 @@ def score(
         before=was,
         after=now,
         largest=_largest(reference, config, sizes),
+        objective="track" if reference.goal is None else "hold",
     )
 
 
@@ -254,6 +276,42 @@ def _verdict(after: Tracking, config: CorrectionConfig, wrist: bool) -> tuple[st
             f"mean drift {after.mean_drift_mm:.1f} mm",
         )
     return "not judged", f"the replay does not judge the track: {after.track_reason}"
+
+
+def relative_size(score: CorrectionScore) -> float:
+    """The correction's size against its plausibility bounds; above 1 the correction is large.
+
+    The largest of the finger RMS over :data:`PLAUSIBLE_FINGER_RATIO` times pure replay's joint tracking
+    error and the wrist's RMS over :data:`PLAUSIBLE_WRIST_MM` and :data:`PLAUSIBLE_WRIST_DEG`: what a
+    dataset's corrections are ranked by.
+    """
+    sizes = [score.finger_vs_replay_tracking / PLAUSIBLE_FINGER_RATIO]
+    if score.wrist_position_rms_mm is not None:
+        sizes.append(score.wrist_position_rms_mm / PLAUSIBLE_WRIST_MM)
+    if score.wrist_rotation_rms_deg is not None:
+        sizes.append(score.wrist_rotation_rms_deg / PLAUSIBLE_WRIST_DEG)
+    return float(max(sizes))
+
+
+def implausible_text(score: CorrectionScore) -> str | None:
+    """The sentence that calls a recording implausible, with the numbers; None for a small correction."""
+    return f"the recording needs a large correction: {score.large_reason}" if score.large else None
+
+
+def _hold_verdict(before: Tracking, after: Tracking, config: CorrectionConfig) -> tuple[str, str]:
+    """A glove correction's verdict: the corrected replay holds the object through the window, or not."""
+    if after.track == HELD:
+        what = "holds already in pure replay" if before.track == HELD else "now holds"
+        return "corrected", f"the grasp {what} through its hold window: {after.track_reason}"
+    if after.track == NOT_HELD:
+        return (
+            "not corrected",
+            f"no correction within the bounds (fingers ≤ {math.degrees(config.finger_bound):.1f}° per joint) "
+            f"was found that keeps the object in the hand: {after.track_reason}; best found: within 1 cm of "
+            f"its placement in {after.within_1cm * 100:.1f} % of the hold's frames, mean displacement "
+            f"{after.mean_drift_mm:.1f} mm",
+        )
+    return "not judged", f"the replay does not judge the hold: {after.track_reason}"
 
 
 def _largest(reference: Reference, config: CorrectionConfig, sizes: FrameSizes) -> tuple[Moment, ...]:

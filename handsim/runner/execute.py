@@ -18,10 +18,11 @@ from __future__ import annotations
 import contextlib
 import sys
 import time
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Iterator, Sequence
 from pathlib import Path
 
 from handsim.progress import progress_bar
+from handsim.runner.correction_job import CorrectionJob, correction_outcome
 from handsim.runner.errors import RunnerError
 from handsim.runner.local_backend import in_process_outcomes, pool_outcomes
 from handsim.runner.output_lock import LOCK_FILE, OutputLock
@@ -35,7 +36,7 @@ from handsim.runner.records import (
 )
 from handsim.runner.run_summary import RunSummary, failure_counts, status_counts
 from handsim.runner.trial_record import versions
-from handsim.runner.worker import run_parameters, trial_outcome, write_outcome_files
+from handsim.runner.worker import TrialOutcome, run_parameters, trial_outcome, write_outcome_files
 from handsim.sim.parallel import available_cores
 from handsim.sim.replay import ReplayConfig
 from handsim.trials import Discovery, TrialEntry
@@ -79,6 +80,75 @@ def _check_parameters(records: Sequence[dict], parameters: dict, out: Path) -> N
             )
 
 
+def _checked(backend: str, workers: int | None, frames: int) -> int:
+    """The workers a run uses, after checking its backend, workers and frames (Ray importable).
+
+    Raises:
+        RunnerError: An unknown backend, ``workers`` or ``frames`` out of range, Ray missing.
+    """
+    if backend not in BACKENDS:
+        raise RunnerError(f"unknown backend {backend!r}; expected one of {list(BACKENDS)}")
+    workers = default_workers() if workers is None else workers
+    if workers < 1:
+        raise RunnerError(f"workers must be ≥ 1, got {workers}")
+    if frames < 0:
+        raise RunnerError(f"frames must be ≥ 0, got {frames}")
+    if backend == "ray":
+        import_ray()  # fail before anything is written
+    return workers
+
+
+def _outcomes(
+    backend: str, todo: list[TrialEntry], job: tuple, workers: int, address: str | None
+) -> Iterator[TrialOutcome]:
+    """The outcomes of the trials to run, from the backend: ``job`` is (function, its parameters, frames)."""
+    run, conf, frames = job
+    if backend == "ray":
+        return ray_outcomes(todo, run, conf, frames, workers, address)
+    if workers == 1 or not todo:
+        return in_process_outcomes(todo, run, conf, frames)
+    # a pool even for one trial: records must not depend on how many trials were left
+    return pool_outcomes(todo, run, conf, frames, min(workers, len(todo)))
+
+
+def _write_outcomes(
+    outcomes: Iterator[TrialOutcome],
+    out: Path,
+    root: str | None,
+    skipped: tuple[int, int],
+    progress: bool,
+    on_record: Callable[[dict], None] | None,
+) -> list[str]:
+    """Write each outcome as it comes (its files, then its record) and return the ids run, in order.
+
+    Args:
+        outcomes: The backend's outcomes (closed at the end, also on Ctrl-C).
+        out: The output folder.
+        root: The dataset root taken out of the records' paths.
+        skipped: Trials already recorded, of how many selected (said on the progress bar).
+        progress: Show the progress bar on a terminal.
+        on_record: Called with each record after it is written.
+    """
+    todo = skipped[1] - skipped[0]
+    ran: list[str] = []
+    bar = progress_bar(enabled=progress, total=todo, unit="trial", desc="trials", dynamic_ncols=True)
+    status = {"ok": 0, "diverged": 0, "error": 0}
+    with contextlib.closing(outcomes), RecordWriter(out) as writer, bar:
+        if skipped[0]:
+            bar.write(f"{skipped[0]} of {skipped[1]} trials already recorded in {out}: skipped")
+        for outcome in outcomes:
+            record = portable_record(outcome.record, root)
+            write_outcome_files(out, outcome)
+            writer.append(record)
+            ran.append(record["id"])
+            status[record["status"]] += 1
+            bar.set_postfix(status, refresh=False)
+            bar.update(1)
+            if on_record is not None:
+                on_record(record)
+    return ran
+
+
 def run_dataset(
     source: Discovery | Sequence[TrialEntry],
     out: str | Path,
@@ -91,12 +161,12 @@ def run_dataset(
     progress: bool = True,
     command: Sequence[str] | None = None,
     on_record: Callable[[dict], None] | None = None,
+    job: CorrectionJob | None = None,
 ) -> RunSummary:
     """Run the trials of a discovery (or a list of trials), appending a record per trial to ``OUT``.
 
     Args:
-        source: A :class:`~handsim.trials.Discovery` (its overview goes into ``run.json``) or
-            trial entries.
+        source: A :class:`~handsim.trials.Discovery` (its overview goes into ``run.json``) or entries.
         out: Output folder (``records.jsonl``, ``run.json``, ``frames/``); created if missing.
         workers: Trials at once; default every core this process may use. 1 runs in this process.
         backend: ``"local"`` or ``"ray"``.
@@ -108,6 +178,8 @@ def run_dataset(
             nothing in a log).
         command: The command line, for ``run.json`` (default ``sys.argv``).
         on_record: Called with each record after it is written.
+        job: A correction run (``handsim correct DATASET``): each trial corrected with the job's parameters
+            (:mod:`handsim.runner.correction_job`) instead of replayed; ``config`` and ``frames`` unused.
 
     Returns:
         What the run did, with counts over every selected trial's record (resumed ones included).
@@ -122,16 +194,9 @@ def run_dataset(
         KeyboardInterrupt: Ctrl-C; the records written so far are complete lines (run again to resume).
     """
     start = time.perf_counter()
-    if backend not in BACKENDS:
-        raise RunnerError(f"unknown backend {backend!r}; expected one of {list(BACKENDS)}")
-    workers = default_workers() if workers is None else workers
-    if workers < 1:
-        raise RunnerError(f"workers must be ≥ 1, got {workers}")
-    if frames < 0:
-        raise RunnerError(f"frames must be ≥ 0, got {frames}")
-    if backend == "ray":
-        import_ray()  # fail before anything is written
+    workers = _checked(backend, workers, frames)
     config = config or ReplayConfig(stability_at="grasp")
+    run, conf = (trial_outcome, config) if job is None else (correction_outcome, job)
     entries, overview = _entries(source)
     out = Path(out)
     if out.exists() and not out.is_dir():
@@ -139,48 +204,18 @@ def run_dataset(
     out.mkdir(parents=True, exist_ok=True)
     with OutputLock(out / LOCK_FILE, what=f"output folder {out}", command=command) as lock:
         notes = [*lock.notes, *repair_records(out)]
-        parameters = run_parameters(config, frames)
+        parameters = run_parameters(config, frames) if job is None else job.parameters(frames)
         existing = load_records(out).records
         _check_parameters(existing, parameters, out)
         recorded = {r["id"] for r in existing}
         todo = [e for e in entries if e.id not in recorded]
-        write_run_info(
-            out,
-            {
-                "command": list(sys.argv if command is None else command),
-                "dataset": overview.get("root"),
-                "versions": versions(),
-                "discovery": overview,
-                "parameters": parameters,
-                "backend": backend,
-                "workers": workers,
-                "selected": [e.id for e in entries],
-            },
-        )
-        if backend == "ray":
-            outcomes = ray_outcomes(todo, trial_outcome, config, frames, workers, address)
-        elif workers == 1 or not todo:
-            outcomes = in_process_outcomes(todo, trial_outcome, config, frames)
-        else:  # a pool even for one trial: records must not depend on how many trials were left
-            outcomes = pool_outcomes(todo, trial_outcome, config, frames, min(workers, len(todo)))
-        ran: list[str] = []
-        bar = progress_bar(enabled=progress, total=len(todo), unit="trial", desc="trials", dynamic_ncols=True)
-        status = {"ok": 0, "diverged": 0, "error": 0}
-        with contextlib.closing(outcomes), RecordWriter(out) as writer, bar:
-            if len(entries) > len(todo):
-                bar.write(
-                    f"{len(entries) - len(todo)} of {len(entries)} trials already recorded in {out}: skipped"
-                )
-            for outcome in outcomes:
-                record = portable_record(outcome.record, overview.get("root"))
-                write_outcome_files(out, outcome)
-                writer.append(record)
-                ran.append(record["id"])
-                status[record["status"]] += 1
-                bar.set_postfix(status, refresh=False)
-                bar.update(1)
-                if on_record is not None:
-                    on_record(record)
+        info = {"command": list(sys.argv if command is None else command), "dataset": overview.get("root")}
+        info.update(versions=versions(), discovery=overview, parameters=parameters, backend=backend)
+        write_run_info(out, {**info, "workers": workers, "selected": [e.id for e in entries]})
+        outcomes = _outcomes(backend, todo, (run, conf, frames), workers, address)
+        skipped = len(entries) - len(todo)
+        counts_before = (skipped, len(entries))
+        ran = _write_outcomes(outcomes, out, overview.get("root"), counts_before, progress, on_record)
         ids = {e.id for e in entries}
         mine = [r for r in load_records(out).records if r["id"] in ids]
         counts = status_counts(mine, ids)
@@ -188,7 +223,7 @@ def run_dataset(
             failures=failure_counts(mine),
             out=str(out),
             trials=len(entries),
-            skipped=len(entries) - len(todo),
+            skipped=skipped,
             ran=tuple(ran),
             notes=tuple(notes),
             wall_s=time.perf_counter() - start,

@@ -91,8 +91,8 @@ def prepare_pool_worker() -> None:
     lifeline.watch(lambda: multiprocessing.connection.wait([parent.sentinel]))
 
 
-def base_record(entry: TrialEntry, config: ReplayConfig, frames: int) -> dict:
-    """A trial's record before it runs: identity, inputs, parameters, versions; status ``"error"``."""
+def identity_record(entry: TrialEntry) -> dict:
+    """The first fields of every record: schema, the trial's identity and inputs; status ``"error"``."""
     return {
         "schema": SCHEMA,
         "id": entry.id,
@@ -101,6 +101,13 @@ def base_record(entry: TrialEntry, config: ReplayConfig, frames: int) -> dict:
         "meta": dict(entry.meta),
         "trial": entry.trial.to_dict(),
         "inputs": input_hashes(entry),
+    }
+
+
+def base_record(entry: TrialEntry, config: ReplayConfig, frames: int) -> dict:
+    """A trial's record before it runs: identity, inputs, parameters, versions; status ``"error"``."""
+    return {
+        **identity_record(entry),
         "parameters": run_parameters(config, frames),
         "metric_spec_version": config.metrics.version,
         "versions": versions(),
@@ -213,15 +220,15 @@ def trial_outcome(entry: TrialEntry, config: ReplayConfig, frames: int = 4) -> T
             files = _renders(entry, loaded, result, frames, record)
             timing["render_s"] = time.perf_counter() - rendered
     except Exception as exc:  # a failing trial is recorded, never stops the run
-        record["status"] = "error"
-        record["error"] = {
-            "type": type(exc).__name__,
-            "message": str(exc),
-            "traceback": portable_traceback(exc),
-        }
+        record.update(status="error", error=error_of(exc))
     timing["total_s"] = time.perf_counter() - start
     record["timing"] = {k: round(v, 3) for k, v in timing.items()}
     return TrialOutcome(record, files)
+
+
+def error_of(exc: BaseException) -> dict:
+    """A failed trial's ``error``: the exception's type, message and traceback (paths made portable)."""
+    return {"type": type(exc).__name__, "message": str(exc), "traceback": portable_traceback(exc)}
 
 
 def crashed_outcome(entry: TrialEntry, config: ReplayConfig, frames: int, why: str) -> TrialOutcome:
@@ -229,13 +236,15 @@ def crashed_outcome(entry: TrialEntry, config: ReplayConfig, frames: int, why: s
 
     Args:
         entry: The trial.
-        config: Replay parameters.
+        config: Replay parameters, or a job's own (an object with ``base_record(entry, frames)``: a correction
+            run's :class:`~handsim.runner.correction_job.CorrectionJob`).
         frames: Frames the run renders per trial.
         why: How the worker died, for the error's message.
     """
-    record = base_record(entry, config, frames)
+    job = getattr(config, "base_record", None)  # a job of its own (a correction run) builds its record
+    record = base_record(entry, config, frames) if job is None else job(entry, frames)
     record["error"] = {"type": "WorkerCrashed", "message": f"{entry.id}: {why}", "traceback": ""}
-    record["timing"] = {"load_s": 0.0, "replay_s": 0.0, "render_s": 0.0, "total_s": 0.0}
+    record["timing"] = dict.fromkeys(("load_s", "replay_s", "render_s", "total_s"), 0.0)
     return TrialOutcome(record)
 
 
