@@ -6,6 +6,12 @@ from typing import TYPE_CHECKING
 
 if TYPE_CHECKING:
     from handsim.sim.grip_check import GripCheck
+    from handsim.sim.placement.robustness import HoldRobustness
+    from handsim.sim.result import ReplayResult
+    from handsim.sim.sections import HandOnly, ObjectDrift, ReplaySummary
+    from handsim.sim.stability.gravity import StabilityResult
+    from handsim.sim.track import TrackVerdict
+    from handsim.trials.base import LoadedTrial
 
 LABEL = 12  # width of the label column
 PHASE_SOURCES = {
@@ -46,7 +52,7 @@ def num(value: float | None, fmt: str = ".2f", unit: str = "") -> str:
     return "n/a" if value is None else f"{value:{fmt}}{unit}"
 
 
-def print_trial(loaded) -> None:
+def print_trial(loaded: LoadedTrial) -> None:
     """What was loaded: the trial's files, hand, objects and the loaders' notes."""
     trial = loaded.trial
     print_line("trial", f"{trial.kind}  {trial.trajectory_path}")
@@ -57,7 +63,7 @@ def print_trial(loaded) -> None:
     print_checks(loaded)
 
 
-def print_checks(loaded) -> None:
+def print_checks(loaded: LoadedTrial) -> None:
     """Which annotation and phase source a glove trial used, and the spikes filled in its recording."""
     # lazy: the record stack (MuJoCo), only after a replay
     from handsim.runner.trial_record import recording_checks
@@ -79,18 +85,62 @@ def print_checks(loaded) -> None:
         print_line("spikes", loaded.checks.spike_text())
 
 
-def print_summary(result) -> None:
+def print_summary(result: ReplayResult) -> None:
     """Everything a replay measured and judged, one labelled line per finding."""
-    # lazy: the simulation stack (MuJoCo), only after a replay
-    from handsim.sim.summary import HAND_KEYS
+    measured = result.measured
+    _print_run(result)
+    _print_contacts(measured)
+    _print_tracking(result)
+    if measured.hand_only is not None:
+        print_self_penetration(measured.hand_only)
+    _print_hands(measured)
+    if measured.numbers.drift is not None:
+        _print_drift(measured.numbers.drift, result.config["metrics"]["drift_tolerance"])
+    if measured.track is not None:
+        print_track(measured.track.verdict)
+    placement = result.scene.get("placement") or {}
+    if placement:
+        _print_placement(result, placement)
+    _print_hold(result, placement)
+    if result.grip is not None:
+        print_grip(result.grip, result.config["metrics"]["grip"])
+    if result.robustness is not None:
+        _print_robustness(result.robustness)
+    if result.release_stability is not None:
+        _print_release_stability(result.release_stability, placement)
+    if result.stability is not None:
+        _print_stability(result.stability)
 
-    s = result.summary
-    scene = result.scene
-    print_line("scenario", scene["scenario"])
+
+def episode_line(result: ReplayResult) -> str:
+    """One episode's verdict in a line: held or why not, robustness, the grip's check."""
+    measured = result.measured
+    hold = result.hold
+    if hold is None or hold.held is None:
+        verdict = (hold.reason if hold is not None else measured.hold_reason) or "not judged"
+    elif hold.held:
+        robustness = None if measured.hold is None else measured.hold.robustness.hold_robustness
+        verdict = f"held {hold.time_held:.2f} s, robustness {num(robustness)}"
+    else:
+        verdict = f"not held: lost at {hold.lost_at:.2f} s ({hold.reason})"
+    grip = result.grip
+    if grip is not None and hold is not None and hold.held is not None:
+        pair = " against ".join(grip.opposing_links) if grip.opposing_links else "no opposing pair"
+        verdict += (
+            f"; grip {pair} in {grip.opposition or 0:.0%} of the window, deepest "
+            f"{grip.max_depth * 1000:.1f} mm, {grip.grip_force:.1f} N of ≤ {grip.force_limit:.0f} N"
+        )
+    return verdict
+
+
+def _print_run(result: ReplayResult) -> None:
+    """The scenario, the frames simulated, the warnings, the divergence and the plausibility flags."""
+    numbers = result.measured.numbers
+    print_line("scenario", result.scene["scenario"])
     print_line(
         "frames",
-        f"{s['frames']} at {1.0 / result.frame_dt:g} Hz ({result.substeps} steps of "
-        f"{result.frame_dt / result.substeps * 1000:g} ms), {s['duration_s']:.2f} s",
+        f"{numbers.frames} at {1.0 / result.frame_dt:g} Hz ({result.substeps} steps of "
+        f"{result.frame_dt / result.substeps * 1000:g} ms), {numbers.duration_s:.2f} s",
     )
     if result.warnings:
         names = sorted({w.name for w in result.warnings})
@@ -114,25 +164,37 @@ def print_summary(result) -> None:
     print_line("valid", f"no ({', '.join(invalid)}): the numbers below judge nothing" if invalid else "yes")
     for flag in result.flags:
         print_line("flag", flag.line())
-    if s["max_penetration_mm"] is None:
-        print_line("penetration", s.get("hold_reason") or "not judged: no object")
-    else:
-        print_line(
-            "penetration",
-            f"max {s['max_penetration_mm']:.2f} mm, p95 {s['p95_penetration_mm']:.2f} mm, "
-            f"{s['frames_penetrating_over_1mm']} frames over 1 mm",
-        )
-        print_line(
-            "contact",
-            f"{s['contact_frames']} of {s['frames']} frames; up to {s['max_contact_links']} links at once; "
-            f"peak total normal force {s['max_total_normal_force_n']:.2f} N",
-        )
+
+
+def _print_contacts(measured: ReplaySummary) -> None:
+    """Hand–object penetration and contacts, or why there are none (no object)."""
+    contacts = measured.numbers.contacts
+    if contacts.max_penetration_mm is None:
+        print_line("penetration", measured.hold_reason or "not judged: no object")
+        return
     print_line(
-        "tracking",
-        f"mean {num(s['mean_tracking_error_deg'])}°, max {num(s['max_tracking_error_deg'])}° (joint angle)",
+        "penetration",
+        f"max {contacts.max_penetration_mm:.2f} mm, p95 {contacts.p95_penetration_mm:.2f} mm, "
+        f"{contacts.frames_penetrating_over_1mm} frames over 1 mm",
     )
     print_line(
-        "tips", f"mean {num(s['mean_tip_error_mm'], '.1f')} mm, max {num(s['max_tip_error_mm'], '.1f')} mm"
+        "contact",
+        f"{contacts.contact_frames} of {measured.numbers.frames} frames; up to {contacts.max_contact_links} "
+        f"links at once; peak total normal force {contacts.max_total_normal_force_n:.2f} N",
+    )
+
+
+def _print_tracking(result: ReplayResult) -> None:
+    """Joint and fingertip tracking, and the targets beyond the joint limits."""
+    tracking = result.measured.numbers.tracking
+    print_line(
+        "tracking",
+        f"mean {num(tracking.mean_tracking_error_deg)}°, max {num(tracking.max_tracking_error_deg)}° "
+        "(joint angle)",
+    )
+    print_line(
+        "tips",
+        f"mean {num(tracking.mean_tip_error_mm, '.1f')} mm, max {num(tracking.max_tip_error_mm, '.1f')} mm",
     )
     limits = next((f for f in result.flags if f.code == "joint_limits"), None)
     print_line(
@@ -142,174 +204,176 @@ def print_summary(result) -> None:
         else f"{limits.values['samples']} target samples beyond the joint limits in "
         f"{len(limits.values['dofs'])} DoFs (flag joint_limits above)",
     )
-    if "max_self_penetration_mm" in s:
-        print_self_penetration(s)
-    for hand in (h for h in ("right", "left") if f"{h}/contact_frames" in s):
-        h = {key: s[f"{hand}/{key}"] for key in HAND_KEYS}
+
+
+def _print_hands(measured: ReplaySummary) -> None:
+    """Each hand's line in a scene with several (right first), with its starting penetration."""
+    hands = {h.hand: h for h in measured.numbers.hands}
+    start_of = {} if measured.track is None else measured.track.start_penetration_mm
+    for name in (n for n in ("right", "left") if n in hands):
+        h = hands[name]
         touch = (
             ""
-            if h["contact_frames"] is None  # no object: the penetration line says why
-            else f"contact {h['contact_frames']} frames (up to {h['max_contact_links']} links, "
-            f"{h['max_total_normal_force_n']:.2f} N); penetration max {h['max_penetration_mm']:.2f} mm; "
+            if h.contact_frames is None  # no object: the penetration line says why
+            else f"contact {h.contact_frames} frames (up to {h.max_contact_links} links, "
+            f"{h.max_total_normal_force_n:.2f} N); penetration max {h.max_penetration_mm:.2f} mm; "
         )
-        start = s.get(f"{hand}/start_penetration_mm")
+        start = start_of.get(name)
         print_line(
-            hand,
-            f"{touch}tracking mean {num(h['mean_tracking_error_deg'])}°; "
-            f"tips mean {num(h['mean_tip_error_mm'], '.1f')} mm"
+            name,
+            f"{touch}tracking mean {num(h.mean_tracking_error_deg)}°; "
+            f"tips mean {num(h.mean_tip_error_mm, '.1f')} mm"
             + ("" if start is None else f"; starts {start:.1f} mm inside the object"),
         )
-    if "mean_drift_mm" in s:
-        tolerance = result.config["metrics"]["drift_tolerance"] * 100
+
+
+def _print_drift(drift: ObjectDrift, tolerance_m: float) -> None:
+    """Recorded objects against their tracks: position, rotation and hinge."""
+    tolerance = tolerance_m * 100
+    print_line(
+        "drift",
+        f"mean {num(drift.mean_drift_mm, '.1f')} mm, max {num(drift.max_drift_mm, '.1f')} mm, "
+        f"final {num(drift.final_drift_mm, '.1f')} mm; within {tolerance:g} cm in "
+        f"{drift.within_tolerance * 100:.1f}% of frames",
+    )
+    mean, top = num(drift.mean_rotation_drift_deg, ".1f"), num(drift.max_rotation_drift_deg, ".1f")
+    rotation = f"mean {mean}°, max {top}°"
+    if drift.max_articulation_drift_deg is not None:
+        rotation += f"; hinge max {drift.max_articulation_drift_deg:.1f}°"
+    hinge = drift.hinge
+    if hinge is not None and hinge.mean_articulation_drift_deg is not None:
+        mean, final = hinge.mean_articulation_drift_deg, hinge.final_articulation_drift_deg
+        rotation += f", mean {mean:.1f}°, final {final:.1f}°"
+    print_line("rotation", rotation)
+
+
+def _print_placement(result: ReplayResult, placement: dict) -> None:
+    """Where a glove trial's object was placed, the grip the recorded closing makes, when contacts act."""
+    links = placement.get("links", [])
+    grasp = placement.get("grasp", {})
+    grip = placement.get("grip") or {}
+    print_line(
+        "placement",
+        f"fits at frame {placement.get('fit_frame')} "
+        f"(flexion fraction {placement.get('fit_fraction', 0):.2f} of the closing "
+        f"{grasp.get('open')}–{grasp.get('closed')}, {grasp.get('source')}), "
+        f"{len(links)} links touching ({', '.join(links)}), penetration "
+        f"{placement.get('penetration_m', 0.0) * 1000:.2f} mm"
+        + ("" if placement.get("feasible", True) else "; INFEASIBLE"),
+    )
+    if grip:
         print_line(
-            "drift",
-            f"mean {num(s['mean_drift_mm'], '.1f')} mm, max {num(s['max_drift_mm'], '.1f')} mm, "
-            f"final {num(s['final_drift_mm'], '.1f')} mm; within {tolerance:g} cm in "
-            f"{s['within_tolerance'] * 100:.1f}% of frames",
+            "grip",
+            f"the recorded closing presses with {grip['normal_force_n']:.1f} N (servo torque "
+            f"{grip['servo_torque_nm']:.2f} N·m); it resists {grip['directions_held']} of 6 gravity "
+            f"directions; best of {placement.get('grip_tests')} grip tests, "
+            f"{placement.get('candidates')} poses tried",
         )
-        mean, top = num(s["mean_rotation_drift_deg"], ".1f"), num(s["max_rotation_drift_deg"], ".1f")
-        rotation = f"mean {mean}°, max {top}°"
-        if s.get("max_articulation_drift_deg") is not None:
-            rotation += f"; hinge max {s['max_articulation_drift_deg']:.1f}°"
-        if s.get("mean_articulation_drift_deg") is not None:
-            mean, final = s["mean_articulation_drift_deg"], s["final_articulation_drift_deg"]
-            rotation += f", mean {mean:.1f}°, final {final:.1f}°"
-        print_line("rotation", rotation)
-    if "track" in s:
-        print_track(s)
-    placement = scene.get("placement") or {}
-    if placement:
-        links = placement.get("links", [])
-        grasp = placement.get("grasp", {})
-        grip = placement.get("grip") or {}
+    scene = result.scene
+    if scene.get("contact_frame", 0) > 0:
         print_line(
-            "placement",
-            f"fits at frame {placement.get('fit_frame')} "
-            f"(flexion fraction {placement.get('fit_fraction', 0):.2f} of the closing "
-            f"{grasp.get('open')}–{grasp.get('closed')}, {grasp.get('source')}), "
-            f"{len(links)} links touching ({', '.join(links)}), penetration "
-            f"{placement.get('penetration_m', 0.0) * 1000:.2f} mm"
-            + ("" if placement.get("feasible", True) else "; INFEASIBLE"),
+            "contacts",
+            f"hand–object contacts act from {result.frames.times[scene['contact_frame']]:.2f} s "
+            "(before, the recorded hand reaches through where the object is placed)",
         )
-        if grip:
-            print_line(
-                "grip",
-                f"the recorded closing presses with {grip['normal_force_n']:.1f} N (servo torque "
-                f"{grip['servo_torque_nm']:.2f} N·m); it resists {grip['directions_held']} of 6 gravity "
-                f"directions; best of {placement.get('grip_tests')} grip tests, "
-                f"{placement.get('candidates')} poses tried",
-            )
-        if scene.get("contact_frame", 0) > 0:
-            print_line(
-                "contacts",
-                f"hand–object contacts act from {result.frames.times[scene['contact_frame']]:.2f} s "
-                "(before, the recorded hand reaches through where the object is placed)",
-            )
+
+
+def _print_hold(result: ReplayResult, placement: dict) -> None:
+    """The glove hold: the release, held or why not, slip and drop; a scene without objects: why none."""
     hold = result.hold
-    if hold is None and "hold_reason" in s:
-        print_line("held", s["hold_reason"])
-        print_line("drift", s["drift_reason"])
-    if hold is not None:
-        print_line(
-            "release",
-            f"at {hold.released_at:.2f} s (grasp closed at frame {placement.get('grasp', {}).get('closed')}, "
-            f"+ {result.config['metrics']['release_delay']:g} s); hold window "
-            f"{hold.window[0]:.2f}–{hold.window[1]:.2f} s",
-        )
-        if hold.held is None:
-            print_line("held", hold.reason or "not judged")
-        else:
-            verdict = "yes" if hold.held else f"no: lost at {hold.lost_at:.2f} s ({hold.reason})"
-            print_line("held", f"{verdict}; held {hold.time_held:.2f} s")
-            print_line("slip", f"max {hold.max_slip * 1000:.1f} mm relative to the hand")
-            print_line("drop", f"{hold.drop * 1000:.1f} mm (object origin, release to the window's end)")
-    if result.grip is not None:
-        print_grip(result.grip, result.config["metrics"]["grip"])
-    robustness = result.robustness
-    if robustness is not None:
-        lost = [m.label for m in robustness.members if m.held is False]
-        unjudged = [m for m in robustness.members if m.held is None]
-        factors = "; ".join(
-            f"{factor} {counts['held']} of {counts['judged']}"
-            for factor, counts in robustness.factors().items()
-        )
-        print_line(
-            "robustness",
-            f"{num(robustness.fraction)}: {robustness.held} of {robustness.judged} ensemble members held "
-            f"({factors}: the winner, the next best placements, the winner moved ±2 mm and turned ±5°, the "
-            "undriven DoFs turned and the sensors offset)" + (f"; lost: {', '.join(lost)}" if lost else ""),
-        )
-        for member in unjudged:
-            print_line("", f"{member.label}: {(member.reason or 'not judged').removeprefix('not judged: ')}")
-    if result.release_stability is not None:
-        directions = result.release_stability.directions
-        held = [d.direction for d in directions if d.success]
-        down = (result.scene.get("placement") or {}).get("gravity_along", "-z")
-        print_line(
-            "at release",
-            f"{len(held)} of {len(directions)} gravity directions held ({', '.join(held) or 'none'}); "
-            + (
-                "the hold itself is judged palm down"
-                if down == "-z"
-                else f"the hold itself is judged with gravity along the grip's {down} (hand turned)"
-            ),
-        )
-    stability = result.stability
-    if stability is not None:
-        passed = sum(d.success for d in stability.directions)
-        displacement = stability.simulation_displacement
-        moved = None if displacement is None else displacement * 1000
-        print_line(
-            "stability",
-            f"{'stable' if stability.success else 'not stable'} ({passed} of {len(stability.directions)} "
-            f"gravity directions held); ObMan displacement {num(moved, '.1f')} mm",
-        )
+    hand_only = result.measured.hand_only
+    if hold is None and hand_only is not None:
+        print_line("held", hand_only.hold_reason)
+        print_line("drift", hand_only.drift_reason)
+    if hold is None:
+        return
+    print_line(
+        "release",
+        f"at {hold.released_at:.2f} s (grasp closed at frame {placement.get('grasp', {}).get('closed')}, "
+        f"+ {result.config['metrics']['release_delay']:g} s); hold window "
+        f"{hold.window[0]:.2f}–{hold.window[1]:.2f} s",
+    )
+    if hold.held is None:
+        print_line("held", hold.reason or "not judged")
+    else:
+        verdict = "yes" if hold.held else f"no: lost at {hold.lost_at:.2f} s ({hold.reason})"
+        print_line("held", f"{verdict}; held {hold.time_held:.2f} s")
+        print_line("slip", f"max {hold.max_slip * 1000:.1f} mm relative to the hand")
+        print_line("drop", f"{hold.drop * 1000:.1f} mm (object origin, release to the window's end)")
 
 
-def print_track(s: dict) -> None:
+def _print_robustness(robustness: HoldRobustness) -> None:
+    """The hold over the robustness ensemble: held of judged, per factor, the members lost or not judged."""
+    lost = [m.label for m in robustness.members if m.held is False]
+    unjudged = [m for m in robustness.members if m.held is None]
+    factors = "; ".join(
+        f"{factor} {counts['held']} of {counts['judged']}" for factor, counts in robustness.factors().items()
+    )
+    print_line(
+        "robustness",
+        f"{num(robustness.fraction)}: {robustness.held} of {robustness.judged} ensemble members held "
+        f"({factors}: the winner, the next best placements, the winner moved ±2 mm and turned ±5°, the "
+        "undriven DoFs turned and the sensors offset)" + (f"; lost: {', '.join(lost)}" if lost else ""),
+    )
+    for member in unjudged:
+        print_line("", f"{member.label}: {(member.reason or 'not judged').removeprefix('not judged: ')}")
+
+
+def _print_release_stability(stability: StabilityResult, placement: dict) -> None:
+    """The grip at the release against six gravity directions, and which one the hold is judged with."""
+    directions = stability.directions
+    held = [d.direction for d in directions if d.success]
+    down = placement.get("gravity_along", "-z")
+    print_line(
+        "at release",
+        f"{len(held)} of {len(directions)} gravity directions held ({', '.join(held) or 'none'}); "
+        + (
+            "the hold itself is judged palm down"
+            if down == "-z"
+            else f"the hold itself is judged with gravity along the grip's {down} (hand turned)"
+        ),
+    )
+
+
+def _print_stability(stability: StabilityResult) -> None:
+    """The grasp stability tests asked for (``--stability``)."""
+    passed = sum(d.success for d in stability.directions)
+    displacement = stability.simulation_displacement
+    moved = None if displacement is None else displacement * 1000
+    print_line(
+        "stability",
+        f"{'stable' if stability.success else 'not stable'} ({passed} of {len(stability.directions)} "
+        f"gravity directions held); ObMan displacement {num(moved, '.1f')} mm",
+    )
+
+
+def print_track(verdict: TrackVerdict) -> None:
     """The verdict on a recorded object's track: followed, lost at t (how), or not judged (why)."""
-    line = s["track_reason"]
-    fraction, frames = s.get("track_followed_fraction"), s.get("track_manipulated_frames")
-    if fraction is not None:
-        line += f" [within tolerance in {fraction * 100:.1f}% of {frames} manipulated frames]"
+    line = verdict.reason
+    if verdict.followed_fraction is not None:
+        line += (
+            f" [within tolerance in {verdict.followed_fraction * 100:.1f}% of {verdict.manipulated_frames} "
+            "manipulated frames]"
+        )
     print_line("track", line)
 
 
-def print_self_penetration(s: dict) -> None:
+def print_self_penetration(hand_only: HandOnly) -> None:
     """The hand through itself (scenes without objects), simulated and at the recorded targets."""
 
-    def deepest(key: str) -> str:
-        links = s[f"{key}_links"]
-        return "" if links is None else f" ({' | '.join(links)} at {s[f'{key}_at_s']:.2f} s)"
+    def deepest(links: tuple[str, ...] | None, at_s: float | None) -> str:
+        return "" if links is None else f" ({' | '.join(links)} at {at_s:.2f} s)"
 
+    h = hand_only
     print_line(
         "self-pen.",
-        f"max {s['max_self_penetration_mm']:.2f} mm{deepest('self_penetration')}, p95 "
-        f"{s['p95_self_penetration_mm']:.2f} mm, {s['frames_self_penetrating_over_1mm']} frames over 1 mm "
+        f"max {h.max_self_penetration_mm:.2f} mm"
+        f"{deepest(h.self_penetration_links, h.self_penetration_at_s)}, p95 "
+        f"{h.p95_self_penetration_mm:.2f} mm, {h.frames_self_penetrating_over_1mm} frames over 1 mm "
         "(simulated hand through itself)",
     )
     print_line(
         "",
-        f"max {s['max_target_self_penetration_mm']:.2f} mm{deepest('target_self_penetration')} "
-        "at the recorded targets",
+        f"max {h.max_target_self_penetration_mm:.2f} mm"
+        f"{deepest(h.target_self_penetration_links, h.target_self_penetration_at_s)} at the recorded targets",
     )
-
-
-def episode_line(result) -> str:
-    """One episode's verdict in a line: held or why not, robustness, the grip's check."""
-    s = result.summary
-    hold = result.hold
-    if hold is None or hold.held is None:
-        verdict = (hold.reason if hold is not None else s.get("hold_reason")) or "not judged"
-    elif hold.held:
-        verdict = f"held {hold.time_held:.2f} s, robustness {num(s.get('hold_robustness'))}"
-    else:
-        verdict = f"not held: lost at {hold.lost_at:.2f} s ({hold.reason})"
-    grip = result.grip
-    if grip is not None and hold is not None and hold.held is not None:
-        pair = " against ".join(grip.opposing_links) if grip.opposing_links else "no opposing pair"
-        verdict += (
-            f"; grip {pair} in {grip.opposition or 0:.0%} of the window, deepest "
-            f"{grip.max_depth * 1000:.1f} mm, {grip.grip_force:.1f} N of ≤ {grip.force_limit:.0f} N"
-        )
-    return verdict

@@ -9,7 +9,7 @@ from __future__ import annotations
 
 from collections.abc import Callable, Sequence
 from concurrent.futures import Future, ThreadPoolExecutor
-from dataclasses import asdict, dataclass, field, replace
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
@@ -20,8 +20,10 @@ from handsim.sim.grip_check import GripCheck, check_grip
 from handsim.sim.metrics import FrameMetrics, HoldTracks, frame_metrics, hold_tracks
 from handsim.sim.parallel import sim_threads
 from handsim.sim.placement.robustness import HoldRobustness, Judge, Outcome, hold_robustness, member_outcomes
-from handsim.sim.plausibility import Flag, check_control_rate, is_valid, replay_flags
+from handsim.sim.plausibility import check_control_rate, is_valid, replay_flags
+from handsim.sim.result import ReplayResult, hold_section, scene_facts, stability_numbers, trajectory_facts
 from handsim.sim.scene.compiled import SimScene
+from handsim.sim.sections import ReplaySummary, TrackSection
 from handsim.sim.specs import MetricSpec
 from handsim.sim.stability.gravity import StabilityResult, stability_test
 from handsim.sim.stepper import Stepper, WarningEvent
@@ -33,7 +35,7 @@ from handsim.sim.summary import (
     summarize,
     window_long_enough,
 )
-from handsim.sim.track import start_summary, track_flags, track_verdict
+from handsim.sim.track import track_flags, track_verdict
 
 MEMBER_FIRST_LOOK = 0.1
 """Seconds after the release at which a robustness-ensemble member's run is first looked at for a loss
@@ -87,75 +89,6 @@ class ReplayConfig:
             "keep_states": self.keep_states,
             "stability_at": self.stability_at,
             "ensemble": self.ensemble,
-        }
-
-
-@dataclass(frozen=True)
-class ReplayResult:
-    """What a replay measured.
-
-    Attributes:
-        frames: Per-frame metrics of the frames simulated.
-        summary: Per-trial numbers (JSON-ready).
-        warnings: MuJoCo warnings with the step they happened at.
-        diverged: The divergence that stopped the run, or None.
-        hold: Glove scenario: the hold outcome, else None.
-        grip: Glove scenario with a judged hold: what the grip looked like over the hold window (its links,
-            opposition, deepest link, force against the servos' bound), else None.
-        robustness: Glove scenario with ``config.ensemble``: the hold over the robustness ensemble, else None.
-        release_stability: Glove scenario with ``config.ensemble``: the stability tests on the state at the
-            release (six gravity directions: the verdict does not rest on one), else None.
-        stability: The grasp stability tests (``config.stability_at``), else None.
-        states: qpos per frame when ``config.keep_states``, else None.
-        frame_dt: Seconds per control frame.
-        substeps: Steps per control frame.
-        steps: MuJoCo steps simulated.
-        config: The configuration (JSON-ready).
-        scene: Scene facts (model hash, scenario, setup notes) (JSON-ready).
-        trajectory: Source file and SHA-256 of the trajectory.
-        notes: Decisions made while replaying.
-        flags: Plausibility flags (:func:`~handsim.sim.plausibility.replay_flags`); ``summary["valid"]`` is
-            false when one of them makes the replay invalid.
-    """
-
-    frames: FrameMetrics
-    summary: dict
-    warnings: tuple[WarningEvent, ...]
-    diverged: WarningEvent | None
-    hold: HoldOutcome | None
-    robustness: HoldRobustness | None
-    release_stability: StabilityResult | None
-    stability: StabilityResult | None
-    states: np.ndarray | None
-    frame_dt: float
-    substeps: int
-    steps: int
-    config: dict
-    scene: dict
-    trajectory: dict
-    notes: tuple[str, ...]
-    flags: tuple[Flag, ...] = ()
-    grip: GripCheck | None = None
-
-    def to_dict(self) -> dict:
-        """JSON-ready result without per-frame arrays (those are in ``frames``)."""
-        return {
-            "summary": self.summary,
-            "diverged": None if self.diverged is None else asdict(self.diverged),
-            "warnings": [asdict(w) for w in self.warnings],
-            "hold": None if self.hold is None else self.hold.to_dict(),
-            "grip": None if self.grip is None else self.grip.to_dict(),
-            "robustness": None if self.robustness is None else self.robustness.to_dict(),
-            "release_stability": None if self.release_stability is None else self.release_stability.to_dict(),
-            "stability": None if self.stability is None else self.stability.to_dict(),
-            "frame_dt": self.frame_dt,
-            "substeps": self.substeps,
-            "steps": self.steps,
-            "config": self.config,
-            "scene": self.scene,
-            "trajectory": self.trajectory,
-            "notes": list(self.notes),
-            "flags": [f.to_dict() for f in self.flags],
         }
 
 
@@ -232,7 +165,6 @@ def replay(scene: SimScene, trajectory: Trajectory, config: ReplayConfig | None 
     schedule = control_schedule(scene, trajectory, config.control_rate)
     switches = scenario_switches(scene, schedule, spec.release_delay)
     driver = _driver_at_start(scene, schedule, switches)
-    setup = scene.setup
     release = switches.release_frame
 
     def judge(variant: SimScene, controls: ControlSchedule) -> Outcome:  # an ensemble member's verdict
@@ -242,65 +174,33 @@ def replay(scene: SimScene, trajectory: Trajectory, config: ReplayConfig | None 
     try:
         qpos, sensors, warnings, diverged = run_schedule(driver)
         frames = frame_metrics(scene, schedule, qpos, sensors, scratch=driver.stepper.data)  # the run is over
-        summary = summarize(frames, spec)
-        if not scene.layout.objects:
-            summary.update(hand_only_summary(frames, scene.layout.link_names))
-        summary["diverged"] = diverged is not None
-        summary["warnings"] = len(warnings)
+        numbers = summarize(frames, spec)
+        hand_only = None if scene.layout.objects else hand_only_summary(frames, scene.layout.link_names)
         verdict = track_verdict(
             scene, schedule, frames, qpos, diverged is not None, scratch=driver.stepper.data
         )
-        if verdict is not None:
-            summary.update(verdict.summary(), **start_summary(scene))
         flags = (
             *replay_flags(scene, trajectory, schedule, switches, frames),
             *track_flags(scene, frames, verdict),
         )
-        summary["valid"] = is_valid(flags)
-        hold = grip = robustness = release_stability = None
-        if _judges_hold(scene, release):
-            hold, grip = _hold(scene, schedule, frames, qpos, sensors, release, spec)
-            summary.update(
-                held=hold.held,
-                hold_reason=hold.reason,
-                time_held_s=hold.time_held,
-                max_slip_mm=hold.max_slip * 1000.0,
-                drop_mm=hold.drop * 1000.0,
-                **grip_summary(grip),
-            )
-            if config.ensemble and hold.judged:
-                if ahead is None:
-                    robustness = hold_robustness(scene, schedule, spec, hold, judge)
-                    release_stability = _release_stability(scene, schedule, qpos, release, spec)
-                else:  # the release test while the members finish; their error first, as without threads
-                    try:
-                        release_stability = _release_stability(scene, schedule, qpos, release, spec)
-                    except Exception:
-                        ahead.result()
-                        raise
-                    robustness = hold_robustness(scene, schedule, spec, hold, judge, ahead.result())
-                    ahead = None
-            summary.update(_closure(setup.placement))
-            summary.update(
-                hold_robustness=None if robustness is None else robustness.fraction,
-                hold_robustness_factors=None if robustness is None else robustness.factors(),
-                release_directions_held=None
-                if release_stability is None
-                else sum(d.success for d in release_stability.directions),
-            )
+        judged = _judged_hold(_Run(scene, schedule, frames, qpos, sensors, release), config, judge, ahead)
     finally:
-        _drop(ahead)  # judged ahead but not needed (the run diverged first), or an error: wait for it
+        _drop(ahead)  # members judged ahead: waited for (unneeded when the run diverged first, or an error)
+    hold, grip, robustness, release_stability = judged
     stability = _stability(scene, schedule, qpos, config)
-    if stability is not None:
-        displacement = stability.simulation_displacement
-        summary.update(
-            stable=stability.success,
-            simulation_displacement_mm=None if displacement is None else displacement * 1000.0,
-        )
-    notes = (*schedule.notes, *([diverged.describe()] if diverged else ()))
+    measured = ReplaySummary(
+        numbers=numbers,
+        hand_only=hand_only,
+        diverged=diverged is not None,
+        warnings=len(warnings),
+        track=None if verdict is None else TrackSection(verdict, _start_penetration(scene)),
+        valid=is_valid(flags),
+        hold=hold_section(hold, grip, scene.setup.placement, robustness, release_stability),
+        stability=stability_numbers(stability),
+    )
     return ReplayResult(
         frames=frames,
-        summary=summary,
+        measured=measured,
         warnings=tuple(warnings),
         diverged=diverged,
         hold=hold,
@@ -312,26 +212,59 @@ def replay(scene: SimScene, trajectory: Trajectory, config: ReplayConfig | None 
         substeps=schedule.substeps,
         steps=(qpos.shape[0] - 1) * schedule.substeps + (schedule.substeps if diverged else 0),
         config=config.to_dict(),
-        scene={
-            "model_sha256": scene.model_sha256,
-            "scenario": setup.scenario,
-            "links": list(scene.layout.link_names),
-            "parts": list(scene.layout.part_labels),
-            "tips": list(scene.layout.tip_names),
-            "placement": setup.placement,
-            "contact_frame": switches.contact_frame,
-            "release_frame": release,
-            "notes": list(setup.notes),
-        },
-        trajectory={
-            "source": trajectory.source,
-            "sha256": trajectory.sha256,
-            "frames": int(trajectory.times.shape[0]),
-        },
-        notes=notes,
+        scene=scene_facts(scene, switches),
+        trajectory=trajectory_facts(trajectory),
+        notes=(*schedule.notes, *([diverged.describe()] if diverged else ())),
         flags=flags,
         grip=grip,
     )
+
+
+@dataclass(frozen=True)
+class _Run:
+    """The winner's run as the hold is judged from it: scene, schedule, metrics, states, release frame."""
+
+    scene: SimScene
+    schedule: ControlSchedule
+    frames: FrameMetrics
+    qpos: np.ndarray
+    sensors: np.ndarray
+    release: int
+
+
+def _judged_hold(
+    run: _Run, config: ReplayConfig, judge: Judge, ahead: Future[list[tuple[str, str, Outcome]]] | None
+) -> tuple[HoldOutcome | None, GripCheck | None, HoldRobustness | None, StabilityResult | None]:
+    """The glove hold of the run: its outcome and grip, the ensemble's robustness and the release test.
+
+    All None where the scene judges no hold (:func:`_judges_hold`); the robustness and the release test only
+    with ``config.ensemble`` and a judged outcome. Members judged ahead (``ahead``) are waited for after the
+    release test, and their error comes first, as without threads.
+    """
+    scene, schedule, qpos, release, spec = run.scene, run.schedule, run.qpos, run.release, config.metrics
+    if not _judges_hold(scene, release):
+        return None, None, None, None
+    hold, grip = _hold(scene, schedule, run.frames, qpos, run.sensors, release, spec)
+    if not (config.ensemble and hold.judged):
+        return hold, grip, None, None
+    if ahead is None:
+        robustness = hold_robustness(scene, schedule, spec, hold, judge)
+        return hold, grip, robustness, _release_stability(scene, schedule, qpos, release, spec)
+    try:  # the release test while the members finish
+        release_stability = _release_stability(scene, schedule, qpos, release, spec)
+    except Exception:
+        ahead.result()
+        raise
+    return hold, grip, hold_robustness(scene, schedule, spec, hold, judge, ahead.result()), release_stability
+
+
+def _start_penetration(scene: SimScene) -> dict[str, float]:
+    """Each hand's starting penetration of the objects from the scene's checks, mm (empty where none ran).
+
+    Keyed by hand name (``""`` for a scene's only hand); :func:`handsim.sim.arctic_scene.arctic_scene`
+    measures it.
+    """
+    return dict(scene.setup.checks.get("start_penetration_mm") or {})
 
 
 def _members_ahead(
@@ -369,24 +302,6 @@ def _drop(ahead: Future | None) -> None:
     """Wait for members judged ahead whose answers are not needed (nothing runs on after the replay)."""
     if ahead is not None:
         ahead.exception()  # waits; an error of an answer nobody asked for is not the replay's
-
-
-def _closure(placement: dict) -> dict:
-    """A glove placement's recording-quality numbers for the summary.
-
-    How far the recorded closing passes the object (the flexion fraction at which it fits), the grip it then
-    makes, and the hand through itself at the closed frame.
-    """
-    grip = placement.get("grip") or {}
-    self_penetration = placement.get("self_penetration_at_closure") or {}
-    depth = self_penetration.get("depth_m")
-    return {
-        "fit_fraction": placement.get("fit_fraction"),
-        "grip_normal_force_n": grip.get("normal_force_n"),
-        "grip_servo_torque_nm": grip.get("servo_torque_nm"),
-        "grip_directions_held": grip.get("directions_held"),
-        "self_penetration_at_closure_mm": None if depth is None else depth * 1000.0,
-    }
 
 
 def _placed(scene: SimScene) -> bool:
@@ -434,33 +349,6 @@ def _hold(
     if reason is not None:
         outcome = replace(outcome, held=None, reason=reason)
     return outcome, grip
-
-
-def grip_summary(grip: GripCheck | None) -> dict:
-    """The grip's numbers in a replay summary (None when no hold was judged)."""
-    if grip is None:
-        return dict.fromkeys(GRIP_KEYS)
-    return {
-        "grip_links": list(grip.links),
-        "grip_opposition": grip.opposition,
-        "grip_opposing_links": None if grip.opposing_links is None else list(grip.opposing_links),
-        "deepest_link": grip.deepest_link,
-        "deepest_link_mm": grip.max_depth * 1000.0,
-        "grip_force_n": grip.grip_force,
-        "grip_force_limit_n": grip.force_limit,
-    }
-
-
-GRIP_KEYS = (
-    "grip_links",
-    "grip_opposition",
-    "grip_opposing_links",
-    "deepest_link",
-    "deepest_link_mm",
-    "grip_force_n",
-    "grip_force_limit_n",
-)
-"""The summary's grip keys (:func:`grip_summary`)."""
 
 
 def member_verdict(scene: SimScene, schedule: ControlSchedule, spec: MetricSpec) -> Outcome:

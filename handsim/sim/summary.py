@@ -1,14 +1,23 @@
-"""Per-trial numbers from per-frame metrics: the hold outcome of a glove trial and a JSON-ready summary."""
+"""Per-trial numbers from per-frame metrics: the hold outcome of a glove trial and the summary's sections."""
 
 from __future__ import annotations
 
-from dataclasses import asdict, dataclass
+from dataclasses import asdict, dataclass, fields
 
 import numpy as np
 
 from handsim.sim.curves import DEG, MM
 from handsim.sim.curves import slip as slip_curve
 from handsim.sim.metrics import FrameMetrics, HoldTracks
+from handsim.sim.sections import (
+    Contacts,
+    FrameNumbers,
+    HandNumbers,
+    HandOnly,
+    HingeDrift,
+    ObjectDrift,
+    Tracking,
+)
 from handsim.sim.specs import MetricSpec
 
 NO_OBJECT = "not judged: no object (a hand-only sequence: nothing to touch, hold or drift)"
@@ -150,113 +159,118 @@ def _finite(x: np.ndarray, fn) -> float | None:
     return float(fn(x)) if x.size else None
 
 
-CONTACT_KEYS = (
-    "max_penetration_mm",
-    "p95_penetration_mm",
-    "frames_penetrating_over_1mm",
-    "contact_frames",
-    "max_contact_links",
-    "max_total_normal_force_n",
-    "truncated_contact_pairs",
-)
-"""The summary's hand–object numbers: None in a scene without objects."""
+CONTACT_KEYS = tuple(f.name for f in fields(Contacts))
+"""The summary's hand–object numbers (:class:`~handsim.sim.sections.Contacts`): None in a scene without
+objects."""
+
+HAND_KEYS = tuple(f.name for f in fields(HandNumbers) if f.name != "hand")
+"""The summary's per-hand numbers of a scene with several hands, each as ``<hand>/<key>``."""
+
+NO_CONTACTS = Contacts(**dict.fromkeys(CONTACT_KEYS))
+"""The hand–object numbers of a scene without objects."""
 
 
-def _hand_numbers(
-    count: np.ndarray, normal: np.ndarray, penetration: np.ndarray, tracking: np.ndarray, tips: np.ndarray
-) -> dict:
-    """Penetration, contact, tracking and fingertip numbers of the hand links/DoFs/tips given.
+def _contacts(count: np.ndarray, normal: np.ndarray, penetration: np.ndarray, truncated: int) -> Contacts:
+    """Penetration and contact numbers of the hand links given.
 
     Args:
         count: Contacts per link × part (N, links, parts).
         normal: Normal force per link × part, N (N, links, parts).
         penetration: Deepest penetration per frame, m (N,).
+        truncated: Contacts beyond the per-frame arrays, summed over the frames.
+    """
+    n = penetration.shape[0]
+    return Contacts(
+        max_penetration_mm=float(penetration.max() * MM) if n else 0.0,
+        p95_penetration_mm=float(np.percentile(penetration, 95) * MM) if n else 0.0,
+        frames_penetrating_over_1mm=int((penetration > 0.001).sum()),
+        contact_frames=int((count.sum(axis=(1, 2)) > 0).sum()) if count.size else 0,
+        max_contact_links=int((count.sum(axis=2) > 0).sum(axis=1).max()) if n and count.size else 0,
+        max_total_normal_force_n=float(normal.sum(axis=(1, 2)).max()) if n and normal.size else 0.0,
+        truncated_contact_pairs=truncated,
+    )
+
+
+def _tracking(tracking: np.ndarray, tips: np.ndarray) -> Tracking:
+    """Joint tracking and fingertip numbers of the DoFs and tips given.
+
+    Args:
         tracking: Joint tracking error, rad (N, dofs).
         tips: Fingertip error, m (N, tips).
     """
-    n = penetration.shape[0]
-    return {
-        "max_penetration_mm": float(penetration.max() * MM) if n else 0.0,
-        "p95_penetration_mm": float(np.percentile(penetration, 95) * MM) if n else 0.0,
-        "frames_penetrating_over_1mm": int((penetration > 0.001).sum()),
-        "contact_frames": int((count.sum(axis=(1, 2)) > 0).sum()) if count.size else 0,
-        "max_contact_links": int((count.sum(axis=2) > 0).sum(axis=1).max()) if n and count.size else 0,
-        "max_total_normal_force_n": float(normal.sum(axis=(1, 2)).max()) if n and normal.size else 0.0,
-        "mean_tracking_error_deg": _finite(np.abs(tracking) * DEG, np.mean),
-        "max_tracking_error_deg": _finite(np.abs(tracking) * DEG, np.max),
-        "mean_tip_error_mm": _finite(tips * MM, np.mean),
-        "max_tip_error_mm": _finite(tips * MM, np.max),
-    }
+    return Tracking(
+        mean_tracking_error_deg=_finite(np.abs(tracking) * DEG, np.mean),
+        max_tracking_error_deg=_finite(np.abs(tracking) * DEG, np.max),
+        mean_tip_error_mm=_finite(tips * MM, np.mean),
+        max_tip_error_mm=_finite(tips * MM, np.max),
+    )
 
 
-HAND_KEYS = (
-    "max_penetration_mm",
-    "frames_penetrating_over_1mm",
-    "contact_frames",
-    "max_contact_links",
-    "max_total_normal_force_n",
-    "mean_tracking_error_deg",
-    "max_tracking_error_deg",
-    "mean_tip_error_mm",
-    "max_tip_error_mm",
-)
-"""The summary's per-hand numbers of a scene with several hands, each as ``<hand>/<key>``."""
+def _hands(frames: FrameMetrics, objects: bool) -> tuple[HandNumbers, ...]:
+    """Each hand's numbers in a scene with several hands (the contact numbers None without objects)."""
+    if len(frames.hand_names) < 2:
+        return ()
+    found = []
+    for h, name in enumerate(frames.hand_names):
+        links, dofs, tips = frames.link_hand == h, frames.dof_hand == h, frames.tip_hand == h
+        contacts = _contacts(
+            frames.contact_count[:, links], frames.normal_force[:, links], frames.hand_penetration[:, h], 0
+        )
+        tracking = _tracking(frames.tracking_error[:, dofs], frames.tip_error[:, tips])
+        own = {**asdict(contacts if objects else NO_CONTACTS), **asdict(tracking)}
+        found.append(HandNumbers(name, **{key: own[key] for key in HAND_KEYS}))
+    return tuple(found)
 
 
-def summarize(frames: FrameMetrics, spec: MetricSpec) -> dict:
-    """JSON-ready per-trial numbers (SI units in the key names: ``_mm``, ``_deg``, ``_n``, ``_s``).
+def _drift(frames: FrameMetrics, spec: MetricSpec) -> ObjectDrift | None:
+    """The recorded objects against their tracks, or None where no object has a finite position error."""
+    pos = frames.object_position_error
+    if not np.isfinite(pos).any():
+        return None
+    hinge = None
+    if np.isfinite(frames.articulation_error).any():
+        hinge = HingeDrift(
+            mean_articulation_drift_deg=_finite(np.abs(frames.articulation_error) * DEG, np.mean),
+            final_articulation_drift_deg=_finite(np.abs(frames.articulation_error[-1]) * DEG, np.max),
+        )
+    return ObjectDrift(
+        mean_drift_mm=_finite(pos * MM, np.mean),
+        max_drift_mm=_finite(pos * MM, np.max),
+        final_drift_mm=_finite(pos[-1] * MM, np.max),
+        within_tolerance=float(np.mean(pos[np.isfinite(pos)] <= spec.drift_tolerance)),
+        mean_rotation_drift_deg=_finite(frames.object_rotation_error * DEG, np.mean),
+        max_rotation_drift_deg=_finite(frames.object_rotation_error * DEG, np.max),
+        max_articulation_drift_deg=_finite(np.abs(frames.articulation_error) * DEG, np.max),
+        hinge=hinge,
+    )
+
+
+def summarize(frames: FrameMetrics, spec: MetricSpec) -> FrameNumbers:
+    """The per-trial numbers of the per-frame metrics (the record's units: ``_mm``, ``_deg``, ``_n``, ``_s``).
 
     Without objects (a hand-only sequence) the hand–object numbers (:data:`CONTACT_KEYS`: penetration,
     contacts, forces; each hand's too) are None, never a 0 that reads as a clean result;
     :func:`hand_only_summary` adds why and the hand's self-penetration.
 
-    A scene with several hands adds each hand's :data:`HAND_KEYS` as ``<hand>/<key>`` (``right/…``,
-    ``left/…``); the whole-scene numbers cover every hand.
+    A scene with several hands adds each hand's :data:`HAND_KEYS` (recorded as ``<hand>/<key>``:
+    ``right/…``, ``left/…``); the whole-scene numbers cover every hand.
     """
     n = frames.times.shape[0]
-    whole = _hand_numbers(
-        frames.contact_count, frames.normal_force, frames.penetration, frames.tracking_error, frames.tip_error
+    objects = frames.object_in_hand.shape[1] > 0
+    contacts = _contacts(
+        frames.contact_count, frames.normal_force, frames.penetration, int(frames.truncated_pairs.sum())
     )
-    summary = {"frames": int(n), "duration_s": float(frames.times[-1] - frames.times[0]) if n else 0.0}
-    for key, value in whole.items():
-        if key == "mean_tracking_error_deg":
-            summary["truncated_contact_pairs"] = int(frames.truncated_pairs.sum())
-        summary[key] = value
-    if len(frames.hand_names) > 1:
-        for h, name in enumerate(frames.hand_names):
-            links, dofs, tips = frames.link_hand == h, frames.dof_hand == h, frames.tip_hand == h
-            own = _hand_numbers(
-                frames.contact_count[:, links],
-                frames.normal_force[:, links],
-                frames.hand_penetration[:, h],
-                frames.tracking_error[:, dofs],
-                frames.tip_error[:, tips],
-            )
-            summary.update({f"{name}/{key}": own[key] for key in HAND_KEYS})
-    if frames.object_in_hand.shape[1] == 0:
-        summary.update(dict.fromkeys(CONTACT_KEYS))
-        for name in frames.hand_names if len(frames.hand_names) > 1 else ():
-            summary.update(dict.fromkeys(f"{name}/{key}" for key in HAND_KEYS if key in CONTACT_KEYS))
-    if np.isfinite(frames.object_position_error).any():
-        pos = frames.object_position_error
-        summary.update(
-            mean_drift_mm=_finite(pos * MM, np.mean),
-            max_drift_mm=_finite(pos * MM, np.max),
-            final_drift_mm=_finite(pos[-1] * MM, np.max),
-            within_tolerance=float(np.mean(pos[np.isfinite(pos)] <= spec.drift_tolerance)),
-            mean_rotation_drift_deg=_finite(frames.object_rotation_error * DEG, np.mean),
-            max_rotation_drift_deg=_finite(frames.object_rotation_error * DEG, np.max),
-            max_articulation_drift_deg=_finite(np.abs(frames.articulation_error) * DEG, np.max),
-        )
-        if np.isfinite(frames.articulation_error).any():
-            summary.update(
-                mean_articulation_drift_deg=_finite(np.abs(frames.articulation_error) * DEG, np.mean),
-                final_articulation_drift_deg=_finite(np.abs(frames.articulation_error[-1]) * DEG, np.max),
-            )
-    return summary
+    return FrameNumbers(
+        frames=int(n),
+        duration_s=float(frames.times[-1] - frames.times[0]) if n else 0.0,
+        contacts=contacts if objects else NO_CONTACTS,
+        tracking=_tracking(frames.tracking_error, frames.tip_error),
+        hands=_hands(frames, objects),
+        drift=_drift(frames, spec),
+    )
 
 
-def hand_only_summary(frames: FrameMetrics, links: tuple[str, ...]) -> dict:
+def hand_only_summary(frames: FrameMetrics, links: tuple[str, ...]) -> HandOnly:
     """The numbers of a replay without objects: hold and drift not judged (why), the hand through itself.
 
     Args:
@@ -265,11 +279,9 @@ def hand_only_summary(frames: FrameMetrics, links: tuple[str, ...]) -> dict:
 
     Returns:
         ``hold_reason`` and ``drift_reason`` (:data:`NO_OBJECT`; no ``held``: a verdict is true or absent);
-        ``max_self_penetration_mm``, ``p95_self_penetration_mm`` and ``frames_self_penetrating_over_1mm``
-        of the simulated hand, ``self_penetration_links`` and ``self_penetration_at_s`` of its deepest
-        frame (None when no two links overlap); ``max_target_self_penetration_mm``,
-        ``target_self_penetration_links`` and ``target_self_penetration_at_s`` of the hand at its targets
-        (the recording's own postures).
+        the simulated hand's deepest self-penetration, its 95th percentile, the frames over 1 mm and the
+        links and time of its deepest frame (None when no two links overlap); the same deepest numbers of
+        the hand at its targets (the recording's own postures).
 
     Raises:
         ValueError: ``frames`` hold no self-penetration (a scene with objects).
@@ -278,29 +290,28 @@ def hand_only_summary(frames: FrameMetrics, links: tuple[str, ...]) -> dict:
     if frames.self_penetration.shape[0] != n or frames.target_self_penetration.shape[0] != n:
         raise ValueError("hand_only_summary needs the self-penetration of a scene without objects")
     depth = frames.self_penetration
-    return {
-        "hold_reason": NO_OBJECT,
-        "drift_reason": NO_OBJECT,
-        "max_self_penetration_mm": float(depth.max() * 1000.0) if n else None,
-        "p95_self_penetration_mm": float(np.percentile(depth, 95) * 1000.0) if n else None,
-        "frames_self_penetrating_over_1mm": int((depth > 0.001).sum()),
-        **_deepest("self_penetration", depth, frames.self_penetration_pair, frames.times, links),
-        "max_target_self_penetration_mm": float(frames.target_self_penetration.max() * 1000.0) if n else None,
-        **_deepest(
-            "target_self_penetration",
-            frames.target_self_penetration,
-            frames.target_self_penetration_pair,
-            frames.times,
-            links,
-        ),
-    }
+    target = frames.target_self_penetration
+    links_at, at_s = _deepest(depth, frames.self_penetration_pair, frames.times, links)
+    target_links, target_at_s = _deepest(target, frames.target_self_penetration_pair, frames.times, links)
+    return HandOnly(
+        hold_reason=NO_OBJECT,
+        drift_reason=NO_OBJECT,
+        max_self_penetration_mm=float(depth.max() * 1000.0) if n else None,
+        p95_self_penetration_mm=float(np.percentile(depth, 95) * 1000.0) if n else None,
+        frames_self_penetrating_over_1mm=int((depth > 0.001).sum()),
+        self_penetration_links=links_at,
+        self_penetration_at_s=at_s,
+        max_target_self_penetration_mm=float(target.max() * 1000.0) if n else None,
+        target_self_penetration_links=target_links,
+        target_self_penetration_at_s=target_at_s,
+    )
 
 
 def _deepest(
-    key: str, depth: np.ndarray, pair: np.ndarray, times: np.ndarray, links: tuple[str, ...]
-) -> dict:
-    """``<key>_links`` and ``<key>_at_s`` of the deepest frame (None when no two links overlap)."""
+    depth: np.ndarray, pair: np.ndarray, times: np.ndarray, links: tuple[str, ...]
+) -> tuple[tuple[str, ...] | None, float | None]:
+    """The two links and the time of the deepest frame (None, None when no two links overlap)."""
     k = int(np.argmax(depth)) if depth.size else -1
     if k < 0 or depth[k] <= 0.0:
-        return {f"{key}_links": None, f"{key}_at_s": None}
-    return {f"{key}_links": [links[i] for i in pair[k]], f"{key}_at_s": float(times[k])}
+        return None, None
+    return tuple(links[i] for i in pair[k]), float(times[k])

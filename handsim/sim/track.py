@@ -296,18 +296,6 @@ def track_verdict(
     return TrackVerdict(FOLLOWED, reason + touch, total, fraction, **common)
 
 
-def start_summary(scene: SimScene) -> dict:
-    """The scene's checks before the run as summary keys: each hand's starting penetration of the objects.
-
-    ``<hand>/start_penetration_mm`` (``start_penetration_mm`` for a scene's only hand), from the scene's
-    ``checks`` (:func:`handsim.sim.arctic_scene.arctic_scene` measures it); empty where none ran.
-    """
-    found = scene.setup.checks.get("start_penetration_mm") or {}
-    return {
-        f"{name}/start_penetration_mm" if name else "start_penetration_mm": d for name, d in found.items()
-    }
-
-
 def track_flags(
     scene: SimScene, frames: FrameMetrics, verdict: TrackVerdict | None, spec: TrackSpec | None = None
 ) -> list[Flag]:
