@@ -13,10 +13,18 @@ import sys
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, NoReturn, Protocol
 
-from handsim.datatypes.physical_ranges import DENSITY, OBJECT_MASS
 from handsim.files import write_atomic
+from handsim.trials.options import (
+    OptionSpec,
+    TrialOptions,
+    option_names,
+    option_spec,
+    parse_positive_number,
+)
 
 if TYPE_CHECKING:
+    from collections.abc import Callable, Sequence
+
     from handsim.datatypes.physical_ranges import PhysicalRange
 
 EXIT_INTERRUPTED = 130
@@ -105,19 +113,26 @@ def add_hand_size(parser: argparse.ArgumentParser) -> None:
     )
 
 
+def argument_type(parse: Callable[[str], Any]) -> Callable[[str], Any]:
+    """An argparse type from a parser that raises ``ValueError``: its message becomes the usage error's."""
+
+    def convert(text: str) -> Any:
+        try:
+            return parse(text)
+        except ValueError as exc:
+            raise argparse.ArgumentTypeError(str(exc)) from None
+
+    convert.__name__ = parse.__name__
+    return convert
+
+
 def positive_number(text: str) -> float:
     """An argparse type: a finite number > 0 (lengths, masses, densities; a usage error otherwise).
 
     Whether the value is plausible (a hand length in metres, a household object's mass) is the builder's to
-    say; this refuses only what is no quantity at all.
+    say; this refuses only what is no quantity at all (:func:`handsim.trials.options.parse_positive_number`).
     """
-    try:
-        value = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected a number, got {text!r}") from None
-    if not (math.isfinite(value) and value > 0.0):
-        raise argparse.ArgumentTypeError(f"expected a finite number > 0, got {text}")
-    return value
+    return argument_type(parse_positive_number)(text)
 
 
 def add_ranged_float(
@@ -141,6 +156,60 @@ def add_ranged_float(
     parser.set_defaults(range_checks=checks, command_parser=parser)
 
 
+def add_trial_options(
+    parser: argparse.ArgumentParser, names: Sequence[str] | None = None, *, forced: bool | None = None
+) -> None:
+    """Add the flags of trial options (:class:`~handsim.trials.options.TrialOptions`), as their metadata says.
+
+    Each flag's name, value, type, choices and help are its field's
+    :class:`~handsim.trials.options.OptionSpec`; its ``dest`` is the field's name, so that
+    :func:`trial_options_from_args` reads them back. Options with a documented range are checked after
+    parsing (:func:`range_problem`); options marked exclusive of each other share a group.
+
+    Args:
+        parser: The command's parser.
+        names: The options, in the order ``--help`` lists them; default every one, in the fields' order.
+        forced: The command has ``--force`` (their help says that it accepts a value out of range);
+            default: ``"force"`` is among ``names``.
+    """
+    names = option_names() if names is None else tuple(names)
+    forced = "force" in names if forced is None else forced
+    groups: dict[str, ArgumentContainer] = {}
+    for name in names:
+        spec = option_spec(name)
+        if spec.exclusive and spec.exclusive not in groups:
+            groups[spec.exclusive] = parser.add_mutually_exclusive_group()
+        _add_option(parser, groups.get(spec.exclusive, parser), name, spec, forced)
+    given = (*(parser.get_default("trial_options") or ()), *names)
+    parser.set_defaults(trial_options=given)
+
+
+def _add_option(
+    parser: argparse.ArgumentParser, container: ArgumentContainer, name: str, spec: OptionSpec, forced: bool
+) -> None:
+    """Add one trial option's flag to ``container`` (``parser`` or one of its groups)."""
+    if spec.switch:
+        container.add_argument(spec.flag, dest=name, action="store_true", help=spec.help)
+        return
+    kwargs: dict[str, Any] = {"dest": name, "default": None, "help": spec.help}
+    if spec.metavar is not None:
+        kwargs["metavar"] = spec.metavar
+    if spec.choices is not None:
+        kwargs["choices"] = spec.choices
+    if spec.value_range is not None:
+        kwargs["help"] += " without --force" if forced else ""
+        add_ranged_float(parser, container, spec.flag, spec.value_range, **kwargs)
+        return
+    if spec.parse is not None:
+        kwargs["type"] = argument_type(spec.parse)
+    container.add_argument(spec.flag, **kwargs)
+
+
+def trial_options_from_args(args: argparse.Namespace) -> TrialOptions:
+    """The trial options a command's parsed arguments give (the flags :func:`add_trial_options` added)."""
+    return TrialOptions(**{name: getattr(args, name) for name in getattr(args, "trial_options", ())})
+
+
 def add_object_mass_options(parser: argparse.ArgumentParser, *, forced: bool) -> None:
     """Add ``--density`` or ``--mass`` (one of them) of an object, checked against their ranges.
 
@@ -148,25 +217,12 @@ def add_object_mass_options(parser: argparse.ArgumentParser, *, forced: bool) ->
         parser: The command's parser.
         forced: The command also has ``--force`` (:func:`add_force`), which accepts values out of range.
     """
-    group = parser.add_mutually_exclusive_group()
-    unless = " without --force" if forced else ""
-    add_ranged_float(
-        parser, group, "--density", DENSITY, metavar="KG_M3",
-        help=f"object density instead of its own, {DENSITY.describe()}{unless}",
-    )  # fmt: skip
-    add_ranged_float(
-        parser, group, "--mass", OBJECT_MASS, metavar="KG",
-        help=f"total object mass instead of a density, {OBJECT_MASS.describe()}{unless}",
-    )  # fmt: skip
+    add_trial_options(parser, ("density", "mass"), forced=forced)
 
 
 def add_force(parser: argparse.ArgumentParser) -> None:
     """Add ``--force``: accept a mass or density outside its documented range."""
-    parser.add_argument(
-        "--force",
-        action="store_true",
-        help="accept a mass or density outside its documented range (docs/objects.md)",
-    )
+    add_trial_options(parser, ("force",))
 
 
 def range_problem(args: argparse.Namespace) -> str | None:
@@ -282,11 +338,4 @@ def write_text(path: str | Path, text: str) -> Path:
 
 def add_arctic_options(parser: argparse.ArgumentParser) -> None:
     """``--mano-dir`` and ``--templates``: what an ARCTIC sequence needs besides its files."""
-    parser.add_argument(
-        "--mano-dir", metavar="DIR", default=None,
-        help="ARCTIC: the folder with your MANO_RIGHT.pkl and MANO_LEFT.pkl (default: $HANDSIM_MANO_DIR)",
-    )  # fmt: skip
-    parser.add_argument(
-        "--templates", metavar="DIR", default=None,
-        help="ARCTIC: object templates folder (<object>/ inside), not the root's meta/object_vtemplates",
-    )  # fmt: skip
+    add_trial_options(parser, ("mano_dir", "templates"))

@@ -16,42 +16,31 @@ import sys
 
 from handsim.cli._common import (
     Commands,
-    add_arctic_options,
     add_control_rate,
-    add_force,
-    add_object_mass_options,
+    add_trial_options,
     output_file,
-    positive_number,
+    trial_options_from_args,
     usage_error,
     write_text,
 )
 from handsim.cli.replay_print import episode_line, print_line, print_summary, print_trial
 from handsim.runner.records import json_ready
+from handsim.trials.options import option_names
 
 EXIT_DIVERGED = 3
 EXIT_NOT_VALID = 4
 
 
-def _thumb_rest(text: str) -> tuple[float, float]:
-    """An argparse type: ``ABD,FLEX`` in degrees, two finite numbers (the joint limits are the loader's)."""
-    parts = text.split(",")
-    try:
-        values = tuple(float(p) for p in parts)
-    except ValueError:
-        values = ()
-    if len(values) != 2 or not all(math.isfinite(v) for v in values):
-        raise argparse.ArgumentTypeError(f"expected ABD,FLEX: two angles in degrees, got {text!r}")
-    return values
+def replay_options() -> tuple[str, ...]:
+    """Every trial option (:class:`~handsim.trials.options.TrialOptions`), in the order ``--help`` lists them.
 
-
-def _grasp_index(text: str) -> int:
-    try:
-        value = int(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected a grasp episode number (1, 2 …), got {text!r}") from None
-    if value < 1:
-        raise argparse.ArgumentTypeError(f"expected a grasp episode number ≥ 1, got {value}")
-    return value
+    The fields' order, but with ``--force`` right after the object mass it unlocks and ``--grasp`` among the
+    glove options, before the ARCTIC ones.
+    """
+    names = [n for n in option_names() if n not in ("force", "grasp")]
+    names.insert(names.index("mass") + 1, "force")
+    names.insert(names.index("mano_dir"), "grasp")
+    return tuple(names)
 
 
 def _stability_at(text: str) -> float | str:
@@ -75,26 +64,11 @@ def _replay(args: argparse.Namespace) -> int:
     # lazy: the simulation stack (MuJoCo, trimesh), only when replaying
     from handsim.sim.replay import ReplayConfig
     from handsim.trials import TrialError
-    from handsim.trials.registry import find_trial
+    from handsim.trials.registry import find_with_options
 
     config = ReplayConfig(control_rate=args.rate, keep_states=bool(args.video), stability_at=args.stability)
     try:
-        trial = find_trial(
-            args.trajectory,
-            grasp=args.grasp,
-            skeleton=args.skeleton,
-            obj=args.object,
-            calibration=args.calibration,
-            units=args.units,
-            density=args.density,
-            mass=args.mass,
-            hand_length=args.hand_length,
-            collision=args.collision,
-            thumb_rest=args.thumb_rest,
-            force=args.force,
-            mano_dir=args.mano_dir,
-            templates=args.templates,
-        )
+        trial = find_with_options(args.trajectory, trial_options_from_args(args))
         if args.grasp is None:
             trial, segmentation = _episodes(trial)
             if segmentation is not None and len(segmentation.complete) > 1:
@@ -125,8 +99,7 @@ def _replay_episodes(args: argparse.Namespace, trial, segmentation, config) -> i
     """Judge every complete grasp episode of a glove recording: one line each and a total."""
     # lazy: the simulation stack, only when replaying
     from handsim.report.aggregate import ROBUST
-    from handsim.sim.replay import replay
-    from handsim.trials import load_trial
+    from handsim.trials import load_trial, replay_trial
 
     print_line("trial", f"{trial.kind}  {trial.trajectory_path}")
     for text in segmentation.lines():
@@ -143,7 +116,7 @@ def _replay_episodes(args: argparse.Namespace, trial, segmentation, config) -> i
         loaded = load_trial(
             dataclasses.replace(trial, grasp=episode.index), metrics=config.metrics, progress=True
         )
-        result = replay(loaded.scene, loaded.trajectory, config)
+        result = replay_trial(loaded, config)
         outcomes.append(result)
         print_line(f"episode {episode.index}", episode_line(result))
         if args.json:
@@ -175,8 +148,7 @@ def _replay_episodes(args: argparse.Namespace, trial, segmentation, config) -> i
 def _replay_trial(args: argparse.Namespace, trial, config) -> int:
     """Replay one trial (a glove recording's one episode) and print everything about it."""
     # lazy: the simulation stack, only when replaying
-    from handsim.sim.replay import replay
-    from handsim.trials import load_trial
+    from handsim.trials import load_trial, replay_trial
 
     loaded = load_trial(trial, metrics=config.metrics, progress=True)
     print_trial(loaded)
@@ -191,7 +163,7 @@ def _replay_trial(args: argparse.Namespace, trial, config) -> int:
             "replay",
             f"--stability {args.stability:g} s is after the {what}'s end ({end:.3f} s)",
         )
-    result = replay(loaded.scene, loaded.trajectory, config)
+    result = replay_trial(loaded, config)
     print_summary(result)
     notes = [*loaded.notes, *loaded.scene.setup.notes, *result.notes]
     if args.verbose:
@@ -264,35 +236,7 @@ def register(commands: Commands) -> None:
         metavar="TRAJECTORY",
         help="GraspDB14 .txt, Tzionas Model_Hand_*.MOTION, ARCTIC <seq>.mano.npy or a NAME.corrected.npz",
     )
-    replay.add_argument("--skeleton", metavar="SKELETON_FILE", help="GraspDB14: the hand (.xmlskel or .SKEL)")
-    replay.add_argument(
-        "--object", metavar="NAME|MESH", help="GraspDB14: a catalogue name or a mesh file (give --units)"
-    )
-    replay.add_argument(
-        "--calibration", metavar="JSON", help="GraspDB14: calibration of a raw-count recording"
-    )
-    replay.add_argument("--units", choices=("m", "mm"), help="units of a mesh file given as --object")
-    add_object_mass_options(replay, forced=True)
-    add_force(replay)
-    replay.add_argument(
-        "--hand-length", type=positive_number, default=None, metavar="M",
-        help="GraspDB14 without --skeleton: parametric hand length, wrist crease to middle fingertip (0.19)",
-    )  # fmt: skip
-    replay.add_argument(
-        "--collision", choices=("capsules", "mesh"), default=None,
-        help="hand collision shapes (default capsules; mesh: per-bone hulls of a skinned .SKEL or MANO hand)",
-    )  # fmt: skip
-    replay.add_argument(
-        "--thumb-rest", type=_thumb_rest, metavar="ABD,FLEX",
-        help="GraspDB14: hold the thumb TMC DoFs no glove sensor drives (th_tmc_abd, th_tmc_flex) at these "
-        "angles in degrees (default: 0,0 as the GraspDB14 tools; see docs/cyberglove.md)",
-    )  # fmt: skip
-    replay.add_argument(
-        "--grasp", type=_grasp_index, metavar="K",
-        help="glove recordings: replay grasp episode K only, with every detail (1-based, as `handsim "
-        "inspect` lists them; default: judge every complete episode, one line each)",
-    )  # fmt: skip
-    add_arctic_options(replay)
+    add_trial_options(replay, replay_options())
     add_control_rate(replay)
     replay.add_argument(
         "--stability", type=_stability_at, metavar="grasp|SECONDS",

@@ -12,7 +12,7 @@ from __future__ import annotations
 import argparse
 import sys
 from pathlib import Path
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 from handsim.cli._common import (
     EXIT_INTERRUPTED,
@@ -22,13 +22,13 @@ from handsim.cli._common import (
     non_negative_int,
     output_dir,
     positive_int,
+    trial_options_from_args,
     usage_error,
 )
 from handsim.runner.records import read_records
 from handsim.runner.run_summary import failure_counts, records_line
 
 if TYPE_CHECKING:
-    from handsim.sim.replay import ReplayConfig
     from handsim.trials import Discovery, TrialOptions
 
 
@@ -61,15 +61,10 @@ def run_and_render(
     dataset: str | Path | Discovery,
     out: str | Path,
     *,
-    workers: int | None = None,
-    backend: str = "local",
-    address: str | None = None,
-    config: ReplayConfig | None = None,
-    frames: int = 4,
     only: str | None = None,
     limit: int | None = None,
-    command: list[str] | None = None,
     options: TrialOptions | None = None,
+    **run: Any,
 ) -> int:
     """Discover, run and report on a dataset, printing what happens; the command's exit code.
 
@@ -78,15 +73,11 @@ def run_and_render(
     Args:
         dataset: A dataset folder or one recording, or a discovery made already.
         out: The output folder (resumed when it holds records of the same parameters).
-        workers: Trials at once; default every core.
-        backend: ``"local"`` or ``"ray"``.
-        address: Ray cluster address.
-        config: Replay parameters (default: :func:`handsim.runner.execute.run_dataset`'s).
-        frames: Frames rendered per trial.
         only: Run only trials whose id matches this glob.
         limit: Run only the first ``limit`` trials.
-        command: The command line for ``run.json``.
         options: Options for the trials of the kinds that take them (ARCTIC's ``mano_dir``, ``templates``).
+        **run: :func:`handsim.runner.execute.run_dataset`'s keyword arguments (``workers``, ``backend``,
+            ``address``, ``config``, ``frames``, ``command`` …), with a progress bar by default.
 
     Returns:
         0 done, 1 every trial failed (the errors counted on stderr), 2 no trial to run, 130 interrupted.
@@ -117,10 +108,8 @@ def run_and_render(
     )
     source = discovery if len(entries) == len(discovery.entries) else entries
     try:
-        summary = run_dataset(
-            source, out, workers=workers, backend=backend, address=address, config=config, frames=frames,
-            command=command, progress=True,  # a bar on a terminal, nothing in a log (handsim.progress)
-        )  # fmt: skip
+        # progress: a bar on a terminal, nothing in a log (handsim.progress)
+        summary = run_dataset(source, out, **{"progress": True, **run})
     except KeyboardInterrupt:
         print(
             f"handsim report: interrupted; the finished trials are recorded in {out / 'records.jsonl'}: "
@@ -145,12 +134,11 @@ def _not_a_trial(path: str | Path, options: TrialOptions | None) -> int:
     a file of no kind, or an option that does not apply, a usage error (2).
     """
     # lazy: the trial registry, only for a recording that is no trial
-    from handsim.trials import TrialError, TrialOptions
-    from handsim.trials.registry import find_trial
+    from handsim.trials import TrialError
+    from handsim.trials.registry import find_with_options
 
-    given = options or TrialOptions()
     try:
-        find_trial(path, mano_dir=given.mano_dir, templates=given.templates)
+        find_with_options(path, options)
     except TrialError as exc:
         return usage_error("report", str(exc))
     return usage_error("report", f"no trial in {path}")
@@ -176,16 +164,13 @@ def _report(args: argparse.Namespace) -> int:
         return _render_only(out)
     if args.dataset is None or args.output is None:
         return usage_error("report", "give DATASET and -o OUT (or --render-only OUT)")
-    # lazy: the trial loaders, only for a run
-    from handsim.trials import TrialOptions
-
     if args.mano_dir is not None:
         # lazy: the MANO reader, only with --mano-dir
         from handsim.io.arctic.mano import find_mano_files
 
         find_mano_files(args.mano_dir)  # before any work: says which files are needed and where to put them
     config = ReplayConfig(control_rate=args.rate, stability_at=None if args.stability == "none" else "grasp")
-    options = TrialOptions(mano_dir=args.mano_dir, templates=args.templates)
+    options = trial_options_from_args(args)
     return run_and_render(
         args.dataset, args.output, workers=args.workers, backend=args.backend, address=args.address,
         config=config, frames=args.frames, only=args.only, limit=args.limit,

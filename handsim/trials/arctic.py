@@ -22,14 +22,9 @@ from handsim.io.arctic.sequence import HANDS, ArcticSequence, read_arctic_sequen
 from handsim.io.arctic.templates import read_arctic_template
 from handsim.sim.arctic_scene import arctic_scene
 from handsim.trials.arctic_hands import SideCheck, arctic_trajectory, hand_side_check
-from handsim.trials.base import (
-    LoadedTrial,
-    Trial,
-    TrialObject,
-    TrialOptions,
-    build_objects,
-)
+from handsim.trials.base import LoadedTrial, Trial, TrialObject, build_objects
 from handsim.trials.kind import TrialKind
+from handsim.trials.options import TrialOptions
 from handsim.trials.sorting import Sorting, TrialEntry, group_fields, relative, trial_input
 
 if TYPE_CHECKING:

@@ -20,13 +20,13 @@ from __future__ import annotations
 import dataclasses
 from collections.abc import Sequence
 from dataclasses import asdict, dataclass, field
-from pathlib import Path
 from typing import TYPE_CHECKING
 
 from handsim.builders.catalog import resolve
 from handsim.builders.objects import object_spec, prepare_object
 from handsim.errors import HandsimError, InputFileError
 from handsim.io.graspdb.default_skeleton import DEFAULT_HAND_LENGTH_M
+from handsim.trials.options import HAND_COLLISIONS, TrialOptions
 
 if TYPE_CHECKING:
     from handsim.datatypes.object_model import ObjectModel
@@ -34,9 +34,19 @@ if TYPE_CHECKING:
     from handsim.glove.checks import RecordingChecks
     from handsim.glove.segmentation import GraspEpisode
     from handsim.sim.scene.compiled import SimScene
+    from handsim.sim.specs import MetricSpec
 
-HAND_COLLISIONS = ("capsules", "mesh")
-"""Hand collision shapes: capsules and a convex palm, or per-bone hulls of a skinned mesh."""
+__all__ = [
+    "HAND_COLLISIONS",
+    "LoadedObject",
+    "LoadedTrial",
+    "Trial",
+    "TrialError",
+    "TrialObject",
+    "TrialOptions",
+    "UnsupportedTrialError",
+    "build_objects",
+]
 
 
 class TrialError(HandsimError):
@@ -173,6 +183,9 @@ class LoadedTrial:
             :class:`~handsim.glove.checks.RecordingChecks`), or None for a kind whose recordings are not
             checked.
         episode: The grasp episode replayed (:attr:`Trial.grasp`), its frames the recording's, or None.
+        metrics: The thresholds its scene was built with (the glove placement search's), which its replay
+            must use too (:func:`~handsim.trials.registry.replay_trial` checks); None for a kind whose scene
+            does not depend on them.
     """
 
     trial: Trial
@@ -183,55 +196,7 @@ class LoadedTrial:
     notes: tuple[str, ...] = field(default=())
     checks: RecordingChecks | None = None
     episode: GraspEpisode | None = None
-
-
-@dataclass(frozen=True)
-class TrialOptions:
-    """What a user may give besides the recording (the ``handsim replay`` options); None: not given.
-
-    Attributes:
-        skeleton: The hand's skeleton file.
-        obj: The object: a catalogue name or a mesh file.
-        calibration: A glove calibration JSON (raw-count recordings).
-        units: A mesh-file object's units, ``"m"`` or ``"mm"``.
-        density: Object density, kg/m³.
-        mass: Object mass, kg.
-        hand_length: Parametric default hand's length, m.
-        collision: Hand collision shapes, one of :data:`HAND_COLLISIONS`.
-        thumb_rest: Glove recordings: ``(abduction, flexion)`` of the undriven thumb TMC DoFs, degrees
-            (:func:`handsim.glove.thumb_rest.apply_thumb_rest`).
-        mano_dir: The folder with the user's MANO model files (ARCTIC; else ``$HANDSIM_MANO_DIR``).
-        templates: ARCTIC object templates folder (``<object>/`` inside), instead of the sequence's
-            ``meta/object_vtemplates/``.
-    """
-
-    skeleton: str | Path | None = None
-    obj: str | Path | None = None
-    calibration: str | Path | None = None
-    units: str | None = None
-    density: float | None = None
-    mass: float | None = None
-    hand_length: float | None = None
-    collision: str | None = None
-    thumb_rest: tuple[float, float] | None = None
-    mano_dir: str | Path | None = None
-    templates: str | Path | None = None
-
-
-OPTION_LABELS = {
-    "skeleton": "a skeleton",
-    "obj": "an object",
-    "calibration": "a calibration",
-    "units": "mesh units",
-    "density": "an object density",
-    "mass": "an object mass",
-    "hand_length": "a hand length",
-    "collision": "a hand collision shape",
-    "thumb_rest": "a thumb rest posture",
-    "mano_dir": "a MANO model folder",
-    "templates": "an ARCTIC templates folder",
-}
-"""How messages name each :class:`TrialOptions` field."""
+    metrics: MetricSpec | None = None
 
 
 def build_objects(

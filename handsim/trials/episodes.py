@@ -12,7 +12,10 @@ judged over 33 s, not over a flexion spike inside the closure).
 from __future__ import annotations
 
 import dataclasses
+import hashlib
 from collections.abc import Callable
+
+import numpy as np
 
 from handsim.datatypes.trajectory import Phase, Trajectory
 from handsim.errors import HandsimError
@@ -26,6 +29,38 @@ from handsim.glove.segmentation import (
 )
 from handsim.trials.base import Trial, TrialError
 from handsim.trials.sorting import Sorting, TrialEntry
+
+_SEGMENTATIONS: dict[str, GraspSegmentation] = {}
+"""Segmentations of the recordings segmented last in this process, by :func:`_content_key`."""
+_KEEP = 8
+"""How many recordings' segmentations :data:`_SEGMENTATIONS` keeps."""
+
+
+def _content_key(trajectory: Trajectory) -> str:
+    """SHA-256 of what a segmentation reads of a recording: its name, DoFs, phases, times, targets, switch."""
+    digest = hashlib.sha256()
+    names = (trajectory.source, trajectory.dof_names, trajectory.phases, trajectory.targets.shape)
+    digest.update(repr(names).encode())
+    for array in (trajectory.times, trajectory.targets, trajectory.switch):
+        if array is not None:
+            digest.update(np.ascontiguousarray(array).tobytes())
+    return digest.hexdigest()
+
+
+def recording_segmentation(trajectory: Trajectory) -> GraspSegmentation:
+    """The grasp episodes of a recording (:func:`~handsim.glove.segmentation.segment_grasps`), segmented once.
+
+    A dataset run lists a recording's episodes, then loads each as a trial; ``handsim replay`` judges them
+    one after another: each load reads the recording again, and finds its segmentation here instead of
+    segmenting it again. The key is the content read, so a recording read another way (another skeleton,
+    thumb rest or annotation) is segmented anew.
+    """
+    key = _content_key(trajectory)
+    if key not in _SEGMENTATIONS:
+        while len(_SEGMENTATIONS) >= _KEEP:
+            del _SEGMENTATIONS[next(iter(_SEGMENTATIONS))]
+        _SEGMENTATIONS[key] = segment_grasps(trajectory)
+    return _SEGMENTATIONS[key]
 
 
 def episode_trajectory(
@@ -47,7 +82,7 @@ def episode_trajectory(
             truncated (the file starts or ends inside it: it is never judged).
     """
     what = trajectory.source or "the recording"
-    segmentation = segment_grasps(trajectory)
+    segmentation = recording_segmentation(trajectory)
     if segmentation.calibration is not None:
         raise TrialError(f"{what}: {segmentation.calibration.text()}: it holds no grasp to replay")
     episodes = segmentation.episodes
@@ -86,7 +121,7 @@ def whole_recording_verdict(trajectory: Trajectory) -> str | None:
     its replay still measures the hand, but its hold outcome is this reason. One without any grasp episode
     (a hand that never closes, or never moves) says "no grasp" first, plainly.
     """
-    segmentation = segment_grasps(trajectory)
+    segmentation = recording_segmentation(trajectory)
     if segmentation.complete:
         return None
     if segmentation.calibration is not None:
@@ -117,7 +152,7 @@ def add_episodes(sorting: Sorting, entry: TrialEntry, read: Callable[[Trial], Tr
         read: Its kind's reader (:attr:`~handsim.trials.kind.TrialKind.read`).
     """
     try:
-        segmentation = segment_grasps(read(entry.trial))
+        segmentation = recording_segmentation(read(entry.trial))
     except HandsimError:
         sorting.add(entry)
         return

@@ -11,6 +11,7 @@ from typing import TYPE_CHECKING
 
 from handsim.builders import default_hand, default_skeleton
 from handsim.sim.scenarios import glove_scene
+from handsim.sim.specs import MetricSpec
 from handsim.trials.base import LoadedTrial, Trial, build_objects
 from handsim.trials.episodes import episode_note, episode_trajectory, whole_recording_verdict
 
@@ -20,12 +21,16 @@ if TYPE_CHECKING:
     from handsim.datatypes.skeleton import Skeleton
     from handsim.datatypes.trajectory import Trajectory
     from handsim.glove.checks import RecordingChecks
-    from handsim.sim.specs import MetricSpec
 
 
-def parametric_hand(trial: Trial) -> tuple[Skeleton, mujoco.MjSpec, str]:
-    """The parametric default hand of the trial's length: skeleton, hand spec, text for people."""
-    skeleton = default_skeleton(trial.hand_length)
+def parametric_hand(trial: Trial, skeleton: Skeleton | None = None) -> tuple[Skeleton, mujoco.MjSpec, str]:
+    """The parametric default hand of the trial's length: skeleton, hand spec, text for people.
+
+    Args:
+        trial: The trial (its hand length and collision shapes).
+        skeleton: The parametric skeleton of that length when read already; None: made here.
+    """
+    skeleton = default_skeleton(trial.hand_length) if skeleton is None else skeleton
     hand = default_hand(trial.hand_length, collision=trial.collision)
     return skeleton, hand, f"parametric default hand, {trial.hand_length:g} m ({skeleton.ndof} DoFs)"
 
@@ -47,7 +52,8 @@ def glove_loaded(
         hand: The hand the trajectory drives.
         hand_text: The hand, for people.
         trajectory: The recording as joint targets, with its phases.
-        metrics: Placement thresholds (default :class:`~handsim.sim.specs.MetricSpec`).
+        metrics: Placement thresholds (default :class:`~handsim.sim.specs.MetricSpec`); the loaded trial
+            keeps them, for its replay to use the same.
         progress: Show a progress bar while an uncached convex decomposition runs.
         notes: Notes of the hand's reader (and of the recording's checks).
         checks: What the recording's checks found (GraspDB14 recordings), or None when not checked.
@@ -76,4 +82,5 @@ def glove_loaded(
         notes=(*trial.notes, *notes, *object_notes),
         checks=checks,
         episode=episode,
+        metrics=metrics or MetricSpec(),
     )

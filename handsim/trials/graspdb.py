@@ -26,18 +26,12 @@ from handsim.io.graspdb.calibration import load_calibration
 from handsim.io.graspdb.default_skeleton import DEFAULT_HAND_LENGTH_M
 from handsim.io.graspdb.filenames import filename_datatype, parse_graspdb_filename
 from handsim.io.graspdb.glove import graspdb_row_count
-from handsim.trials.base import (
-    LoadedTrial,
-    Trial,
-    TrialError,
-    TrialObject,
-    TrialOptions,
-    UnsupportedTrialError,
-)
+from handsim.trials.base import LoadedTrial, Trial, TrialError, TrialObject, UnsupportedTrialError
 from handsim.trials.episodes import add_episodes
 from handsim.trials.glove import glove_loaded, parametric_hand
 from handsim.trials.graspdb_names import graspdb_meta
 from handsim.trials.kind import TrialKind
+from handsim.trials.options import TrialOptions
 from handsim.trials.sorting import Sorting, TrialEntry, TrialInput, trial_input
 
 if TYPE_CHECKING:
@@ -120,11 +114,18 @@ def _find(path: Path, options: TrialOptions) -> Trial:
     )
 
 
-def _load(trial: Trial, metrics: MetricSpec | None, progress: bool) -> LoadedTrial:
+def _skeleton(trial: Trial) -> Skeleton:
+    """The trial's hand skeleton: its skeleton file's, else the parametric default hand's."""
     if trial.skeleton_path is None:
-        skeleton, hand, hand_text = parametric_hand(trial)
+        return default_skeleton(trial.hand_length)
+    return read_skeleton(trial.skeleton_path)
+
+
+def _load(trial: Trial, metrics: MetricSpec | None, progress: bool) -> LoadedTrial:
+    skeleton = _skeleton(trial)
+    if trial.skeleton_path is None:
+        _, hand, hand_text = parametric_hand(trial, skeleton)
     else:
-        skeleton = read_skeleton(trial.skeleton_path)
         hand = build_hand(skeleton, collision=trial.collision)
         hand_text = f"{Path(trial.skeleton_path).name} ({skeleton.ndof} DoFs, {trial.collision})"
     trajectory, notes, checks = _recording(trial, skeleton)
@@ -133,11 +134,7 @@ def _load(trial: Trial, metrics: MetricSpec | None, progress: bool) -> LoadedTri
 
 def _read(trial: Trial) -> Trajectory:
     """The recording as the trial replays it, without building its scene (its grasp episodes' source)."""
-    if trial.skeleton_path is None:
-        skeleton = default_skeleton(trial.hand_length)
-    else:
-        skeleton = read_skeleton(trial.skeleton_path)
-    return _recording(trial, skeleton)[0]
+    return _recording(trial, _skeleton(trial))[0]
 
 
 def _recording(trial: Trial, skeleton: Skeleton) -> tuple[Trajectory, list[str], RecordingChecks]:

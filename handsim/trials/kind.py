@@ -7,7 +7,8 @@ from dataclasses import dataclass
 from pathlib import Path, PurePosixPath
 from typing import TYPE_CHECKING
 
-from handsim.trials.base import LoadedTrial, Trial, TrialOptions
+from handsim.trials.base import LoadedTrial, Trial
+from handsim.trials.options import TrialOptions
 from handsim.trials.sorting import Sorting
 
 if TYPE_CHECKING:  # an annotation only: the trial registry loads without MuJoCo (start-up time)
@@ -23,7 +24,9 @@ class TrialKind:
         name: The kind's name (:attr:`Trial.kind`).
         label: The kind for people, with an article (``"a GraspDB14 recording"``).
         files: The files that make a trial of this kind (listed in messages and ``--help``).
-        options: The :class:`TrialOptions` fields it takes; the others are refused before ``find`` runs.
+        options: The :class:`~handsim.trials.options.TrialOptions` fields it takes, of those each kind
+            chooses (:attr:`~handsim.trials.options.OptionSpec.per_kind`); the others given are refused
+            before ``find`` runs, in a message naming them by their label.
         brings: Why it takes no other options (the end of a refusal message).
         matches: True when a path (which exists) is a trial of this kind, judged by its name; may raise
             :class:`~handsim.trials.base.UnsupportedTrialError` for a file of the kind's dataset that is

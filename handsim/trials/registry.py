@@ -7,25 +7,21 @@ Adding a kind is one module exposing a :class:`~handsim.trials.kind.TrialKind` a
 from __future__ import annotations
 
 import dataclasses
+import inspect
 from pathlib import Path
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 from handsim.errors import InputFileError
 from handsim.trials import arctic, corrected, graspdb, scripted, tzionas
-from handsim.trials.base import (
-    HAND_COLLISIONS,
-    OPTION_LABELS,
-    LoadedTrial,
-    Trial,
-    TrialError,
-    TrialOptions,
-    UnsupportedTrialError,
-)
+from handsim.trials.base import LoadedTrial, Trial, TrialError, UnsupportedTrialError
 from handsim.trials.discovery import Discovery, discover_with
+from handsim.trials.episodes import recording_segmentation
 from handsim.trials.kind import TrialKind
+from handsim.trials.options import HAND_COLLISIONS, TrialOptions, given_options, option_names, option_spec
 
 if TYPE_CHECKING:
     from handsim.glove.segmentation import GraspSegmentation
+    from handsim.sim.replay import ReplayConfig, ReplayResult
     from handsim.sim.specs import MetricSpec
 
 
@@ -76,50 +72,50 @@ def trial_kind(path: str | Path) -> str:
     raise UnsupportedTrialError(f"{p}: {what} is not a trial handsim replays; it replays {kinds}")
 
 
-def find_trial(
-    path: str | Path,
-    *,
-    skeleton: str | Path | None = None,
-    obj: str | Path | None = None,
-    calibration: str | Path | None = None,
-    units: str | None = None,
-    density: float | None = None,
-    mass: float | None = None,
-    hand_length: float | None = None,
-    collision: str | None = None,
-    thumb_rest: tuple[float, float] | None = None,
-    force: bool = False,
-    mano_dir: str | Path | None = None,
-    templates: str | Path | None = None,
-    grasp: int | None = None,
-) -> Trial:
+def _keyword_signature() -> inspect.Signature:
+    """:func:`find_trial`'s signature: the path, then each :class:`TrialOptions` field as a keyword."""
+    keywords = [
+        inspect.Parameter(f.name, inspect.Parameter.KEYWORD_ONLY, default=f.default, annotation=f.type)
+        for f in dataclasses.fields(TrialOptions)
+    ]
+    path = inspect.Parameter("path", inspect.Parameter.POSITIONAL_OR_KEYWORD, annotation="str | Path")
+    return inspect.Signature([path, *keywords], return_annotation="Trial")
+
+
+def find_trial(path: str | Path, **options: Any) -> Trial:
+    """Find the files of a trial from its recording, the options given as keywords.
+
+    ``find_trial(path, obj="mug", mass=0.1)`` is ``find_with_options(path, TrialOptions(obj="mug",
+    mass=0.1))``; its signature lists the keywords, which are :class:`TrialOptions`' fields.
+
+    Args:
+        path: A recording of one of :data:`TRIAL_KINDS` (see :func:`find_with_options`).
+        **options: :class:`TrialOptions` fields by name (``skeleton``, ``obj`` … ``grasp``).
+
+    Returns:
+        The trial.
+
+    Raises:
+        TypeError: A keyword that is no trial option (the message lists them).
+        HandsimError: As :func:`find_with_options`.
+    """
+    unknown = sorted(set(options) - set(option_names()))
+    if unknown:
+        raise TypeError(f"find_trial() got unknown option(s) {unknown}; expected {list(option_names())}")
+    return find_with_options(path, TrialOptions(**options))
+
+
+find_trial.__signature__ = _keyword_signature()  # type: ignore[attr-defined]
+
+
+def find_with_options(path: str | Path, options: TrialOptions | None = None) -> Trial:
     """Find the files of a trial from its recording.
 
     Args:
         path: A recording of one of :data:`TRIAL_KINDS` (a GraspDB14 ``.txt``, a Tzionas
             ``Model_Hand_*.MOTION`` or its ``Models/NN`` folder, a scripted grasp ``NAME.grasp.json`` …).
-        skeleton: GraspDB14: the hand's skeleton (``.xmlskel`` or ``.SKEL``); default the parametric
-            hand. Tzionas: must be the motion's own ``.SKEL`` if given.
-        obj: GraspDB14: the object (catalogue name or mesh file); default the object whose id the file
-            name carries. Scripted grasp: default the file's object.
-        calibration: GraspDB14 raw-count recording: its glove calibration JSON.
-        units: A mesh-file object's units, ``"m"`` or ``"mm"``.
-        density: Object density in kg/m³ instead of the objects' own.
-        mass: Object mass in kg instead of the objects' own.
-        hand_length: Parametric default hand's length, m (default 0.19; a scripted grasp's own); only
-            without a skeleton.
-        collision: Hand collision shapes: ``"capsules"`` (default) or ``"mesh"`` (skinned skeletons and
-            MANO hands).
-        mano_dir: ARCTIC: the folder with ``MANO_RIGHT.pkl`` and ``MANO_LEFT.pkl`` (default
-            ``$HANDSIM_MANO_DIR``).
-        templates: ARCTIC: a folder of object templates (``<object>/``) instead of the sequence's
-            ``meta/object_vtemplates/``.
-        thumb_rest: GraspDB14: ``(abduction, flexion)`` in degrees at which to hold the thumb TMC DoFs no
-            glove sensor drives (default: left at 0, as the GraspDB14 tools do).
-        force: Accept an object density or mass outside its documented range (every kind's objects).
-        grasp: Glove recordings (GraspDB14, scripted grasps): replay this grasp episode (1-based, as
-            :func:`grasp_episodes` and ``handsim inspect`` list them), the recording cut to it; None: the
-            whole recording.
+        options: What the user gave besides the recording (each field's meaning: :class:`TrialOptions`);
+            default none.
 
     Returns:
         The trial.
@@ -131,29 +127,31 @@ def find_trial(
         UnknownObjectError: The file name's object id (the scripted grasp's object) is not in the catalogue.
         FormatError: A scripted grasp that does not follow its format.
     """
-    if collision is not None and collision not in HAND_COLLISIONS:
-        raise TrialError(f"unknown hand collision {collision!r}; expected one of {list(HAND_COLLISIONS)}")
-    if density is not None and mass is not None:
+    options = options or TrialOptions()
+    if options.collision is not None and options.collision not in HAND_COLLISIONS:
+        raise TrialError(
+            f"unknown hand collision {options.collision!r}; expected one of {list(HAND_COLLISIONS)}"
+        )
+    if options.density is not None and options.mass is not None:
         raise TrialError("give an object density or a mass, not both")
-    options = TrialOptions(
-        skeleton=skeleton,
-        obj=obj,
-        calibration=calibration,
-        units=units,
-        density=density,
-        mass=mass,
-        hand_length=hand_length,
-        collision=collision,
-        thumb_rest=None if thumb_rest is None else (float(thumb_rest[0]), float(thumb_rest[1])),
-        mano_dir=mano_dir,
-        templates=templates,
-    )
+    if options.thumb_rest is not None:
+        rest = (float(options.thumb_rest[0]), float(options.thumb_rest[1]))
+        options = dataclasses.replace(options, thumb_rest=rest)
     kind = kind_named(trial_kind(path))
-    for option in dataclasses.fields(TrialOptions):
-        if getattr(options, option.name) is not None and option.name not in kind.options:
-            raise TrialError(
-                f"{path}: {OPTION_LABELS[option.name]} does not apply to {kind.label}; {kind.brings}"
-            )
+    _check_applies(path, kind, options)
+    trial = kind.find(Path(path), options)
+    if options.grasp is not None:
+        trial = dataclasses.replace(trial, grasp=options.grasp)
+    return dataclasses.replace(trial, force=True) if options.force else trial
+
+
+def _check_applies(path: str | Path, kind: TrialKind, options: TrialOptions) -> None:
+    """Refuse an option the kind does not take, or a grasp episode that is no whole number ≥ 1."""
+    for name in given_options(options):
+        spec = option_spec(name)
+        if spec.per_kind and name not in kind.options:
+            raise TrialError(f"{path}: {spec.label} does not apply to {kind.label}; {kind.brings}")
+    grasp = options.grasp
     if grasp is not None and kind.read is None:
         raise TrialError(
             f"{path}: a grasp episode does not apply to {kind.label}: only glove recordings hold them"
@@ -162,10 +160,6 @@ def find_trial(
         raise TrialError(
             f"{path}: a grasp episode is a whole number ≥ 1 (as `handsim inspect` lists them), got {grasp!r}"
         )
-    trial = kind.find(Path(path), options)
-    if grasp is not None:
-        trial = dataclasses.replace(trial, grasp=grasp)
-    return dataclasses.replace(trial, force=True) if force else trial
 
 
 def grasp_episodes(trial: Trial) -> GraspSegmentation:
@@ -183,9 +177,7 @@ def grasp_episodes(trial: Trial) -> GraspSegmentation:
         raise TrialError(
             f"{trial.trajectory_path}: {kind.label} is one sequence, not a glove recording of grasps"
         )
-    from handsim.glove.segmentation import segment_grasps  # numpy only, but not at the CLI's start-up
-
-    return segment_grasps(kind.read(trial))
+    return recording_segmentation(kind.read(trial))
 
 
 def load_trial(
@@ -193,7 +185,7 @@ def load_trial(
     *,
     metrics: MetricSpec | None = None,
     progress: bool = False,
-    **options,
+    **options: Any,
 ) -> LoadedTrial:
     """Read a trial's files and build its scene.
 
@@ -201,12 +193,12 @@ def load_trial(
         trial: A :class:`~handsim.trials.base.Trial`, or a recording path (then ``options`` go to
             :func:`find_trial`).
         metrics: Thresholds of the glove placement search (default :class:`~handsim.sim.specs.MetricSpec`);
-            replay with the same.
+            replay with the same (:func:`replay_trial` checks).
         progress: Show a progress bar while an object's convex decomposition runs (uncached meshes).
         **options: :func:`find_trial`'s keyword arguments, with a path only.
 
     Returns:
-        Scene and trajectory, ready for :func:`handsim.sim.replay.replay`.
+        Scene and trajectory, ready for :func:`replay_trial`.
 
     Raises:
         HandsimError: A file is missing or malformed, the trajectory does not fit the hand, or the scene
@@ -217,6 +209,69 @@ def load_trial(
     elif options:
         raise TypeError(f"options {sorted(options)} are for a path; a Trial already holds them")
     return kind_named(trial.kind).load(trial, metrics, progress)
+
+
+def check_metrics(loaded: LoadedTrial, metrics: MetricSpec) -> None:
+    """Refuse to replay a trial with other thresholds than its scene was built with.
+
+    A glove trial's scene is placed by the placement search with the thresholds :func:`load_trial` was
+    given; its replay judges the hold with its :class:`~handsim.sim.replay.ReplayConfig`'s. Both must be
+    the same spec, or the verdict mixes two definitions.
+
+    Args:
+        loaded: The loaded trial (:attr:`~handsim.trials.base.LoadedTrial.metrics`: None when its scene does
+            not depend on the thresholds).
+        metrics: The thresholds of the replay.
+
+    Raises:
+        TrialError: The two differ (the message names the parameters that do).
+    """
+    built = loaded.metrics
+    if built is None or built == metrics:
+        return
+    have, want = _flat(built.to_dict()), _flat(metrics.to_dict())
+    differ = [
+        f"{k}: {have.get(k)!r} loaded, {want.get(k)!r} replayed"
+        for k in sorted(have)
+        if have.get(k) != want.get(k)
+    ]
+    raise TrialError(
+        f"{loaded.trial.trajectory_path}: its scene was built with other metrics than it is replayed with "
+        f"({'; '.join(differ) or 'the same values, another spec'}); load it with metrics=config.metrics"
+    )
+
+
+def _flat(value: object, prefix: str = "") -> dict[str, object]:
+    """A nested dict as one level, its keys joined by dots."""
+    if not isinstance(value, dict):
+        return {prefix.rstrip("."): value}
+    out: dict[str, object] = {}
+    for key, item in value.items():
+        out.update(_flat(item, f"{prefix}{key}."))
+    return out
+
+
+def replay_trial(loaded: LoadedTrial, config: ReplayConfig | None = None) -> ReplayResult:
+    """Replay a loaded trial (:func:`handsim.sim.replay.replay`) with the thresholds it was loaded with.
+
+    Args:
+        loaded: The trial, from :func:`load_trial` with ``metrics=config.metrics``.
+        config: Replay parameters (default :class:`~handsim.sim.replay.ReplayConfig`).
+
+    Returns:
+        The replay's result.
+
+    Raises:
+        TrialError: ``config.metrics`` are not the thresholds the trial's scene was built with
+            (:func:`check_metrics`).
+        HandsimError: As :func:`handsim.sim.replay.replay`.
+    """
+    # lazy: the simulation stack, only when replaying
+    from handsim.sim.replay import ReplayConfig, replay
+
+    config = config or ReplayConfig()
+    check_metrics(loaded, config.metrics)
+    return replay(loaded.scene, loaded.trajectory, config)
 
 
 def discover(dataset: str | Path, options: TrialOptions | None = None) -> Discovery:

@@ -14,10 +14,11 @@ from handsim.builders import catalog, default_skeleton
 from handsim.builders.graspdb_objects import UnknownObjectError
 from handsim.errors import HandsimError
 from handsim.io.scripted import SYNTHETIC_NOTE, is_scripted_grasp, read_scripted_grasp, scripted_grasp_fields
-from handsim.trials.base import LoadedTrial, Trial, TrialObject, TrialOptions
+from handsim.trials.base import LoadedTrial, Trial, TrialObject
 from handsim.trials.episodes import add_episodes
 from handsim.trials.glove import glove_loaded, parametric_hand
 from handsim.trials.kind import TrialKind
+from handsim.trials.options import TrialOptions
 from handsim.trials.sorting import Sorting, TrialEntry, group_fields, trial_input
 
 if TYPE_CHECKING:

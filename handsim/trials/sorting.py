@@ -11,7 +11,8 @@ import os
 from dataclasses import dataclass, field
 from pathlib import Path, PurePosixPath
 
-from handsim.trials.base import Trial, TrialOptions
+from handsim.trials.base import Trial
+from handsim.trials.options import TrialOptions
 
 INPUT_ROLES = ("trajectory", "skeleton", "object", "annotation", "calibration", "models_info")
 """Roles of a trial's input files."""

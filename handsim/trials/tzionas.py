@@ -24,15 +24,9 @@ from handsim.io import read_skeleton, read_trajectory
 from handsim.io.tzionas.configs import config_dir_of, read_models_info
 from handsim.io.tzionas.sequence import object_track_name, read_tzionas_hands, two_hand_models
 from handsim.sim.scenarios import recorded_scene
-from handsim.trials.base import (
-    LoadedTrial,
-    Trial,
-    TrialError,
-    TrialObject,
-    TrialOptions,
-    build_objects,
-)
+from handsim.trials.base import LoadedTrial, Trial, TrialError, TrialObject, build_objects
 from handsim.trials.kind import TrialKind
+from handsim.trials.options import TrialOptions
 from handsim.trials.sorting import Sorting, TrialEntry, TrialInput, group_fields, trial_input
 
 if TYPE_CHECKING:
