@@ -14,7 +14,6 @@ the bundled Tzionas sequence 20 (:func:`default_replay_inputs`); :func:`recordin
 from __future__ import annotations
 
 import functools
-import inspect
 import os
 from collections.abc import Sequence
 from pathlib import Path
@@ -24,7 +23,8 @@ from handsim.assets import TZIONAS_DIR
 from handsim.datatypes.trajectory import Trajectory
 from handsim.errors import HandsimError
 from handsim.sim.scene.compiled import SimScene
-from handsim.trials import find_trial, load_trial
+from handsim.trials import load_trial
+from handsim.trials.options import option_names
 
 DEFAULT_SEQUENCE = ("Models", "20")
 """The bundled Tzionas sequence under :data:`handsim.assets.TZIONAS_DIR`."""
@@ -37,7 +37,7 @@ class RecordingError(HandsimError, ValueError):
 
 def trial_option_names() -> tuple[str, ...]:
     """The trial option keywords an environment passes to :func:`handsim.trials.find_trial`."""
-    return tuple(p for p in inspect.signature(find_trial).parameters if p != "path")
+    return option_names()
 
 
 _CACHE: dict[tuple, tuple[SimScene, Trajectory]] = {}

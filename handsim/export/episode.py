@@ -23,8 +23,8 @@ from handsim.errors import HandsimError
 from handsim.export.errors import ExportError, RecordMismatchError
 from handsim.export.record_checks import input_problems, replay_config, summary_problems
 from handsim.runner.portable import record_trial
-from handsim.sim.replay import ReplayConfig, replay
-from handsim.trials import LoadedTrial, load_trial
+from handsim.sim.replay import ReplayConfig
+from handsim.trials import LoadedTrial, load_trial, replay_trial
 
 ENV_ID = "handsim/Replay-v0"
 """The environment the episodes are steps of."""
@@ -200,7 +200,7 @@ def replay_record(
     """
     rid, config, loaded = _loaded(record, root)
     try:
-        result = replay(loaded.scene, loaded.trajectory, config)
+        result = replay_trial(loaded, config)
     except HandsimError as exc:
         raise RecordMismatchError(f"trial {rid!r}: cannot be replayed any more: {exc}") from exc
     problems = summary_problems(record["summary"], result.summary, rtol, atol)

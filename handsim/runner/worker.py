@@ -30,9 +30,9 @@ from handsim.runner.portable import portable_traceback
 from handsim.runner.records import SCHEMA, json_ready
 from handsim.runner.renders import FRAMES_DIR, key_frames, render_pngs, safe_id
 from handsim.runner.trial_record import curves, input_hashes, trajectory_quality, versions
-from handsim.sim.replay import ReplayConfig, replay
+from handsim.sim.replay import ReplayConfig
 from handsim.thread_setting import THREADS_ENV
-from handsim.trials import TrialEntry, load_trial
+from handsim.trials import TrialEntry, load_trial, replay_trial
 from handsim.viz.headless import prefer_headless_gl
 
 
@@ -196,7 +196,7 @@ def trial_outcome(entry: TrialEntry, config: ReplayConfig, frames: int = 4) -> T
         record["trajectory_quality"] = trajectory_quality(loaded.trajectory, loaded.scene, loaded.checks)
         notes = [*loaded.notes, *loaded.scene.setup.notes]
         used = _replay_config(config, loaded.scene, frames, notes)
-        result = replay(loaded.scene, loaded.trajectory, used)
+        result = replay_trial(loaded, used)
         timing["replay_s"] = time.perf_counter() - start - timing["load_s"]
         record.update(
             status="diverged" if result.diverged is not None else "ok",

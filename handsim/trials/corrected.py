@@ -135,6 +135,7 @@ def _loader(load_source: SourceLoader) -> Callable[[Trial, MetricSpec | None, bo
             hand=loaded.hand,
             objects=loaded.objects,
             notes=(*loaded.notes, rate_note(header)),
+            metrics=loaded.metrics,
         )
 
     return load
