@@ -13,6 +13,7 @@ from pathlib import Path
 
 from handsim.assets import TZIONAS_DIR
 from handsim.trials import discover
+from tests.tzionas_fixtures import shifted_motion
 
 _NOT_A_TRIAL_17 = (
     "Tzionas/Ballan model of sequence 17, which has no hand motion here (no Model_Hand_*.MOTION): not a trial"
@@ -22,7 +23,8 @@ _ZONES = "Tzionas skinning zones (.ZONES; not read by handsim)"
 
 def _tzionas(root: Path) -> Path:
     """The bundled sample plus: 21 hand-only (the cube's files left unlisted), 22 without its
-    MODELS_INFO.txt, 23 with a .VOI of its listed object and a stray file in its Configs folder."""
+    MODELS_INFO.txt, 23 with a .VOI of its listed object and a stray file in its Configs folder (its hand
+    moved 1 µm: a recording of its own, as a byte-identical copy of 20 is replayed once)."""
     shutil.copytree(TZIONAS_DIR, root)
     models, configs = root / "Models", root / "Configs"
     for sequence in ("21", "22", "23"):
@@ -33,6 +35,8 @@ def _tzionas(root: Path) -> Path:
     (models / "22" / "Model_Object_Cube.SKEL").unlink()
     (models / "23" / "Model_Object_Cube.VOI").write_text("1\n0\n")
     (configs / "23" / "notes.txt").write_text("x\n")
+    motion = models / "23" / "Model_Hand_R.MOTION"
+    motion.write_text(shifted_motion(motion.read_text(), (0.0, 0.0, 1e-3)))
     return root
 
 

@@ -97,6 +97,8 @@ def run_and_render(
     unknown = group_files({"path": u.path, "reason": u.reason} for u in discovery.unknown)
     for group in unknown:
         print(f"unknown     {group.what()}: {group.reason}")
+    for group in group_files({"path": c.path, "reason": c.reason} for c in discovery.copies):
+        print(f"copy        {group.what()}: {group.reason}")
     if not entries:
         if not only and not isinstance(dataset, Discovery) and Path(dataset).is_file():
             return _not_a_trial(dataset, options)

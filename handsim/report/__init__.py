@@ -4,8 +4,8 @@
 self-contained page: inline CSS, SVG plots, frames as ``data:`` URIs, no scripts), ``OUT/report.md`` and
 ``OUT/summary.json``. Modules: :mod:`~handsim.report.records` (reading), :mod:`~handsim.report.aggregate`
 (numbers), :mod:`~handsim.report.summary` (the JSON summary), :mod:`~handsim.report.charts` (SVG charts),
-:mod:`~handsim.report.html_doc` and :mod:`~handsim.report.html_trial` (HTML),
-:mod:`~handsim.report.markdown` (Markdown).
+:mod:`~handsim.report.html_doc`, :mod:`~handsim.report.html_trial` and :mod:`~handsim.report.html_curves`
+(HTML), :mod:`~handsim.report.markdown` (Markdown).
 """
 
 from handsim.report.records import RunRecords, read_run

@@ -5,11 +5,10 @@ from __future__ import annotations
 import json
 from collections.abc import Sequence
 
-from handsim.datatypes.fingers import groups_by_hand
 from handsim.report import fmt
 from handsim.report.aggregate import number
-from handsim.report.charts import Markers, Series, area_chart, line_chart
 from handsim.report.frames import FrameImage
+from handsim.report.html_curves import curves_block
 from handsim.report.markup import badge, esc, numbers, simple_table
 
 SUMMARY_FIELDS: tuple[tuple[str, str, int | None], ...] = (
@@ -114,116 +113,6 @@ def _recording(quality: dict | None) -> str:
     if all(value is None for key, value in quality.items() if key not in known):
         quality = {key: value for key, value in quality.items() if key in known}
     return "<h4>Recording</h4>" + numbers(_fields(quality, _QUALITY_FIELDS))
-
-
-def _checked_curves(curves: dict) -> tuple[dict, list[str]]:
-    """The curves whose length matches ``time_s`` (others left out, with a note)."""
-    n = len(curves.get("time_s") or [])
-    kept, problems = {"time_s": curves.get("time_s") or []}, []
-    for key in ("penetration_mm", "drift_mm", "tracking_error_deg", "self_penetration_mm"):
-        values = curves.get(key)
-        if values is not None and len(values) != n:
-            problems.append(f"{key} has {len(values)} values for {n} times: not drawn")
-            values = None
-        kept[key] = values
-    fingers = {}
-    for name, values in (curves.get("contacts_per_finger") or {}).items():
-        if len(values) == n:
-            fingers[name] = values
-        else:
-            problems.append(f"contacts of {name} have {len(values)} values for {n} times: not drawn")
-    kept["contacts_per_finger"] = fingers
-    kept["stride"] = curves.get("stride")
-    return kept, problems
-
-
-def _curves(record: dict) -> str:
-    curves, problems = _checked_curves(record.get("curves") or {})
-    t = curves["time_s"]
-    if not t:
-        return '<p class="note">No curves: the trial did not run.</p>'
-    hold = record.get("hold") or {}
-    spans, events = [], []
-    window = hold.get("window")
-    if isinstance(window, (list, tuple)) and len(window) == 2 and None not in window:
-        spans.append((float(window[0]), float(window[1]), "hold window"))
-    if number(hold.get("released_at")) is not None:
-        events.append((float(hold["released_at"]), "release"))
-    if number(hold.get("lost_at")) is not None:
-        events.append((float(hold["lost_at"]), "lost"))
-    track_lost = number((record.get("summary") or {}).get("track_lost_at_s"))
-    if track_lost is not None:
-        events.append((track_lost, "object lost"))
-    diverged_at = number((record.get("diverged") or {}).get("frame"))
-    if diverged_at is not None and t:
-        stride = max(1, int(number(curves.get("stride")) or 1))  # curves keep every stride-th frame
-        events.append((float(t[min(int(diverged_at) // stride, len(t) - 1)]), "diverged"))
-    marks = Markers(vlines=events, vspans=spans)
-    time = "time (s)"
-    self_penetration = curves.get("self_penetration_mm")  # a hand-only trial: no hand–object penetration
-    depth, title = (
-        (Series("self-penetration", t, self_penetration), "The hand through itself (deepest, simulated)")
-        if self_penetration
-        else (
-            Series("penetration", t, curves.get("penetration_mm") or [None] * len(t)),
-            "Deepest hand–object penetration",
-        )
-    )
-    charts = [
-        line_chart(
-            [depth],
-            title=title,
-            x_label=time,
-            y_label="mm",
-            y_min=0.0,
-            markers=Markers(hlines=[(1.0, "1 mm")], vlines=marks.vlines, vspans=marks.vspans),
-        )
-    ]
-    per_finger = curves.get("contacts_per_finger") or {}
-    for hand, names in (groups_by_hand(per_finger) or {"": []}).items():  # one chart per hand
-        if names or not self_penetration:
-            charts.append(
-                area_chart(
-                    t,
-                    [(name[len(hand) + 1 :] if hand else name, per_finger[name]) for name in names],
-                    title="Contacts per finger (stacked)" + (f", {hand} hand" if hand else ""),
-                    x_label=time,
-                    y_label="contacts",
-                    markers=marks,
-                )
-            )
-    drift = curves.get("drift_mm")
-    metrics = ((record.get("parameters") or {}).get("replay") or {}).get("metrics") or {}
-    tolerance = number(metrics.get("drift_tolerance"))
-    if drift:
-        hlines = [(tolerance * 1000.0, "tolerance")] if tolerance is not None else []
-        charts.append(
-            line_chart(
-                [Series("drift", t, drift)],
-                title="Object drift from the recording",
-                x_label=time,
-                y_label="mm",
-                y_min=0.0,
-                markers=Markers(hlines=hlines, vlines=marks.vlines, vspans=marks.vspans),
-            )
-        )
-    charts.append(
-        line_chart(
-            [Series("tracking error", t, curves.get("tracking_error_deg") or [None] * len(t))],
-            title="Joint tracking error (RMS over the joints)",
-            x_label=time,
-            y_label="degrees",
-            y_min=0.0,
-            markers=marks,
-        )
-    )
-    if self_penetration:
-        reason = (record.get("summary") or {}).get("hold_reason") or "not judged: no object"
-        note = f'<p class="note">Hand–object penetration, contacts, hold and drift: {esc(reason)}.</p>'
-    else:
-        note = "" if drift else '<p class="note">No object track to drift from (glove scenario).</p>'
-    note += "".join(f'<p class="problem">{esc(p)}</p>' for p in problems)
-    return '<div class="grid2">' + "".join(f"<div>{c}</div>" for c in charts) + "</div>" + note
 
 
 def _frames(images: Sequence[FrameImage]) -> str:
@@ -498,7 +387,7 @@ def trial_section(record: dict, row: dict, images: Sequence[FrameImage], trials:
         _flags(record),
         numbers(_fields(summary, SUMMARY_FIELDS)) if summary else "",
         _recording(quality),
-        _curves(record),
+        curves_block(record),
         _frames(images),
         _hold(record),
         _track(record),

@@ -51,10 +51,9 @@ def _frames(trial: dict) -> str:
     return ", ".join(f"[{link_text(p.rsplit('/', 1)[-1])}]({quote(p)})" for p in renders) or fmt.MISSING
 
 
-def render_markdown(summary: dict) -> str:
-    """The Markdown report of ``summary`` (:func:`~handsim.report.summary.build_summary`)."""
+def _overview(summary: dict) -> list[str]:
+    """The title, the run in one paragraph, and the dataset: trials by kind, companion and unknown files."""
     o = summary["overview"]
-    trials = {t["id"]: t for t in summary["trials"]}
     out = [
         f"# handsim physics-plausibility report — {cell(fmt.text(summary['dataset']))}",
         "",
@@ -82,7 +81,12 @@ def render_markdown(summary: dict) -> str:
             for g in group_files(entries)
         ]
         out += [""] if entries else []
-    out += ["## Groups", ""]
+    return out
+
+
+def _groups(summary: dict) -> list[str]:
+    """One table per group-by field that some trial has, each with its total row."""
+    out = ["## Groups", ""]
     group_columns = shown(GROUP_COLUMNS, summary["trials"])
     out += [f"- **{c.label}**: {c.help}" for c in group_columns if c.help] + [""]
     for key in GROUP_KEYS:
@@ -92,7 +96,13 @@ def render_markdown(summary: dict) -> str:
         out += [f"### {GROUP_TITLES[key]}", ""]
         out += _column_table(group_columns, rows, (key, lambda r: cell(fmt.text(r["group"]))), summary["all"])
         out += [""]
-    out += ["## Worst trials first", "", f"Ranking: {summary['ranking']}", ""]
+    return out
+
+
+def _trials(summary: dict) -> list[str]:
+    """The worst trials first, then every trial, then the two-hand trials' per-hand numbers."""
+    trials = {t["id"]: t for t in summary["trials"]}
+    out = ["## Worst trials first", "", f"Ranking: {summary['ranking']}", ""]
     for w in summary["worst"]:
         t = trials[w["id"]]
         out.append(
@@ -116,7 +126,12 @@ def render_markdown(summary: dict) -> str:
             ("trial", lambda r: f"[{link_text(r['id'])}]({HTML_NAME}#{r['anchor']})"),
             None,
         )
-    out += ["", "## Reproducibility", ""]
+    return out
+
+
+def _reproducibility(summary: dict) -> list[str]:
+    """The command line, metric spec and versions the records were made with, and the records' notes."""
+    out = ["", "## Reproducibility", ""]
     command = summary["command"]
     if isinstance(command, list):
         out += ["Command line:", "", "```", shlex.join(str(c) for c in command), "```", ""]
@@ -132,4 +147,9 @@ def render_markdown(summary: dict) -> str:
     if summary["notes"]:
         out += ["Notes on the records:", ""] + [f"- {n}" for n in summary["notes"]] + [""]
     out += ["Re-render from the records alone: `handsim report --render-only OUT/`.", ""]
-    return "\n".join(out)
+    return out
+
+
+def render_markdown(summary: dict) -> str:
+    """The Markdown report of ``summary`` (:func:`~handsim.report.summary.build_summary`)."""
+    return "\n".join([*_overview(summary), *_groups(summary), *_trials(summary), *_reproducibility(summary)])

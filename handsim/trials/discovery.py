@@ -14,13 +14,34 @@ exactly one of three lists:
 
 A trial's id is the dataset-relative POSIX path of its recording (``r_01_11_ex03-rad-004-grasp-su04.txt``,
 ``Models/20``): stable and unique, the key of a run's records.
+
+**One recording, one trial.** The same recording under several names or folders (copied, or linked) is
+replayed once: counting it twice would count one grasp as two in every rate. Two trials are the same when
+their replays would be: the same kind, the same bytes in every input file, role by role (a GraspDB14
+recording with its annotation and calibration; a Tzionas sequence's hand and object ``.MOTION``, skeleton,
+mesh and skin files with its ``MODELS_INFO.txt`` and ``INDEX_BOUNDS.txt``; an ARCTIC ``.mano.npy`` with its
+``.object.npy`` and template files; a scripted grasp's file), and the same settings: the grasp episode, the
+hand options, and the objects, a catalogue object by its name and an object read from files by those files'
+bytes (already among the inputs) and the track it follows. So a recording whose file name names its object
+(GraspDB14) is another trial under another object's name, a tennis-ball recording linked under a mug's name
+is replayed with the mug too, while a whole sequence folder copied elsewhere is one trial. Names, folders
+and the group-by fields read from them (actor, sequence) do not make a replay differ, so they do not count.
+The first copy in id order is the trial; each later one (a glove recording's episodes one by one) becomes
+a companion whose reason is ``same content as <first id>: replayed once``.
+
+Comparing costs a ``stat`` per input file; only trials whose inputs all have equal sizes are read, in
+chunks, for their SHA-256 (each real file once, a link resolved first), so a dataset without copies reads
+no file for it.
 """
 
 from __future__ import annotations
 
+import dataclasses
+import hashlib
 import os
 import re
-from collections.abc import Sequence
+from collections import Counter
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from fnmatch import fnmatchcase
 from pathlib import Path, PurePosixPath
@@ -30,6 +51,13 @@ from handsim.io.text_files import require_file, special_file
 from handsim.trials.base import TrialOptions
 from handsim.trials.kind import TrialKind
 from handsim.trials.sorting import CompanionFile, Sorting, TrialEntry, UnknownFile
+
+SAME_CONTENT = "same content as "
+"""How the reason of a recording's later copy begins (then the first copy's id, ``: replayed once``)."""
+_CHUNK = 1 << 20
+"""Bytes read at a time while hashing (1 MiB)."""
+_NAMED = ("trajectory_path", "skeleton_path", "calibration_path", "annotation_path", "notes", "objects")
+"""Trial fields that name files or record how they were found: compared by the inputs' bytes instead."""
 
 _DOCS = re.compile(
     r"(?:readme|license|licence|copying|notice)(?:\..*)?|.*\.(?:md|rst|pdf|html?)", re.IGNORECASE
@@ -69,6 +97,11 @@ class Discovery:
             "companion": [{"path": c.path, "reason": c.reason} for c in self.companions],
             "unknown": [{"path": u.path, "reason": u.reason} for u in self.unknown],
         }
+
+    @property
+    def copies(self) -> tuple[CompanionFile, ...]:
+        """The companions that are later copies of a trial's recording (replayed once, as that trial)."""
+        return tuple(c for c in self.companions if c.reason.startswith(SAME_CONTENT))
 
 
 def _walk(
@@ -173,15 +206,68 @@ def discover_with(
     for kind in kinds:
         kind.sort_files(sorting)
     _rest(sorting, kinds)
+    entries = _replayed_once(sorted(sorting.entries, key=lambda e: _episode_order(e.id)), sorting.companions)
     return Discovery(
         root=str(base),
-        entries=tuple(sorted(sorting.entries, key=lambda e: _episode_order(e.id))),
+        entries=tuple(entries),
         companions=tuple(
             CompanionFile(p, r)
             for p, r in sorted(sorting.companions.items(), key=lambda c: _episode_order(c[0]))
         ),
         unknown=tuple(UnknownFile(p, r) for p, r in sorted(sorting.unknown.items())),
     )
+
+
+def _replayed_once(entries: list[TrialEntry], companions: dict[str, str]) -> list[TrialEntry]:
+    """The entries (sorted by id) less the later copies of a recording, which go to ``companions``.
+
+    Sizes first: only entries whose every input has the size of another entry's are hashed.
+    """
+    sizes = [_recording_key(entry, os.path.getsize) for entry in entries]
+    shared = {key for key, n in Counter(sizes).items() if key is not None and n > 1}
+    digests: dict[str, str] = {}
+    first: dict[tuple, str] = {}
+    kept = []
+    for entry, size in zip(entries, sizes, strict=True):
+        key = _recording_key(entry, lambda f: _sha256(f, digests)) if size in shared else None
+        if key in first:
+            companions[entry.id] = f"{SAME_CONTENT}{first[key]}: replayed once"
+            continue
+        if key is not None:
+            first[key] = entry.id
+        kept.append(entry)
+    return kept
+
+
+def _recording_key(entry: TrialEntry, measure: Callable[[str], object]) -> tuple | None:
+    """What makes two trials the same replay (the module docstring), each input file by ``measure``.
+
+    None for a trial without inputs or with one that cannot be read (its own replay says why).
+    """
+    try:
+        files = tuple((i.role, measure(i.file)) for i in entry.inputs)
+    except OSError:
+        return None
+    if not files:
+        return None
+    trial = entry.trial
+    settings = tuple(
+        (f.name, getattr(trial, f.name)) for f in dataclasses.fields(trial) if f.name not in _NAMED
+    )
+    objects = tuple(("" if os.path.isabs(o.what) else o.what, o.track) for o in trial.objects)
+    return (entry.kind, files, settings, objects)
+
+
+def _sha256(path: str, digests: dict[str, str]) -> str:
+    """The SHA-256 of a file's bytes, read in chunks; ``digests`` keeps each real file's (links resolved)."""
+    real = os.path.realpath(path)
+    if real not in digests:
+        digest = hashlib.sha256()
+        with open(real, "rb") as f:
+            while chunk := f.read(_CHUNK):
+                digest.update(chunk)
+        digests[real] = digest.hexdigest()
+    return digests[real]
 
 
 def select(
