@@ -17,6 +17,7 @@ from handsim.datatypes.trajectory import Trajectory
 from handsim.sim.control import DEFAULT_CONTROL_RATE, ControlSchedule, control_schedule
 from handsim.sim.drive import ScenarioSwitches, ScheduleDriver, scenario_switches
 from handsim.sim.grip_check import GripCheck, check_grip
+from handsim.sim.memory import check_replay_memory
 from handsim.sim.metrics import FrameMetrics, HoldTracks, frame_metrics, hold_tracks
 from handsim.sim.parallel import sim_threads
 from handsim.sim.placement.robustness import HoldRobustness, Judge, Outcome, hold_robustness, member_outcomes
@@ -158,11 +159,14 @@ def replay(scene: SimScene, trajectory: Trajectory, config: ReplayConfig | None 
 
     Raises:
         TrajectoryError: The trajectory does not fit the scene (see :func:`control_schedule`).
+        RecordingTooLongError: Its replay would need more memory than the limit
+            (:func:`handsim.sim.memory.check_replay_memory`).
         SimulationError: A target is not finite.
     """
     config = config or ReplayConfig()
     spec = config.metrics
     schedule = control_schedule(scene, trajectory, config.control_rate)
+    check_replay_memory(scene.model, schedule.frames, 1.0 / schedule.frame_dt, trajectory.source)
     switches = scenario_switches(scene, schedule, spec.release_delay)
     driver = _driver_at_start(scene, schedule, switches)
     release = switches.release_frame
