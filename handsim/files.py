@@ -6,9 +6,26 @@ A bottom-layer module (no handsim imports), so every layer that writes a result 
 from __future__ import annotations
 
 import contextlib
+import hashlib
 import os
 import threading
 from pathlib import Path
+
+HASH_CHUNK = 1 << 20
+"""Bytes read at a time while hashing a file (1 MiB: a large recording is never held whole)."""
+
+
+def sha256_file(path: str | Path) -> str:
+    """SHA-256 of a file's bytes (hex), read in chunks of :data:`HASH_CHUNK`.
+
+    Raises:
+        OSError: The file cannot be read.
+    """
+    digest = hashlib.sha256()
+    with open(path, "rb") as f:
+        while chunk := f.read(HASH_CHUNK):
+            digest.update(chunk)
+    return digest.hexdigest()
 
 
 def write_atomic(path: str | Path, data: bytes) -> Path:

@@ -7,7 +7,6 @@ digits (enough for plots; the summary keeps full precision).
 
 from __future__ import annotations
 
-import hashlib
 import math
 import platform
 from pathlib import Path
@@ -17,6 +16,7 @@ import numpy as np
 
 from handsim.datatypes.fingers import finger_groups
 from handsim.datatypes.trajectory import Trajectory
+from handsim.files import sha256_file as file_digest
 from handsim.glove.checks import CHECK_FIELDS, RecordingChecks
 from handsim.sim.curves import CURVES, DEG, row_max, tracking_error
 from handsim.sim.plausibility import limit_violations
@@ -29,7 +29,6 @@ MAX_CURVE_POINTS = 600
 """Most points per curve in a record."""
 CURVE_DIGITS = 6
 """Significant digits of curve values."""
-_CHUNK = 1 << 20
 
 
 def versions() -> dict:
@@ -45,14 +44,10 @@ def versions() -> dict:
 
 def sha256_file(path: str | Path) -> str | None:
     """SHA-256 of a file's bytes (hex), or None when it cannot be read."""
-    digest = hashlib.sha256()
     try:
-        with open(path, "rb") as f:
-            for block in iter(lambda: f.read(_CHUNK), b""):
-                digest.update(block)
+        return file_digest(path)
     except OSError:
         return None
-    return digest.hexdigest()
 
 
 def input_hashes(entry: TrialEntry) -> list[dict]:

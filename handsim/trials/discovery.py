@@ -37,7 +37,6 @@ no file for it.
 from __future__ import annotations
 
 import dataclasses
-import hashlib
 import os
 import re
 from collections import Counter
@@ -47,6 +46,7 @@ from fnmatch import fnmatchcase
 from pathlib import Path, PurePosixPath
 
 from handsim.errors import HandsimError, InputFileError
+from handsim.files import sha256_file
 from handsim.io.text_files import require_file, special_file
 from handsim.trials.base import TrialOptions
 from handsim.trials.kind import TrialKind
@@ -54,8 +54,6 @@ from handsim.trials.sorting import CompanionFile, Sorting, TrialEntry, UnknownFi
 
 SAME_CONTENT = "same content as "
 """How the reason of a recording's later copy begins (then the first copy's id, ``: replayed once``)."""
-_CHUNK = 1 << 20
-"""Bytes read at a time while hashing (1 MiB)."""
 _NAMED = ("trajectory_path", "skeleton_path", "calibration_path", "annotation_path", "notes", "objects")
 """Trial fields that name files or record how they were found: compared by the inputs' bytes instead."""
 
@@ -259,14 +257,10 @@ def _recording_key(entry: TrialEntry, measure: Callable[[str], object]) -> tuple
 
 
 def _sha256(path: str, digests: dict[str, str]) -> str:
-    """The SHA-256 of a file's bytes, read in chunks; ``digests`` keeps each real file's (links resolved)."""
+    """The SHA-256 of a file's bytes; ``digests`` keeps each real file's (links resolved)."""
     real = os.path.realpath(path)
     if real not in digests:
-        digest = hashlib.sha256()
-        with open(real, "rb") as f:
-            while chunk := f.read(_CHUNK):
-                digest.update(chunk)
-        digests[real] = digest.hexdigest()
+        digests[real] = sha256_file(real)
     return digests[real]
 
 

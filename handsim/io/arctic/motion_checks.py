@@ -7,7 +7,6 @@ describes the file layout).
 
 from __future__ import annotations
 
-import hashlib
 import math
 import numbers
 from pathlib import Path
@@ -16,6 +15,7 @@ from typing import Any
 import numpy as np
 
 from handsim.errors import FormatError, HandsimError
+from handsim.files import sha256_file
 
 ARCTIC_FPS = 30.0
 """Frames per second of ARCTIC's ``raw_seqs`` (one row per image frame of its 30 fps videos). Used for time
@@ -76,7 +76,7 @@ PER_FRAME_FIELDS = ("rot", "pose", "trans")
 
 def file_sha256(path: Path) -> str:
     """SHA-256 of a file's bytes, hex: the record names exactly which input it replayed."""
-    return hashlib.sha256(path.read_bytes()).hexdigest()
+    return sha256_file(path)
 
 
 def shape_text(shape: tuple[int | None, ...]) -> str:
