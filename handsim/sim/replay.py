@@ -159,8 +159,7 @@ def replay(scene: SimScene, trajectory: Trajectory, config: ReplayConfig | None 
 
     Raises:
         TrajectoryError: The trajectory does not fit the scene (see :func:`control_schedule`).
-        RecordingTooLongError: Its replay would need more memory than the limit
-            (:func:`handsim.sim.memory.check_replay_memory`).
+        RecordingTooLongError: It would need more memory than the limit (:mod:`handsim.sim.memory`).
         SimulationError: A target is not finite.
     """
     config = config or ReplayConfig()
