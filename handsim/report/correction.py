@@ -22,6 +22,7 @@ from handsim.report.fmt import num
 from handsim.report.markup import esc, simple_table
 from handsim.report.style import CSS
 from handsim.runner.records import read_records
+from handsim.viz.plotting import pyplot
 
 REPORT_FILE = "correction.html"
 """The page, in the run's output folder."""
@@ -29,19 +30,6 @@ PLOT_DPI = 72
 """Resolution of the embedded plots: 6.4 × 3.6 inches at 72 dpi, ~25 kB a trial."""
 
 _BEFORE, _AFTER, _FINGER, _WRIST = "#8c96a3", "#1f5fa8", "#d4862a", "#b45fc4"
-
-
-def _pyplot():
-    try:
-        import matplotlib  # lazy: optional extra handsim[plot]
-    except ImportError as exc:
-        raise HandsimError(
-            'the correction report\'s plots need matplotlib: pip install "handsim[plot]"'
-        ) from exc
-    matplotlib.use("Agg")  # files only; never a window
-    import matplotlib.pyplot as plt  # lazy: after choosing the Agg backend above
-
-    return plt
 
 
 def _nan(values: list) -> list[float]:
@@ -54,7 +42,7 @@ def correction_plot(record: dict) -> bytes:
     Raises:
         HandsimError: matplotlib is not installed.
     """
-    plt = _pyplot()
+    plt = pyplot()
     curves, c = record["curves"], record["correction"]
     t = _nan(curves["time_s"])
     fig, (top, bottom) = plt.subplots(2, 1, figsize=(6.4, 3.6), sharex=True, constrained_layout=True)

@@ -28,7 +28,12 @@ EPISODE_COLOURS = {"approach": "#eef3e2", "closure": "#f8dfb8", "hold": "#f0a848
 """Shading of an episode's phases in :func:`draw_episodes` (a truncated episode's are hatched grey)."""
 
 
-def _pyplot():
+def pyplot():
+    """Matplotlib's ``pyplot`` on the file-only Agg backend (imported on first use: an optional extra).
+
+    Raises:
+        HandsimError: matplotlib is not installed (the message says how to install it).
+    """
     try:
         import matplotlib  # lazy: optional extra handsim[plot]
     except ImportError as exc:
@@ -60,7 +65,7 @@ def plot_trajectory(
     Raises:
         HandsimError: matplotlib is not installed.
     """
-    plt = _pyplot()
+    plt = pyplot()
     n = len(trajectory.dof_names)
     cols = min(5, n)
     rows = math.ceil(n / cols)
@@ -144,7 +149,7 @@ def draw_episodes(ax: Axes, segmentation: GraspSegmentation) -> None:
 
 def save_figure(fig: Figure, path: str | Path) -> Path:
     """Lay out ``fig``, write it to ``path`` (PNG/SVG/PDF by suffix, folders created), close it."""
-    plt = _pyplot()
+    plt = pyplot()
     fig.tight_layout()
     out = Path(path)
     out.parent.mkdir(parents=True, exist_ok=True)

@@ -16,7 +16,7 @@ import numpy as np
 from handsim.sim.curves import CURVES, DEG, MM, row_max, tracking_error
 from handsim.sim.curves import slip as slip_curve
 from handsim.sim.replay import ReplayResult
-from handsim.viz.plotting import _pyplot, save_figure
+from handsim.viz.plotting import pyplot, save_figure
 
 
 @dataclass(frozen=True)
@@ -230,7 +230,7 @@ def plot_replay(result: ReplayResult, path: str | Path, *, title: str | None = N
     Raises:
         HandsimError: matplotlib is not installed.
     """
-    plt = _pyplot()
+    plt = pyplot()
     c = replay_curves(result)
     t = c.times
     nlinks = len(c.links)
