@@ -1233,6 +1233,28 @@ def test_row_a_corrupted_value_in_the_records_is_noted_naming_record_and_key(cap
     assert "'max_penetration_mm' is 'lots'" in (out / "report.md").read_text()  # the report says it too
 
 
+def test_row_per_frame_lists_in_the_records_are_read_as_lists_of_numbers(capsys, tmp_path):
+    from tests.helpers import write_short_grasp
+
+    out = tmp_path / "out"
+    grasp = write_short_grasp(tmp_path / "data", "cube")
+    assert cli(["report", str(grasp), "-o", str(out), "--workers", "1", "--frames", "0"], capsys)[0] == 0
+    records = out / "records.jsonl"
+    record = json.loads(records.read_text())
+    record.setdefault("trajectory_quality", {})["spike_frames"] = [3, 17]  # a glove recording's spikes
+    records.write_text(json.dumps(record) + "\n")
+    code, first, stdout = cli(["report", "--render-only", str(out)], capsys)
+    assert (code, first) == (0, "")
+    assert not [line for line in stdout.splitlines() if line.startswith("note")]
+    record["trajectory_quality"]["spike_frames"] = [3, "x"]
+    records.write_text(json.dumps(record) + "\n")
+    code, first, stdout = cli(["report", "--render-only", str(out)], capsys)
+    assert stdout.splitlines()[0] == (
+        f"note        {records}: record 1 ('cube.grasp.json#1'): trajectory_quality 'spike_frames' is "
+        "[3, 'x'], expected a list of finite numbers: shown as missing and left out of every statistic"
+    )
+
+
 WHOLE = "options['{}'] must be a whole number (int), got"
 
 

@@ -40,7 +40,7 @@ def test_a_replay_over_the_limit_is_refused_before_it_runs_naming_the_file_estim
         f"{SEQ20}: replaying 617 control frames (6 s at 100 Hz) would need about 5.3 MB"
     )
     assert "over the limit of 1.0 MB ($HANDSIM_MAX_REPLAY_GB)" in message
-    assert "--grasp K" in message and "--control-rate" in message
+    assert "--grasp K" in message and "--rate" in message
 
 
 def test_within_the_limit_nothing_is_said(seq20, monkeypatch):

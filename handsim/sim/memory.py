@@ -84,5 +84,5 @@ def check_replay_memory(model: mujoco.MjModel, frames: int, control_rate: float,
         f"{where}replaying {frames:,} control frames ({frames / control_rate:,.0f} s at {control_rate:g} Hz) "
         f"would need about {_size(need)} of memory ({model.nq} state and {model.nsensordata} sensor "
         f"values per frame, kept for the metrics), over the limit of {_size(limit)} ({origin}); "
-        "replay one grasp episode (--grasp K) or a part of the recording, or a lower --control-rate"
+        "replay one grasp episode (--grasp K) or a part of the recording, or at a lower --rate"
     )
