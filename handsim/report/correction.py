@@ -138,7 +138,7 @@ def correction_html(records: list[dict], plots: bool = True) -> str:
         "<!doctype html><html lang='en'><head><meta charset='utf-8'><title>handsim correct</title>"
         f"<style>{CSS}</style></head><body><header class='top'><h1>handsim correct</h1>"
         f"<div class='sub'>{len(order)} trials corrected, {large} implausible (a large correction), "
-        f"{len(other)} not corrected</div></header><main>"
+        f"{len(other)} not corrected · terms: handsim's docs/concepts.md</div></header><main>"
         "<section class='block'><h2>Trials by correction size</h2><p class='note'>size: the correction "
         "against its plausibility bounds (finger RMS over twice pure replay's joint tracking error, wrist "
         f"RMS over 10 mm and 5°); above 1 it is large.</p>{table}</section>"
