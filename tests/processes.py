@@ -118,7 +118,7 @@ def ray_head(cpus: int, log: Path, timeout: float = 180.0) -> Iterator[tuple[str
     default): a driver connecting by address needs ``RAY_AUTH_MODE=token`` in its environment when it
     starts (Ray reads it once, on import), and the cluster and its drivers need the token in this
     process's environment (``~/.ray/auth_token`` or ``RAY_AUTH_TOKEN_PATH``: the ``ray_home`` fixture of
-    tests/test_runner_real_data.py makes one; ``ray start`` makes none). Only this cluster is stopped
+    tests/conftest.py makes one; ``ray start`` makes none). Only this cluster is stopped
     afterwards (SIGINT to its ``ray start``, which stops what it started; SIGKILL to its process group if that
     hangs), never other Ray clusters of the machine, as ``ray stop`` would.
 

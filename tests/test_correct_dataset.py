@@ -117,22 +117,6 @@ def test_the_cli_corrects_a_dataset_and_writes_the_report(dataset, tmp_path, cap
     assert (out / "corrected").is_dir() and len(read_records(out)) == 1
 
 
-@pytest.fixture
-def ray_home(tmp_path_factory, monkeypatch) -> Path:
-    """A home of Ray's own with the token of its token authentication (the user's home is never written)."""
-    import secrets
-
-    home = tmp_path_factory.mktemp("ray_home")
-    token = home / ".ray" / "auth_token"
-    token.parent.mkdir()
-    token.write_text(secrets.token_hex(32))
-    monkeypatch.setenv("HOME", str(home))
-    monkeypatch.setenv("RAY_AUTH_TOKEN_PATH", str(token))
-    monkeypatch.delenv("RAY_AUTH_TOKEN", raising=False)
-    monkeypatch.delenv("RAY_AUTH_MODE", raising=False)
-    return home
-
-
 @pytest.mark.slow
 def test_the_ray_backend_gives_bitwise_the_records_of_the_local_pool(dataset, local_run, tmp_path, ray_home):
     ray = pytest.importorskip("ray")

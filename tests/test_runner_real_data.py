@@ -5,7 +5,6 @@ from __future__ import annotations
 import hashlib
 import json
 import multiprocessing
-import secrets
 import subprocess
 import sys
 from pathlib import Path
@@ -143,33 +142,6 @@ def test_a_process_pool_gives_the_in_process_records_and_resumes_after_an_interr
     assert sorted([*first, *resumed.ran]) == sorted(FAST_IDS)
     expected = {k: v for k, v in without_timing(records).items() if k in FAST_IDS}
     assert without_timing(read_records(tmp_path)) == expected
-
-
-@pytest.fixture(scope="session")
-def _ray_session_home(tmp_path_factory: pytest.TempPathFactory) -> Path:
-    """The home of this session's Ray clusters, with the token of Ray's token authentication in it."""
-    home = tmp_path_factory.mktemp("ray_home")
-    token = home / ".ray" / "auth_token"
-    token.parent.mkdir()
-    token.write_text(secrets.token_hex(32))  # what `ray get-auth-token --generate` writes
-    return home
-
-
-@pytest.fixture
-def ray_home(_ray_session_home: Path, monkeypatch: pytest.MonkeyPatch) -> Path:
-    """A home of Ray's own for the test (its token in ``.ray/auth_token``), whatever ran before.
-
-    Ray's token authentication (on by default for ``ray start`` and a local ``ray.init``) reads the token
-    from ``~/.ray/auth_token`` (or ``RAY_AUTH_TOKEN_PATH``); ``ray start`` does not create one. Every Ray
-    test of the session shares one home and one token (Ray caches the token it loaded once per process),
-    and the user's home is never written. ``RAY_AUTH_MODE``, which a local ``ray.init`` sets in this
-    process, is restored after the test.
-    """
-    monkeypatch.setenv("HOME", str(_ray_session_home))
-    monkeypatch.setenv("RAY_AUTH_TOKEN_PATH", str(_ray_session_home / ".ray" / "auth_token"))
-    monkeypatch.delenv("RAY_AUTH_TOKEN", raising=False)
-    monkeypatch.delenv("RAY_AUTH_MODE", raising=False)
-    return _ray_session_home
 
 
 @pytest.mark.slow
