@@ -66,17 +66,16 @@ def rollout_ratio(loaded, config: CorrectionConfig, threads: int, repeats: int) 
     residual = rng.normal(0.0, 0.01, (config.samples, config.horizon, reference.size))
     backend = CpuRollout(threads)
     sampler = AnnealedSampler(reference, config, backend, model, rng)
-    controls = sampler.controls(residual, frames, begin.mocap)
+    controls = sampler.controls(residual, frames, begin)
     nu = model.nu
     steps = controls.shape[0] * controls.shape[1]
     raw_data = mujoco.MjData(model)
     rollout_times, raw_times = [], []
-    backend.rollout(
-        model, begin.state, begin.warmstart, controls
-    )  # warm up: the thread pool and the per-thread data
+    spec = sampler.spec(guided=False)
+    backend.rollout(model, begin, controls, spec)  # warm up: the thread pool and the per-thread data
     for _ in range(repeats):
         start = time.perf_counter()
-        backend.rollout(model, begin.state, begin.warmstart, controls)
+        backend.rollout(model, begin, controls, spec)
         rollout_times.append(time.perf_counter() - start)
         start = time.perf_counter()
         for sequence in controls:

@@ -23,6 +23,7 @@ from handsim.cli._common import (
     add_arctic_options,
     add_force,
     add_object_mass_options,
+    argument_type,
     non_negative_int,
     output_dir,
     output_file,
@@ -30,7 +31,7 @@ from handsim.cli._common import (
     usage_error,
     write_text,
 )
-from handsim.correct.config import BUDGETS, CorrectionConfig
+from handsim.correct.config import BUDGETS, CorrectionConfig, CorrectionError
 from handsim.errors import HandsimError
 
 if TYPE_CHECKING:
@@ -88,6 +89,37 @@ def print_score(score: CorrectionScore) -> None:
         _line("implausible", implausible_text(score))
 
 
+def _weight(text: str) -> float:
+    """A finite number ≥ 0 (a gain or a weight)."""
+    value = float(text)
+    if not (math.isfinite(value) and value >= 0):
+        raise ValueError(f"expected a number ≥ 0, got {text!r}")
+    return value
+
+
+def _add_guidance_options(parser: argparse.ArgumentParser, default: CorrectionConfig) -> None:
+    """``--guidance``, ``--guidance-rounds`` and ``--opposition-weight``."""
+    _add_weight(
+        parser, "--guidance", default.guidance, "GAIN",
+        "contact guidance: the share of a virtual force carrying each object to its goal in the first "
+        f"rounds' rollouts, annealed to zero; never in the result (default {default.guidance:g}: off)",
+    )  # fmt: skip
+    parser.add_argument(
+        "--guidance-rounds", type=non_negative_int, default=default.guidance_rounds, metavar="N",
+        help=f"rounds with guidance, at most all but the last (default {default.guidance_rounds})",
+    )  # fmt: skip
+    _add_weight(
+        parser, "--opposition-weight", default.opposition_weight, "W",
+        "glove grasps: the cost of a hold frame without an opposing grip, as 1 cm of slip costs 1 "
+        f"(default {default.opposition_weight:g}; 0: off)",
+    )  # fmt: skip
+
+
+def _add_weight(parser: argparse.ArgumentParser, flag: str, default: float, metavar: str, text: str) -> None:
+    """A number option ≥ 0 (a gain or a weight)."""
+    parser.add_argument(flag, type=argument_type(_weight), default=default, metavar=metavar, help=text)
+
+
 def _config(args: argparse.Namespace) -> CorrectionConfig:
     budget = BUDGETS[args.budget]
     return CorrectionConfig(
@@ -95,21 +127,27 @@ def _config(args: argparse.Namespace) -> CorrectionConfig:
         iterations=args.iterations or budget.iterations,
         horizon=args.horizon,
         wrist=not args.no_wrist,
+        guidance=args.guidance,
+        guidance_rounds=args.guidance_rounds,
+        opposition_weight=args.opposition_weight,
         seed=args.seed,
     )
 
 
 def _correct(args: argparse.Namespace) -> int:
     name = args.output.name.lower()
+    try:
+        config = _config(args)
+    except CorrectionError as exc:
+        return usage_error("correct", str(exc))
     if Path(args.trial).is_dir() and not name.endswith(".npz"):
-        return _correct_dataset(args, _config(args))
+        return _correct_dataset(args, config)
     if not name.endswith(SUFFIX):
         return usage_error("correct", f"-o {args.output}: a corrected trial's name ends in {SUFFIX!r}")
     # lazy: the simulation stack (MuJoCo), only when correcting
     from handsim.correct import correct, write_corrected
     from handsim.trials import TrialError, load_trial
 
-    config = _config(args)
     try:
         loaded = load_trial(
             args.trial,
@@ -287,6 +325,7 @@ def register(commands: Commands) -> None:
     parser.add_argument(
         "--no-wrist", action="store_true", help="correct the fingers only, not the recorded wrist pose"
     )
+    _add_guidance_options(parser, default)
     parser.add_argument(
         "--threads", type=positive_int, default=None, metavar="N",
         help="rollout threads (default: $HANDSIM_THREADS, else every core); the result does not depend on it",

@@ -12,6 +12,10 @@ each, the rollouts split into chunks. Each rollout sets the whole state it start
 step, so its states do not depend on which thread ran it or what that thread ran before: the results are
 bitwise the same for any ``nthread`` and chunk size (pinned in ``tests/test_correct.py``), and bitwise those
 of :class:`~handsim.sim.drive.ScheduleDriver` stepping the same controls from the same state.
+
+A rollout's controls may also set ``xfrc_applied`` (``mjSTATE_XFRC_APPLIED``: the guidance's virtual force,
+:mod:`handsim.correct.guidance`); a rollout whose controls do not set it starts with it zero, whatever the
+thread's data held before, so an unguided rollout is exactly that.
 """
 
 from __future__ import annotations
@@ -35,14 +39,6 @@ CONTROLS = (
 SWITCHED_CONTROLS = CONTROLS | mujoco.mjtState.mjSTATE_EQ_ACTIVE
 """The controls of a scene that releases supports during the run (a glove scene): actuator targets, every
 equality's active flag (a support switched off at the release), then every mocap body's pose."""
-
-
-def control_spec(model: mujoco.MjModel, length: int) -> int:
-    """What a control vector of ``length`` elements sets: :data:`CONTROLS`, else :data:`SWITCHED_CONTROLS`.
-
-    The two differ by the equalities' flags; without equalities they are the same vector.
-    """
-    return int(CONTROLS if length == mujoco.mj_stateSize(model, CONTROLS) else SWITCHED_CONTROLS)
 
 
 @dataclass(frozen=True)
@@ -83,19 +79,24 @@ class RolloutBackend(Protocol):
     threads: int
 
     def rollout(
-        self, model: mujoco.MjModel, state: np.ndarray, warmstart: np.ndarray, controls: np.ndarray
-    ) -> np.ndarray:
-        """The states after every step of every sequence.
+        self, model: mujoco.MjModel, start: Start, controls: np.ndarray, spec: int, sensors: bool
+    ) -> tuple[np.ndarray, np.ndarray | None]:
+        """The states (and sensor data) after every step of every sequence.
 
         Args:
             model: The model (not changed).
-            state: The start, ``mj_getState(…, mjSTATE_FULLPHYSICS)`` (nstate,).
-            warmstart: The start's ``qacc_warmstart`` (nv,).
-            controls: Per sequence and step, the :data:`CONTROLS` vector, or the :data:`SWITCHED_CONTROLS`
-                one (N, nstep, ncontrol): their lengths tell them apart (:func:`control_spec`).
+            start: Where every sequence starts: its ``state`` (``mj_getState(…, mjSTATE_FULLPHYSICS)``) and
+                ``warmstart`` (``qacc_warmstart``); the other fields are the controls' business.
+            controls: Per sequence and step, the vector of the ``mjtState`` elements ``spec`` names
+                (N, nstep, ncontrol).
+            spec: What the controls set: :data:`CONTROLS` or :data:`SWITCHED_CONTROLS`, with
+                ``mjSTATE_XFRC_APPLIED`` in a guided round. Elements a spec leaves out are zero
+                (``xfrc_applied``) or the start's.
+            sensors: Return the sensor data too.
 
         Returns:
-            States (N, nstep, nstate) in the layout of :data:`STATE`.
+            States (N, nstep, nstate) in the layout of :data:`STATE`, and the sensor data after every step
+            (N, nstep, nsensordata), or None unless ``sensors``.
         """
 
     def close(self) -> None:
@@ -127,25 +128,28 @@ class CpuRollout:
         return self._data
 
     def rollout(
-        self, model: mujoco.MjModel, state: np.ndarray, warmstart: np.ndarray, controls: np.ndarray
-    ) -> np.ndarray:
-        """The states after every step of every sequence (:meth:`RolloutBackend.rollout`)."""
+        self, model: mujoco.MjModel, start: Start, controls: np.ndarray, spec: int, sensors: bool = False
+    ) -> tuple[np.ndarray, np.ndarray | None]:
+        """States (and sensor data) after every step of every sequence (:meth:`RolloutBackend.rollout`)."""
         count = controls.shape[0]
-        starts = np.broadcast_to(state, (count, state.shape[0]))
-        warm = np.broadcast_to(warmstart, (count, warmstart.shape[0]))
-        states, _ = self._pool.rollout(
+        datas = self._datas(model)
+        for data in datas:  # a force a guided rollout left is not part of the next rollout's start
+            data.xfrc_applied[:] = 0.0
+        starts = np.broadcast_to(start.state, (count, start.state.shape[0]))
+        warm = np.broadcast_to(start.warmstart, (count, start.warmstart.shape[0]))
+        states, data = self._pool.rollout(
             model,
-            self._datas(model),
+            datas,
             np.ascontiguousarray(starts),
             np.ascontiguousarray(controls),
-            control_spec=control_spec(model, controls.shape[-1]),
+            control_spec=int(spec),
             initial_warmstart=np.ascontiguousarray(warm),
             # four chunks per thread: a thread slowed by other work on the machine hands its last chunks to
             # the others (24 rollouts on 2 threads of a loaded 2-core machine: chunks of 3 ran 1.24× as fast
             # as chunks of 12); the results do not depend on it
             chunk_size=max(1, count // (4 * self.threads)),
         )
-        return states
+        return states, data if sensors else None
 
     def close(self) -> None:
         """Stop the thread pool."""

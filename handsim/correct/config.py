@@ -17,7 +17,7 @@ from handsim.errors import HandsimError
 CORRECTION_METHOD = "annealed-mppi-receding-horizon"
 """The method's name in a corrected file's provenance (:mod:`handsim.correct.sampler`)."""
 
-CORRECTION_CONFIG_VERSION = "1"
+CORRECTION_CONFIG_VERSION = "2"
 """Bumped whenever a parameter's meaning or a default changes (written into every corrected file)."""
 
 
@@ -52,9 +52,16 @@ sequence 20 in 26–42 s per recorded second on 2 shared cores, depending on the
 _POSITIVE = (
     "control_rate", "finger_noise", "wrist_position_noise", "wrist_rotation_noise", "temperature",
     "finger_bound", "wrist_position_bound", "wrist_rotation_bound", "position_scale", "rotation_scale",
-    "articulation_scale", "finger_scale", "wrist_position_scale", "wrist_rotation_scale",
+    "articulation_scale", "finger_scale", "wrist_position_scale", "wrist_rotation_scale", "opposition_force",
 )  # fmt: skip
-_WEIGHTS = ("rotation_weight", "articulation_weight", "finger_weight", "wrist_weight")
+_WEIGHTS = (
+    "rotation_weight",
+    "articulation_weight",
+    "finger_weight",
+    "wrist_weight",
+    "guidance",
+    "opposition_weight",
+)
 _CHECKS = (
     (_POSITIVE, lambda v: v > 0, "be a positive number"),
     (("anneal", "near_noise"), lambda v: 0 < v <= 1, "lie in (0, 1]"),
@@ -119,6 +126,25 @@ class CorrectionConfig:
             acceptance's 5° RMS).
         wrist_weight: Weight of each wrist term (0.01): the wrist is the lever the acceptance allows most
             of (10 mm, 5° RMS); on sequence 20 it then moved 2.7–4.3 mm and 1.2–3.1° RMS, within those.
+        guidance: Contact guidance's gain in the first planning round (SPIDER's virtual contact guidance,
+            :mod:`handsim.correct.guidance`): the share of the force that carries each free object along its
+            goal (its weight, its recorded acceleration and a pull back from where it starts) applied to it
+            in the guided rounds' rollouts; 0 turns guidance off. Annealed to exactly zero by
+            ``guidance_rounds``; the plan committed is chosen among unguided rollouts only, so no virtual
+            force is in the result. Off by default: at 1 it helped the synthetic two-hand carry (smaller
+            drift and correction in both seeds measured) but not Tzionas sequence 20 (three seeds: within
+            1 cm 76.6 % against 78.3 % on average; docs/correct.md, "Contact guidance").
+        guidance_rounds: Rounds of a planning pass that apply guidance, its gain falling linearly from
+            ``guidance`` in the first to zero (SPIDER removes its virtual contact by the last iterations);
+            the rounds after are unguided, and at least the last always is: at most ``iterations − 1``
+            rounds are guided (SPIDER's own cap), none with a single round.
+        opposition_weight: Weight of a glove hold's opposition term (:mod:`handsim.correct.grip`): per frame
+            of the hold, 1 where no opposing pair of the hand's sides (thumb and fingers, or fingers and
+            palm) presses on the object, falling to 0 as the weaker side's push reaches ``opposition_force``
+            of the object's weight: the grip the replay's grip check asks for. 1: a frame without
+            opposition costs what 1 cm of slip does.
+        opposition_force: The weaker opposing side's push on the object, as a share of its weight, at which
+            the opposition term vanishes (0.5: a clear contact on both sides, not a graze).
         wrist: Correct the wrist (its mocap target) where a root pose is recorded; False: fingers only.
         seed: Seed of the perturbations (a NumPy ``Generator``).
     """
@@ -149,11 +175,24 @@ class CorrectionConfig:
     wrist_position_scale: float = 0.01
     wrist_rotation_scale: float = math.radians(5.0)
     wrist_weight: float = 0.01
+    guidance: float = 0.0
+    guidance_rounds: int = 1
+    opposition_weight: float = 1.0
+    opposition_force: float = 0.5
     wrist: bool = True
     seed: int = 0
 
     def __post_init__(self) -> None:
-        counts = {"samples": 3, "iterations": 1, "horizon": 1, "knot": 1, "commit": 1, "rescue": 0, "seed": 0}
+        counts = {
+            "samples": 3,
+            "iterations": 1,
+            "horizon": 1,
+            "knot": 1,
+            "commit": 1,
+            "rescue": 0,
+            "seed": 0,
+            "guidance_rounds": 0,
+        }
         for name, least in counts.items():
             value = getattr(self, name)
             if isinstance(value, bool) or not isinstance(value, int) or value < least:

@@ -10,8 +10,10 @@ scale; the scales and weights are :class:`~handsim.correct.config.CorrectionConf
 * ``wrist_weight · (|Δp|² / wrist_position_scale² + |Δr|² / wrist_rotation_scale²)``, averaged over the
   corrected wrists.
 
-Object terms count only at frames whose recorded pose is valid. Nothing else is in the cost: no contact
-reward and no guidance force, so a plan is judged by what the committed simulation will measure.
+Object terms count only at frames whose recorded pose is valid. A glove hold adds the opposition term
+(:mod:`handsim.correct.grip`) over the hold's frames: the grip the replay's grip check asks for. A plan is
+judged by what the committed simulation will measure; a guided round's costs (:mod:`handsim.correct.guidance`)
+only steer the next round's mean.
 """
 
 from __future__ import annotations
@@ -19,6 +21,7 @@ from __future__ import annotations
 import numpy as np
 
 from handsim.correct.config import CorrectionConfig
+from handsim.correct.grip import Opposition
 from handsim.correct.reference import Reference
 from handsim.datatypes.rotations import quat_angle
 
@@ -40,6 +43,12 @@ class Objective:
             [1.0 / config.wrist_position_scale**2] * 3 + [1.0 / config.wrist_rotation_scale**2] * 3, hands
         )
         self._wrist_scale = config.wrist_weight * wrist / max(hands, 1)
+        self.opposition = Opposition(reference, config)
+
+    @property
+    def needs_sensors(self) -> bool:
+        """Whether the cost reads the rollouts' sensor data (the opposition term of a glove hold)."""
+        return self.opposition.active
 
     def control(self, residual: np.ndarray) -> np.ndarray:
         """The correction's size term per frame, residuals (..., D) → (...)."""
@@ -72,6 +81,15 @@ class Objective:
             largest = np.maximum(largest, np.max(np.where(obj.valid[frames], distance, 0.0), axis=-1))
         return largest
 
-    def __call__(self, qpos: np.ndarray, residual: np.ndarray, frames: np.ndarray) -> np.ndarray:
-        """Total cost per future: ``qpos`` (N, h, nq) and ``residual`` (N, h, D) at ``frames`` (h,) → (N,)."""
-        return np.sum(self.tracking(qpos, frames) + self.control(residual), axis=-1)
+    def __call__(
+        self, qpos: np.ndarray, residual: np.ndarray, frames: np.ndarray, sensors: np.ndarray | None = None
+    ) -> np.ndarray:
+        """Total cost per future: ``qpos`` (N, h, nq) and ``residual`` (N, h, D) at ``frames`` (h,) → (N,).
+
+        ``sensors`` (N, h, nsensordata), the sensor data at the same frames, adds the opposition term where
+        :attr:`needs_sensors`.
+        """
+        total = self.tracking(qpos, frames) + self.control(residual)
+        if sensors is not None and self.needs_sensors:
+            total = total + self.opposition(sensors, frames)
+        return np.sum(total, axis=-1)

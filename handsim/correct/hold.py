@@ -6,7 +6,8 @@ whether the hand then holds it through the scene's hold window (:func:`handsim.s
 lost at the first slip beyond the slip limit relative to the hand, or a contact gap). The correction's goal
 for such a scene is that hold: the object's "track" is its placed pose, counted from the release to the
 window's end, so the cost of :mod:`handsim.correct.cost` measures the object's displacement from where the
-grasp placed it while the hand must hold it.
+grasp placed it while the hand must hold it; over the same frames it adds the opposition term
+(:mod:`handsim.correct.grip`), the grip the replay's grip check asks for.
 
 A glove scene holds the hand still (its root is fixed in the world: the glove records no wrist pose), so the
 object's displacement in the world *is* its displacement relative to the hand, the quantity the hold is

@@ -21,8 +21,14 @@ the round after them), so what is committed is a plan whose simulated future was
 lets an object leave its track (farther than ``position_scale`` from its recording at some frame of the
 horizon) while it is on its track now, up to ``rescue`` more passes of annealed rounds start again from it
 at the full noise: the search spends its effort where a loss may still be prevented, and none where the
-recording is easy or the object is lost already. SPIDER's virtual contact guidance is not used: no force but
-the hand's acts on the object in any rollout.
+recording is easy or the object is lost already.
+
+**Contact guidance** (SPIDER's virtual contact, :mod:`handsim.correct.guidance`): where ``guidance`` is
+positive, the first ``guidance_rounds`` rounds of each pass simulate their candidates with a virtual force
+on each object towards its goal, its gain annealed to zero; those rounds only move the MPPI mean. The plan
+committed is the cheapest candidate of the **unguided** rounds (the first of which also scores the nominal
+plan and the recording), so no virtual force acts in any future a committed plan was chosen by, nor in the
+committed simulation.
 """
 
 from __future__ import annotations
@@ -33,9 +39,10 @@ from dataclasses import dataclass
 import mujoco
 import numpy as np
 
-from handsim.correct.backend import RolloutBackend, Start
+from handsim.correct.backend import CONTROLS, SWITCHED_CONTROLS, RolloutBackend, Start
 from handsim.correct.config import CorrectionConfig
 from handsim.correct.cost import Objective
+from handsim.correct.guidance import Guidance, guidance_schedule
 from handsim.correct.reference import Reference, moved_roots, world_roots
 
 
@@ -114,8 +121,13 @@ class AnnealedSampler:
         self.release = reference.switches.release_frame
         layout = reference.scene.layout
         self.supports = np.array([o.support_eq for o in layout.objects if o.support_eq >= 0], dtype=np.int64)
+        self.guidance = Guidance(reference, config, model)
+        self.gains = guidance_schedule(config)
+        self.first_unguided = int(np.argmax(self.gains == 0.0))  # the schedule ends at zero
 
-    def controls(self, residual: np.ndarray, frames: np.ndarray, start: Start) -> np.ndarray:
+    def controls(
+        self, residual: np.ndarray, frames: np.ndarray, start: Start, wrench: np.ndarray | None = None
+    ) -> np.ndarray:
         """Per-step rollout controls of residual sequences.
 
         Args:
@@ -124,28 +136,28 @@ class AnnealedSampler:
             frames: Control frames.
             start: The state planned from: mocap bodies not corrected keep its poses, equalities its flags
                 (a support goes off in the steps after the release frame, as the replay core switches it).
+            wrench: Guidance ``xfrc_applied`` per frame (h, 6 · nbody), the same for every sequence
+                (:mod:`handsim.correct.guidance`), or None (no guidance: no such columns).
 
         Returns:
-            (N, h · substeps, nu [+ neq] + 7 · nmocap): ``ctrl``, every equality's flag where the scene
-            releases supports (:data:`~handsim.correct.backend.SWITCHED_CONTROLS`), then every mocap
-            position, then every quaternion.
+            (N, h · substeps, ncontrol): ``ctrl``, the wrenches where given, every equality's flag where the
+            scene releases supports, then every mocap position, then every quaternion: the vector
+            :meth:`spec` names.
         """
         ref = self.reference
         count, h, _ = residual.shape
         nu = self.model.nu
-        neq = self.model.neq if self.release >= 0 else 0
-        mocap = start.mocap
-        out = np.empty((count, h, nu + neq + 7 * self.nmocap))
         ctrl = np.broadcast_to(ref.schedule.ctrl[frames], (count, h, nu)).copy()
         ctrl[..., ref.actuators] += residual[..., : ref.fingers]
-        out[..., :nu] = ctrl
-        if neq:
-            active = np.broadcast_to(start.eq_active, (h, neq)).copy()
+        parts = [ctrl]
+        if wrench is not None:
+            parts.append(np.broadcast_to(wrench, (count, *wrench.shape)))
+        if self.release >= 0:
+            active = np.broadcast_to(start.eq_active, (h, self.model.neq)).copy()
             active[np.ix_(frames > self.release, self.supports)] = 0.0
-            out[..., nu : nu + neq] = active
-        nu += neq  # the mocap columns follow
-        pos = np.broadcast_to(mocap[:, :3], (count, h, self.nmocap, 3)).copy()
-        quat = np.broadcast_to(mocap[:, 3:], (count, h, self.nmocap, 4)).copy()
+            parts.append(np.broadcast_to(active, (count, h, self.model.neq)))
+        pos = np.broadcast_to(start.mocap[:, :3], (count, h, self.nmocap, 3)).copy()
+        quat = np.broadcast_to(start.mocap[:, 3:], (count, h, self.nmocap, 4)).copy()
         if ref.welded:  # the welded roots follow the recording, moved where the wrists are corrected
             roots = self.roots[frames]
             if ref.hands:
@@ -153,16 +165,43 @@ class AnnealedSampler:
             world = world_roots(self.world, np.broadcast_to(roots, (count, *roots.shape[-3:])))
             pos[..., ref.mocap, :] = world[..., :3]
             quat[..., ref.mocap, :] = world[..., 3:]
-        out[..., nu : nu + 3 * self.nmocap] = pos.reshape(count, h, -1)
-        out[..., nu + 3 * self.nmocap :] = quat.reshape(count, h, -1)
-        return np.repeat(out, self.substeps, axis=1)
+        parts += [pos.reshape(count, h, -1), quat.reshape(count, h, -1)]
+        return np.repeat(np.concatenate(parts, axis=-1), self.substeps, axis=1)
 
-    def simulate(self, start: Start, residual: np.ndarray, frames: np.ndarray) -> np.ndarray:
+    def spec(self, guided: bool) -> int:
+        """The ``mjtState`` bits :meth:`controls` sets (with the guidance's wrenches or without)."""
+        spec = SWITCHED_CONTROLS if self.release >= 0 else CONTROLS
+        return int(spec | (mujoco.mjtState.mjSTATE_XFRC_APPLIED if guided else 0))
+
+    def simulate(
+        self, start: Start, residual: np.ndarray, frames: np.ndarray, wrench: np.ndarray | None = None
+    ) -> np.ndarray:
         """``qpos`` at the end of each frame of each residual sequence (N, h, nq) from ``start``."""
-        controls = self.controls(residual, frames, start)
-        states = self.backend.rollout(self.model, start.state, start.warmstart, controls)
-        ends = states[:, self.substeps - 1 :: self.substeps]
-        return ends[..., 1 : 1 + self.model.nq]  # the state's layout: time, qpos, qvel, …
+        return self.futures(start, residual, frames, wrench)[0]
+
+    def futures(
+        self, start: Start, residual: np.ndarray, frames: np.ndarray, wrench: np.ndarray | None = None
+    ) -> tuple[np.ndarray, np.ndarray | None]:
+        """``qpos`` at the end of each frame (N, h, nq), and the sensor data there where the cost reads it.
+
+        Args:
+            start: The state planned from.
+            residual: (N, h, D) at ``frames`` (h,).
+            frames: Control frames.
+            wrench: Guidance wrenches per frame (h, 6 · nbody), or None.
+
+        Returns:
+            The ``qpos``, and the sensor data of the same steps (N, h, nsensordata), or None where the cost
+            does not read it.
+        """
+        controls = self.controls(residual, frames, start, wrench)
+        sensors = self.objective.needs_sensors
+        states, data = self.backend.rollout(
+            self.model, start, controls, self.spec(wrench is not None), sensors
+        )
+        ends = slice(self.substeps - 1, None, self.substeps)
+        qpos = states[:, ends, 1 : 1 + self.model.nq]  # the state's layout: time, qpos, qvel, …
+        return qpos, None if data is None else data[:, ends]
 
     def plan(
         self,
@@ -181,51 +220,111 @@ class AnnealedSampler:
             begin: The committed simulation at ``start``.
         """
         config = self.config
-        knot = config.knot
-        offsets = np.arange(1, frames + 1)
-        indices = start + offsets
+        indices = start + np.arange(1, frames + 1)
         count = nominal.shape[0]
         ramp = np.ones(count)
         if count > 2:
             ramp[1:] = config.near_noise + (1.0 - config.near_noise) * np.arange(count - 1) / (count - 2)
-        on_track = self.objective.drift(begin.state[None, None, 1 : 1 + self.model.nq], indices[:1] - 1)[
-            0
-        ] <= (config.position_scale)
-        centre = nominal
-        best_cost, best, best_drift = math.inf, nominal, math.inf
-        nominal_cost = math.nan
-        rollouts = 0
+        nq = self.model.nq
+        on_track = self.objective.drift(begin.state[None, None, 1 : 1 + nq], indices[:1] - 1)[0] <= (
+            config.position_scale
+        )
+        search = _Search(centre=nominal, best=nominal)
+        qvel = begin.state[1 + nq : 1 + nq + self.model.nv]
         for pass_ in range(1 + config.rescue):
-            if pass_ > 0 and not (on_track and best_drift > config.position_scale):
+            if pass_ > 0 and not (on_track and search.best_drift > config.position_scale):
                 break  # nothing to rescue: the plan keeps the objects on track, or they are off it already
-            centre = best if pass_ > 0 else centre
-            for round_ in range(config.iterations):
-                first = pass_ == 0 and round_ == 0
-                scale = config.anneal**round_ * ramp[1:, None] * self.noise
-                draws = config.samples - 1 - (1 if first else 0)
-                noise = self.rng.standard_normal((draws, count - 1, nominal.shape[1])) * scale
-                candidates = [centre[None]]
-                if first:  # the recording itself from the next knot on: a correction is never forced
-                    zero = np.zeros_like(centre)
-                    zero[0] = centre[0]
-                    candidates.append(zero[None])
-                free = self.reference.clip(centre[1:] + noise)
-                candidates.append(
-                    np.concatenate([np.broadcast_to(centre[:1], (draws, 1, centre.shape[1])), free], 1)
+            if pass_ > 0:
+                search.centre = search.best
+            for round_, gain in enumerate(self.gains):
+                wrench = None
+                if gain > 0:
+                    wrench = self.guidance.wrenches(gain, begin.state[1 : 1 + nq], qvel, start, indices)
+                first = pass_ == 0 and round_ == self.first_unguided
+                self._round(
+                    search,
+                    nominal,
+                    begin,
+                    indices,
+                    config.anneal**round_ * ramp[1:, None] * self.noise,
+                    first,
+                    wrench,
                 )
-                knots = np.concatenate(candidates)
-                residual = self.reference.in_range(interpolate(knots, knot, offsets), indices)
-                qpos = self.simulate(begin, residual, indices)
-                costs = self.objective(qpos, residual, indices)
-                rollouts += knots.shape[0]
-                if first:
-                    nominal_cost = float(costs[0])
-                i = int(np.argmin(costs))
-                if costs[i] < best_cost:
-                    best_cost, best = float(costs[i]), knots[i]
-                    best_drift = float(self.objective.drift(qpos[i : i + 1], indices)[0])
-                spread = max(float(np.median(costs) - costs[i]), 1e-12)
-                weights = np.exp(-(costs - costs[i]) / (config.temperature * spread))
-                centre = np.tensordot(weights / weights.sum(), knots, axes=1)
-                centre[0] = nominal[0]  # the residual already applied: exactly, not a weighted sum of copies
-        return StepPlan(knots=best, cost=best_cost, nominal_cost=nominal_cost, rollouts=rollouts)
+        return StepPlan(
+            knots=search.best,
+            cost=search.best_cost,
+            nominal_cost=search.nominal_cost,
+            rollouts=search.rollouts,
+        )
+
+    def _round(
+        self,
+        search: _Search,
+        nominal: np.ndarray,
+        begin: Start,
+        indices: np.ndarray,
+        scale: np.ndarray,
+        first: bool,
+        wrench: np.ndarray | None,
+    ) -> None:
+        """One round: perturb the centre, simulate, keep the best unguided plan, move the centre (MPPI).
+
+        Args:
+            search: The planning step's state (updated).
+            nominal: The plan the step started from.
+            begin: The committed simulation at the start frame.
+            indices: The frames planned.
+            scale: The round's noise per free knot and element (K − 1, D).
+            first: The step's first unguided round: the nominal plan and the recording are candidates.
+            wrench: The round's guidance wrenches, or None (an unguided round: its plans may be committed).
+        """
+        config, centre = self.config, search.centre
+        extra = [centre[None]]
+        if first:  # the recording itself from the next knot on: a correction is never forced
+            if self.first_unguided > 0:  # guided rounds moved the centre: the nominal plan is scored too
+                extra.append(nominal[None])
+            zero = np.zeros_like(centre)
+            zero[0] = centre[0]
+            extra.append(zero[None])
+        draws = config.samples - len(extra)
+        noise = self.rng.standard_normal((draws, centre.shape[0] - 1, centre.shape[1])) * scale
+        free = self.reference.clip(centre[1:] + noise)
+        head = np.broadcast_to(centre[:1], (draws, 1, centre.shape[1]))
+        knots = np.concatenate([*extra, np.concatenate([head, free], 1)])
+        offsets = indices - indices[0] + 1
+        residual = self.reference.in_range(interpolate(knots, config.knot, offsets), indices)
+        qpos, sensors = self.futures(begin, residual, indices, wrench)
+        costs = self.objective(qpos, residual, indices, sensors)
+        search.rollouts += knots.shape[0]
+        i = int(np.argmin(costs))
+        if wrench is None:  # a plan committed has been simulated without guidance
+            if first:
+                search.nominal_cost = float(costs[len(extra) - 2])
+            if costs[i] < search.best_cost:
+                search.best_cost, search.best = float(costs[i]), knots[i]
+                search.best_drift = float(self.objective.drift(qpos[i : i + 1], indices)[0])
+        spread = max(float(np.median(costs) - costs[i]), 1e-12)
+        weights = np.exp(-(costs - costs[i]) / (config.temperature * spread))
+        search.centre = np.tensordot(weights / weights.sum(), knots, axes=1)
+        search.centre[0] = nominal[0]  # the residual already applied: exactly, not a weighted sum of copies
+
+
+@dataclass
+class _Search:
+    """A planning step's search so far: the next round's centre and the best unguided plan simulated.
+
+    Attributes:
+        centre: The next round's mean plan (K, D).
+        best: The cheapest plan simulated without guidance.
+        best_cost: Its cost (inf before any).
+        best_drift: Its largest object distance from the goal over the horizon, m.
+        nominal_cost: The nominal plan's cost (unguided).
+        rollouts: Candidates simulated.
+    """
+
+    centre: np.ndarray
+    best: np.ndarray
+    best_cost: float = math.inf
+    best_drift: float = math.inf
+    nominal_cost: float = math.nan
+    rollouts: int = 0
