@@ -192,3 +192,12 @@ def test_a_truncated_episode_is_never_judged(tmp_path):
         "the last frame)"
     )
     assert result.grip is None and result.summary["grip_opposition"] is None
+
+
+def test_the_closure_tests_cross_products_are_numpys_bitwise():
+    from handsim.sim.grip_check import _cross
+
+    rng = np.random.default_rng(7)
+    for left, right in (((6, 3), (6, 3)), ((6, 3), (1, 3)), ((6, 1, 3), (6, 8, 3))):
+        a, b = rng.normal(size=left), rng.normal(size=right)
+        assert np.array_equal(_cross(a, b), np.cross(a, b))
