@@ -280,7 +280,8 @@ def register(commands: Commands) -> None:
         "and glove grasps (a GraspDB14 recording or episode, a scripted grasp: the placed object held "
         "through the hold window). Given a dataset folder and an output folder, corrects every trial through "
         "the dataset runner (resumable; local cores or Ray) and writes OUT/correction.html. "
-        "Deterministic for a seed; the result does not depend on the threads.",
+        "Deterministic for a seed; the result does not depend on the threads. The words it prints "
+        "(corrected, not corrected, implausible, size …) are defined in docs/concepts.md.",
     )
     parser.add_argument(
         "trial",
