@@ -1211,14 +1211,19 @@ def test_row_a_switch_off_in_every_row_is_flagged(capsys, tmp_path):
     )
 
 
-def test_row_a_corrupted_value_in_the_records_is_noted_naming_record_and_key(capsys, tmp_path):
+def _cube_report(tmp_path, capsys) -> tuple[Path, Path, dict]:
+    """A report of one short scripted cube grasp: its folder, its records file and the one record."""
     from tests.helpers import write_short_grasp
 
     out = tmp_path / "out"
     grasp = write_short_grasp(tmp_path / "data", "cube")
     assert cli(["report", str(grasp), "-o", str(out), "--workers", "1", "--frames", "0"], capsys)[0] == 0
     records = out / "records.jsonl"
-    record = json.loads(records.read_text())
+    return out, records, json.loads(records.read_text())
+
+
+def test_row_a_corrupted_value_in_the_records_is_noted_naming_record_and_key(capsys, tmp_path):
+    out, records, record = _cube_report(tmp_path, capsys)
     record["summary"]["max_penetration_mm"] = "lots"
     record["summary"]["valid"] = "yes"
     records.write_text(json.dumps(record) + "\n")
@@ -1234,13 +1239,7 @@ def test_row_a_corrupted_value_in_the_records_is_noted_naming_record_and_key(cap
 
 
 def test_row_per_frame_lists_in_the_records_are_read_as_lists_of_numbers(capsys, tmp_path):
-    from tests.helpers import write_short_grasp
-
-    out = tmp_path / "out"
-    grasp = write_short_grasp(tmp_path / "data", "cube")
-    assert cli(["report", str(grasp), "-o", str(out), "--workers", "1", "--frames", "0"], capsys)[0] == 0
-    records = out / "records.jsonl"
-    record = json.loads(records.read_text())
+    out, records, record = _cube_report(tmp_path, capsys)
     record.setdefault("trajectory_quality", {})["spike_frames"] = [3, 17]  # a glove recording's spikes
     records.write_text(json.dumps(record) + "\n")
     code, first, stdout = cli(["report", "--render-only", str(out)], capsys)
