@@ -1,7 +1,8 @@
 """Benchmark: the correction's rollouts against raw ``mj_step``, and a whole correction of sequence 20.
 
 Run from the repository root: ``PYTHONPATH=. python benchmarks/correct.py [--repeats N] [--threads N]``
-(``--no-full`` skips the whole correction, which takes minutes).
+(``--no-full`` skips the whole correction, which takes minutes; ``--arctic`` adds a correction of the
+ARCTIC-shaped benchmark scene).
 
 Two numbers, in one run, on the bundled Tzionas sequence 20 (right hand + 53 mm cube, 617 frames at 100 Hz):
 
@@ -17,6 +18,11 @@ Two numbers, in one run, on the bundled Tzionas sequence 20 (right hand + 53 mm 
 * ``correct_seconds_per_recorded_second=``: the wall time of ``handsim.correct.correct`` on the whole
   sequence with the default (``standard``) parameters on ``--threads`` threads, over the recording's 6.16 s
   (the before and after replays included; loading the trial not).
+
+With ``--arctic``, ``arctic_followed_before=`` and ``arctic_followed_after=``: the fraction of the manipulated
+frames in which the ARCTIC-shaped benchmark scene's box follows its recording (the replay's track verdict,
+:func:`handsim.sim.track.track_verdict`) in pure replay and after a correction with the ``quick`` budget
+(two mean-shape MANO hands carry the box and lift its lid: ``benchmarks/arctic_recording.py``).
 
 The load average is printed beside them: on a machine shared with other work the wall-clock numbers are
 what the machine gave this run.
@@ -38,7 +44,7 @@ from handsim.correct.planner import committed_driver
 from handsim.correct.reference import build_reference
 from handsim.correct.sampler import AnnealedSampler
 from handsim.sim.stepper import Stepper
-from handsim.trials import load_trial
+from handsim.trials import LoadedTrial, Trial, load_trial
 
 BEST = min
 """The statistic of the repeats: the least time (other work on a shared machine only adds time)."""
@@ -97,11 +103,39 @@ def rollout_ratio(loaded, config: CorrectionConfig, threads: int, repeats: int) 
     return rollout_rate / raw_rate
 
 
+def arctic_correction(threads: int) -> tuple[float, float]:
+    """The ARCTIC-shaped scene's followed fraction in pure replay and after a ``quick`` correction."""
+    from arctic_recording import arctic_case_scene  # benchmarks/arctic_recording.py
+
+    from handsim.correct.config import BUDGETS
+
+    case = arctic_case_scene()
+    trial = Trial("arctic", "benchmarks/arctic_recording.py", None, ())
+    loaded = LoadedTrial(trial, case.scene, case.trajectory, "two mean-shape MANO hands", ())
+    budget = BUDGETS["quick"]
+    start = time.perf_counter()
+    correction = correct(
+        loaded, CorrectionConfig(samples=budget.samples, iterations=budget.iterations), threads=threads
+    )
+    seconds = time.perf_counter() - start
+    before, after = (r.summary.get("track_followed_fraction") for r in (correction.before, correction.after))
+    score = correction.score
+    print(
+        f"ARCTIC-shaped scene: corrected in {seconds:.1f} s on {threads} threads; {score.status}: "
+        f"{score.reason}; fingers {score.finger_rms_deg:.2f}° RMS, wrist "
+        f"{score.wrist_position_rms_mm:.1f} mm and {score.wrist_rotation_rms_deg:.2f}° RMS"
+    )
+    return float("nan") if before is None else before, float("nan") if after is None else after
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--repeats", type=int, default=7)
     parser.add_argument("--threads", type=int, default=2)
     parser.add_argument("--no-full", action="store_true", help="skip the whole correction (minutes)")
+    parser.add_argument(
+        "--arctic", action="store_true", help="also correct the ARCTIC-shaped scene (minutes)"
+    )
     args = parser.parse_args()
     print(f"start: {_load()}")
     loaded = load_trial(TZIONAS_DIR / "Models" / "20" / "Model_Hand_R.MOTION")
@@ -125,6 +159,11 @@ def main() -> None:
         print(f"  ({_load()})")
     print(f"rollout_vs_raw_1thread={ratio:.3f}")
     print(f"correct_seconds_per_recorded_second={per_second:.2f}")
+    if args.arctic:
+        before, after = arctic_correction(args.threads)
+        print(f"  ({_load()})")
+        print(f"arctic_followed_before={before:.3f}")
+        print(f"arctic_followed_after={after:.3f}")
 
 
 if __name__ == "__main__":
