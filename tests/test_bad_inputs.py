@@ -1241,6 +1241,7 @@ def test_row_a_corrupted_value_in_the_records_is_noted_naming_record_and_key(cap
 def test_row_per_frame_lists_in_the_records_are_read_as_lists_of_numbers(capsys, tmp_path):
     out, records, record = _cube_report(tmp_path, capsys)
     record.setdefault("trajectory_quality", {})["spike_frames"] = [3, 17]  # a glove recording's spikes
+    record["summary"]["grip_links"] = ["th_tmc", "if_dip"]  # names, not numbers
     records.write_text(json.dumps(record) + "\n")
     code, first, stdout = cli(["report", "--render-only", str(out)], capsys)
     assert (code, first) == (0, "")

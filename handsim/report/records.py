@@ -94,11 +94,13 @@ def value_notes(path: Path, number_in_file: int, record: dict) -> list[str]:
                 continue
             if key in YES_NO_KEYS and not isinstance(value, bool):
                 expected = "true or false"
+            elif not key.endswith(NUMBER_KEY_ENDINGS):
+                continue
             elif isinstance(value, list):  # per-frame lists (spike_frames): each a number
                 if all(number(v) is not None for v in value):
                     continue
                 expected = "a list of finite numbers"
-            elif key.endswith(NUMBER_KEY_ENDINGS) and number(value) is None:
+            elif number(value) is None:
                 expected = "a finite number"
             else:
                 continue
