@@ -26,6 +26,7 @@ def test_demo_checks_the_default_hand_and_reports_on_the_bundled_tzionas_sample(
     out = capsys.readouterr().out
     assert "27 actuated DoFs" in out and "0 MuJoCo warnings" in out
     assert "synthetic scripted grasps" in out and "not recordings" in out
+    assert not [line for line in out.splitlines() if line.startswith("note")]  # records it reads cleanly
     records = [json.loads(line) for line in (out_dir / "records.jsonl").read_text().splitlines()]
     assert sorted((r["id"], r["kind"], r["status"]) for r in records) == [
         ("demo/cube.grasp.json#1", "scripted", "ok"),  # each scripted grasp: one grasp episode
