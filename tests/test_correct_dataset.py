@@ -129,3 +129,13 @@ def test_the_ray_backend_gives_bitwise_the_records_of_the_local_pool(dataset, lo
     assert _without_timing(read_records(tmp_path)) == _without_timing(records.values())
     ball = read_records(tmp_path)
     assert {r["id"] for r in ball} == set(records)
+
+
+def test_options_of_one_trial_are_refused_for_a_dataset_run(dataset, tmp_path, capsys):
+    out = tmp_path / "out"
+    assert main(["correct", str(dataset), "-o", str(out), "--density", "500", "--grasp", "1"]) == 2
+    assert capsys.readouterr().err.splitlines()[0] == (
+        "handsim correct: error: --density, --grasp: options of one trial's correction, not of a dataset run "
+        "(each worker corrects on one thread; a dataset's trials take only --mano-dir and --templates)"
+    )
+    assert not out.exists()

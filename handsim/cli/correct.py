@@ -11,6 +11,7 @@ not judged). Exit codes: 0 the file was written (whatever the verdict: it is pri
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import math
 import sys
 import time
@@ -28,6 +29,7 @@ from handsim.cli._common import (
     output_dir,
     output_file,
     positive_int,
+    trial_options_from_args,
     usage_error,
     write_text,
 )
@@ -146,19 +148,11 @@ def _correct(args: argparse.Namespace) -> int:
         return usage_error("correct", f"-o {args.output}: a corrected trial's name ends in {SUFFIX!r}")
     # lazy: the simulation stack (MuJoCo), only when correcting
     from handsim.correct import correct, write_corrected
-    from handsim.trials import TrialError, load_trial
+    from handsim.trials import TrialError, find_with_options, load_trial
 
+    options = dataclasses.replace(trial_options_from_args(args), grasp=args.grasp)
     try:
-        loaded = load_trial(
-            args.trial,
-            progress=True,
-            density=args.density,
-            mass=args.mass,
-            force=args.force,
-            mano_dir=args.mano_dir,
-            templates=args.templates,
-            grasp=args.grasp,
-        )
+        loaded = load_trial(find_with_options(args.trial, options), progress=True)
     except TrialError as exc:
         return usage_error("correct", str(exc))
     trial = loaded.trial
@@ -187,15 +181,33 @@ def _correct(args: argparse.Namespace) -> int:
     return 0
 
 
+_ONE_TRIAL_ONLY = (
+    ("density", "--density"),
+    ("mass", "--mass"),
+    ("force", "--force"),
+    ("grasp", "--grasp"),
+    ("threads", "--threads"),
+    ("json", "--json"),
+)
+"""Options of a single correction that a dataset run does not take (``dest``, flag)."""
+
+
 def _correct_dataset(args: argparse.Namespace, config: CorrectionConfig) -> int:
     """``handsim correct DATASET -o OUTDIR``: every trial corrected by the dataset runner, then the report."""
     # lazy: the runner (MuJoCo) and the trial loaders, only for a run
     from handsim.runner.correction_job import CorrectionJob
     from handsim.runner.execute import run_dataset
     from handsim.runner.records import read_records
-    from handsim.trials import TrialOptions, discover, select
+    from handsim.trials import discover, select
 
-    discovery = discover(args.trial, TrialOptions(mano_dir=args.mano_dir, templates=args.templates))
+    single = [flag for dest, flag in _ONE_TRIAL_ONLY if getattr(args, dest, None) not in (None, False)]
+    if single:
+        return usage_error(
+            "correct",
+            f"{', '.join(single)}: options of one trial's correction, not of a dataset run (each worker "
+            "corrects on one thread; a dataset's trials take only --mano-dir and --templates)",
+        )
+    discovery = discover(args.trial, trial_options_from_args(args))
     entries = select(discovery.entries, args.only, args.limit)
     if not entries:
         return usage_error(
