@@ -66,7 +66,9 @@ class Guidance:
         self.model = model
         self.dt = float(reference.schedule.frame_dt)
         self.objects = reference.objects
-        self.bodies = [int(model.jnt_bodyid[_free_joint(model, o.qpos)]) for o in self.objects]
+        joints = [_free_joint(model, o.qpos) for o in self.objects]
+        self.bodies = [int(model.jnt_bodyid[j]) for j in joints]
+        self.dofs = [int(model.jnt_dofadr[j]) for j in joints]
         self.mass = [float(model.body_subtreemass[b]) for b in self.bodies]
         self.gravity = np.array(model.opt.gravity, dtype=float)
         step = config.knot
@@ -93,8 +95,9 @@ class Guidance:
             return out.reshape(frames.shape[0], -1)
         t = (frames - start)[:, None] * self.dt
         omega = GUIDANCE_RATE
-        for obj, body, mass, accel in zip(self.objects, self.bodies, self.mass, self.accel, strict=True):
-            dof = int(self.model.jnt_dofadr[_free_joint(self.model, obj.qpos)])
+        for obj, body, dof, mass, accel in zip(
+            self.objects, self.bodies, self.dofs, self.mass, self.accel, strict=True
+        ):
             p0, v0 = qpos[obj.qpos : obj.qpos + 3], qvel[dof : dof + 3]
             goal = obj.pose[frames, :3]
             goal_v = (obj.pose[np.minimum(frames + 1, obj.pose.shape[0] - 1), :3] - goal) / self.dt
