@@ -4,8 +4,8 @@ Fast by construction: the bundled scripted tennis-ball grasp (3.3 s, its ball pl
 through its hold window) corrected with a few samples over a short horizon. What is pinned: the goal is the
 ball's placed pose over the release … window's end and planning starts where the hand can act on it; the
 committed simulation is the replay of the corrected recording (``correct`` checks it), and the corrected file
-replays bit for bit through ``load_trial`` and ``handsim replay``; a grasp that slips out is reported "not
-corrected" with the replay's reason.
+replays bit for bit through ``load_trial`` and ``handsim replay``; a grasp that slips out, or whose hold the
+replay's grip check rejects, is reported "not corrected" with the replay's reason.
 """
 
 from __future__ import annotations
@@ -19,7 +19,8 @@ import pytest
 from handsim.assets import ASSETS_DIR
 from handsim.cli import main
 from handsim.correct import CorrectionConfig, correct, write_corrected
-from handsim.correct.hold import HELD, NOT_HELD
+from handsim.correct.hold import HELD, NOT_HELD, NOT_JUDGED
+from handsim.correct.score import Tracking, hold_verdict
 from handsim.io.corrected import read_corrected
 from handsim.sim.replay import ReplayConfig, replay
 from handsim.trials import load_trial
@@ -106,3 +107,19 @@ def test_the_cli_corrects_a_glove_grasp(tmp_path, capsys):
     assert any(line.startswith("before") and "held" in line for line in printed.splitlines())
     assert any(line.startswith("corrected") for line in printed.splitlines())
     assert out.is_file()
+
+
+def _hold_tracking(track: str, reason: str) -> Tracking:
+    return Tracking(1.0, 2.7, 7.2, 3.0, track, reason, 1.0)
+
+
+def test_a_hold_the_grip_check_rejects_is_not_corrected_and_a_short_window_not_judged():
+    config = CorrectionConfig()
+    before = _hold_tracking(NOT_HELD, "lost at 2.94 s: slipped 2.0 cm relative to the hand")
+    no_grip = _hold_tracking(NOT_JUDGED, "not judged: no grip: … in 0% of the hold window")
+    status, reason = hold_verdict(before, no_grip, config, gripped=True)
+    assert status == "not corrected"
+    assert "grip check accepts: not judged: no grip" in reason and "mean displacement 2.7 mm" in reason
+    short = _hold_tracking(NOT_JUDGED, "not judged: the hold window lasts 0.10 s after the release")
+    status, reason = hold_verdict(short, short, config, gripped=False)
+    assert status == "not judged" and reason.endswith("lasts 0.10 s after the release")

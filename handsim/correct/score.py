@@ -11,6 +11,11 @@ replay's own verdict, and the moments where the correction is largest. The verdi
 * **not judged**: the replay does not judge the track (the recording never moves the object beyond the
   tolerance, or the run diverged).
 
+A glove hold's verdict reads the replay's hold the same way: **corrected** when the corrected replay holds
+the object through the window, **not corrected** when it loses it or when its grip check does not accept the
+hold (no opposing grip, a wedge, a link through the object: the correction did not make the grasp hold),
+**not judged** only when no motion of the fingers could be judged (a window too short after the release).
+
 A correction is **large** (the recording implausible) beyond the acceptance's bounds
 (:data:`PLAUSIBLE_FINGER_RATIO` times pure replay's own joint tracking error, or the wrist's
 :data:`PLAUSIBLE_WRIST_MM` / :data:`PLAUSIBLE_WRIST_DEG` RMS): then the recording needed more than the
@@ -238,7 +243,9 @@ def score(
     if wr_rms is not None and wr_rms > PLAUSIBLE_WRIST_DEG:
         large.append(f"wrist turned {wr_rms:.1f}° RMS (small is ≤ {PLAUSIBLE_WRIST_DEG:g}°)")
     status, reason = (
-        _verdict(now, config, wrist) if reference.goal is None else _hold_verdict(was, now, config)
+        _verdict(now, config, wrist)
+        if reference.goal is None
+        else hold_verdict(was, now, config, gripped=after.grip is not None)
     )
     return CorrectionScore(
         status=status,
@@ -298,18 +305,36 @@ def implausible_text(score: CorrectionScore) -> str | None:
     return f"the recording needs a large correction: {score.large_reason}" if score.large else None
 
 
-def _hold_verdict(before: Tracking, after: Tracking, config: CorrectionConfig) -> tuple[str, str]:
-    """A glove correction's verdict: the corrected replay holds the object through the window, or not."""
+def hold_verdict(
+    before: Tracking, after: Tracking, config: CorrectionConfig, *, gripped: bool
+) -> tuple[str, str]:
+    """A glove correction's verdict: the corrected replay holds the object through the window, or not.
+
+    ``gripped``: the corrected replay's grip check ran (the hold was judged on the object's motion, then
+    examined for a grip). A hold it turned into "not judged" (no opposing grip, a wedge, a link through the
+    object) is a correction that did not make the grasp hold: **not corrected**, with the check's reason.
+    Only a hold the replay cannot judge whatever the fingers do (its window too short after the release, a
+    placement that penetrates the hand) leaves the correction **not judged**.
+    """
+    bounds = f"fingers ≤ {math.degrees(config.finger_bound):.1f}° per joint"
+    best = (
+        f"best found: within 1 cm of its placement in {after.within_1cm * 100:.1f} % of the hold's frames, "
+        f"mean displacement {after.mean_drift_mm:.1f} mm"
+    )
     if after.track == HELD:
         what = "holds already in pure replay" if before.track == HELD else "now holds"
         return "corrected", f"the grasp {what} through its hold window: {after.track_reason}"
     if after.track == NOT_HELD:
         return (
             "not corrected",
-            f"no correction within the bounds (fingers ≤ {math.degrees(config.finger_bound):.1f}° per joint) "
-            f"was found that keeps the object in the hand: {after.track_reason}; best found: within 1 cm of "
-            f"its placement in {after.within_1cm * 100:.1f} % of the hold's frames, mean displacement "
-            f"{after.mean_drift_mm:.1f} mm",
+            f"no correction within the bounds ({bounds}) was found that keeps the object in the hand: "
+            f"{after.track_reason}; {best}",
+        )
+    if gripped:
+        return (
+            "not corrected",
+            f"no correction within the bounds ({bounds}) was found whose hold the replay's grip check "
+            f"accepts: {after.track_reason}; {best}",
         )
     return "not judged", f"the replay does not judge the hold: {after.track_reason}"
 
