@@ -24,6 +24,13 @@ frames in which the ARCTIC-shaped benchmark scene's box follows its recording (t
 :func:`handsim.sim.track.track_verdict`) in pure replay and after a correction with the ``quick`` budget
 (two mean-shape MANO hands carry the box and lift its lid: ``benchmarks/arctic_recording.py``).
 
+With ``--warp`` (``handsim[warp]``; a GPU, or the device ``$HANDSIM_WARP_DEVICE`` names):
+``warp_rollouts_vs_cpu_threads=``, the same planning step's rollouts on MuJoCo Warp (every sequence a world
+of one batch, kernels compiled and the CUDA graph captured before timing) over ``CpuRollout`` on
+``--threads`` threads (16 on the GPU machine, as the issue asks), and
+``warp_correct_seconds_per_recorded_second=``, the whole correction planned on Warp. ``--samples N`` sets the
+batch: a GPU pays only for large ones (docs/gpu.md).
+
 The load average is printed beside them: on a machine shared with other work the wall-clock numbers are
 what the machine gave this run.
 """
@@ -57,27 +64,32 @@ def _load() -> str:
     return f"load average {one:.2f} (1 min), {five:.2f} (5 min) on {os.cpu_count()} cores"
 
 
-def rollout_ratio(loaded, config: CorrectionConfig, threads: int, repeats: int) -> float:
-    """Rollout steps/s on ``threads`` threads over raw single-thread ``mj_step``'s (module docstring)."""
+def planning_batch(loaded, config: CorrectionConfig):
+    """One planning step's rollouts from frame :data:`START`: (model, start, controls, spec, substeps)."""
     reference = build_reference(loaded.scene, loaded.trajectory, config)
     stepper = Stepper(loaded.scene, reference.schedule.substeps)
     driver = committed_driver(reference, config, np.zeros((reference.frames, reference.size)), stepper)
     driver.reset()
     for k in range(START):
         driver.advance(driver.schedule.ctrl[k + 1])
-    model, substeps = stepper.model, reference.schedule.substeps
+    model = stepper.model
     begin = start_of(model, stepper.data)
     frames = START + 1 + np.arange(config.horizon)
     rng = np.random.default_rng(0)
     residual = rng.normal(0.0, 0.01, (config.samples, config.horizon, reference.size))
-    backend = CpuRollout(threads)
-    sampler = AnnealedSampler(reference, config, backend, model, rng)
+    sampler = AnnealedSampler(reference, config, CpuRollout(1), model, rng)
     controls = sampler.controls(residual, frames, begin)
+    return model, begin, controls, sampler.spec(guided=False), reference.schedule.substeps
+
+
+def rollout_ratio(loaded, config: CorrectionConfig, threads: int, repeats: int) -> float:
+    """Rollout steps/s on ``threads`` threads over raw single-thread ``mj_step``'s (module docstring)."""
+    model, begin, controls, spec, substeps = planning_batch(loaded, config)
+    backend = CpuRollout(threads)
     nu = model.nu
     steps = controls.shape[0] * controls.shape[1]
     raw_data = mujoco.MjData(model)
     rollout_times, raw_times = [], []
-    spec = sampler.spec(guided=False)
     backend.rollout(model, begin, controls, spec)  # warm up: the thread pool and the per-thread data
     for _ in range(repeats):
         start = time.perf_counter()
@@ -101,6 +113,40 @@ def rollout_ratio(loaded, config: CorrectionConfig, threads: int, repeats: int) 
         f"(1 thread; least of {repeats})"
     )
     return rollout_rate / raw_rate
+
+
+def warp_comparison(loaded, config: CorrectionConfig, threads: int, repeats: int) -> tuple[float, float]:
+    """MuJoCo Warp against ``threads`` CPU threads: one planning step's rollouts, then the whole correction.
+
+    Returns:
+        The rollouts' steps/s on Warp over the CPU threads', and the correction's seconds per recorded second
+        on Warp (its kernels compiled before the clock starts).
+    """
+    from handsim.correct.warp_backend import WarpRollout
+
+    model, begin, controls, spec, _ = planning_batch(loaded, config)
+    steps = controls.shape[0] * controls.shape[1]
+    rates = {}
+    for name, backend in (("cpu", CpuRollout(threads)), ("warp", WarpRollout())):
+        backend.rollout(model, begin, controls, spec)  # warm up: threads, or Warp's kernels and graph
+        times = []
+        for _ in range(repeats):
+            start = time.perf_counter()
+            backend.rollout(model, begin, controls, spec)
+            times.append(time.perf_counter() - start)
+        rates[name] = steps / BEST(times)
+        device = getattr(backend, "device", f"{threads} threads")
+        print(f"rollouts on {name} ({device}): {rates[name]:.0f} steps/s ({config.samples} sequences)")
+        backend.close()
+    start = time.perf_counter()
+    correction = correct(loaded, config, backend="warp")
+    seconds = time.perf_counter() - start
+    recorded = float(correction.reference.schedule.times[-1])
+    print(
+        f"correction on MuJoCo Warp: {seconds:.1f} s for {recorded:.2f} s recorded; cube within 1 cm "
+        f"{correction.score.after.within_1cm * 100:.1f} % ({correction.score.status})"
+    )
+    return rates["warp"] / rates["cpu"], seconds / recorded
 
 
 def arctic_correction(threads: int) -> tuple[float, float]:
@@ -136,10 +182,17 @@ def main() -> None:
     parser.add_argument(
         "--arctic", action="store_true", help="also correct the ARCTIC-shaped scene (minutes)"
     )
+    parser.add_argument(
+        "--warp",
+        action="store_true",
+        help="also run the rollouts and the correction on MuJoCo Warp against --threads CPU threads "
+        "(handsim[warp]; a GPU, or $HANDSIM_WARP_DEVICE)",
+    )
+    parser.add_argument("--samples", type=int, default=None, help="samples per round (default: the budget's)")
     args = parser.parse_args()
     print(f"start: {_load()}")
     loaded = load_trial(TZIONAS_DIR / "Models" / "20" / "Model_Hand_R.MOTION")
-    config = CorrectionConfig()
+    config = CorrectionConfig() if args.samples is None else CorrectionConfig(samples=args.samples)
     ratio = rollout_ratio(loaded, config, args.threads, args.repeats)
     print(f"  ({_load()})")
     per_second = float("nan")
@@ -164,6 +217,11 @@ def main() -> None:
         print(f"  ({_load()})")
         print(f"arctic_followed_before={before:.3f}")
         print(f"arctic_followed_after={after:.3f}")
+    if args.warp:
+        versus, warp_per_second = warp_comparison(loaded, config, args.threads, args.repeats)
+        print(f"  ({_load()})")
+        print(f"warp_rollouts_vs_cpu_threads={versus:.3f}")
+        print(f"warp_correct_seconds_per_recorded_second={warp_per_second:.2f}")
 
 
 if __name__ == "__main__":

@@ -25,9 +25,10 @@ import handsim  # noqa: F401  (registers the environments)
 from handsim.assets import TZIONAS_DIR
 from handsim.cli import main
 from handsim.correct import CorrectionConfig, CorrectionError, correct, write_corrected
-from handsim.correct.backend import CpuRollout, rollout_backend, start_of
+from handsim.correct.backend import CpuRollout, start_of
 from handsim.correct.planner import committed_driver
 from handsim.correct.reference import build_reference
+from handsim.correct.rollouts import rollout_backend
 from handsim.correct.sampler import AnnealedSampler
 from handsim.correct.trial_file import corrected_bytes
 from handsim.errors import FormatError, InputFileError
@@ -201,7 +202,8 @@ def test_config_raises_error_naming_the_bad_parameter(change, message):
 
 
 def test_an_unknown_backend_is_refused_listing_the_backends():
-    with pytest.raises(CorrectionError, match=r"unknown rollout backend 'gpu'; backends are \['cpu'\]"):
+    listed = r"unknown rollout backend 'gpu'; backends are \['cpu', 'warp'\]"
+    with pytest.raises(CorrectionError, match=listed):
         rollout_backend("gpu")
 
 

@@ -139,3 +139,6 @@ def test_options_of_one_trial_are_refused_for_a_dataset_run(dataset, tmp_path, c
         "(each worker corrects on one thread; a dataset's trials take only --mano-dir and --templates)"
     )
     assert not out.exists()
+    assert main(["correct", str(dataset), "-o", str(out), "--rollouts", "warp"]) == 2
+    assert capsys.readouterr().err.startswith("handsim correct: error: --rollouts: options of one trial's")
+    assert not out.exists()

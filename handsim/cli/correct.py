@@ -77,11 +77,13 @@ def print_score(score: CorrectionScore) -> None:
         )
     _line("before", _tracking_text(score.before, score.objective))
     _line("after", _tracking_text(score.after, score.objective))
+    wrist = score.wrist_position_rms_mm is not None
     for i, m in enumerate(score.largest):
         _line(
             "largest" if i == 0 else "",
             f"{m.time_s:6.2f} s (frame {m.frame}): fingers {m.finger_rms_deg:.2f}° RMS, "
-            f"{m.finger_max_deg:.2f}° max; wrist {m.wrist_mm:.1f} mm, {m.wrist_deg:.2f}°",
+            f"{m.finger_max_deg:.2f}° max"
+            + (f"; wrist {m.wrist_mm:.1f} mm, {m.wrist_deg:.2f}°" if wrist else ""),
         )
     _line(score.status, score.reason)
     if score.large:
@@ -150,6 +152,10 @@ def _correct(args: argparse.Namespace) -> int:
     from handsim.correct import correct, write_corrected
     from handsim.trials import TrialError, find_with_options, load_trial
 
+    if args.rollouts == "warp":  # before the trial loads: a missing MuJoCo Warp is said at once
+        from handsim.correct.warp_backend import import_warp
+
+        import_warp()
     options = dataclasses.replace(trial_options_from_args(args), grasp=args.grasp)
     try:
         loaded = load_trial(find_with_options(args.trial, options), progress=True)
@@ -167,7 +173,9 @@ def _correct(args: argparse.Namespace) -> int:
             last[0] = now
             print(f"{'':<{LABEL}}frame {done}/{frames} ({now:.0f} s)", file=sys.stderr, flush=True)
 
-    correction = correct(loaded, config, threads=args.threads, progress=progress)
+    correction = correct(
+        loaded, config, backend=args.rollouts or "cpu", threads=args.threads, progress=progress
+    )
     _print_correction(correction, time.perf_counter() - started)
     _line("wrote", str(write_corrected(args.output, correction)))
     if args.json:
@@ -188,6 +196,7 @@ _ONE_TRIAL_ONLY = (
     ("grasp", "--grasp"),
     ("threads", "--threads"),
     ("json", "--json"),
+    ("rollouts", "--rollouts"),
 )
 """Options of a single correction that a dataset run does not take (``dest``, flag)."""
 
@@ -268,8 +277,8 @@ def _print_correction(correction: Correction, seconds: float) -> None:
     _line(
         "method",
         f"annealed MPPI in receding horizon: {config.samples} samples × {config.iterations} rounds, horizon "
-        f"{config.horizon} frames, seed {config.seed}; {plan.rollouts} rollouts on {correction.threads} "
-        f"thread(s)",
+        f"{config.horizon} frames, seed {config.seed}; {plan.rollouts} rollouts on "
+        + (f"{correction.threads} thread(s)" if correction.backend == "cpu" else "MuJoCo Warp"),
     )
     per = seconds / recorded if recorded > 0 else math.nan
     _line("time", f"{seconds:.1f} s for {recorded:.2f} s recorded ({per:.1f} s per recorded second)")
@@ -292,7 +301,8 @@ def register(commands: Commands) -> None:
         "and glove grasps (a GraspDB14 recording or episode, a scripted grasp: the placed object held "
         "through the hold window). Given a dataset folder and an output folder, corrects every trial through "
         "the dataset runner (resumable; local cores or Ray) and writes OUT/correction.html. "
-        "Deterministic for a seed; the result does not depend on the threads. The words it prints "
+        "Deterministic for a seed with the default cpu rollouts; the result does not depend on the threads. "
+        "The words it prints "
         "(corrected, not corrected, implausible, size …) are defined in docs/concepts.md.",
     )
     parser.add_argument(
@@ -339,10 +349,7 @@ def register(commands: Commands) -> None:
         "--no-wrist", action="store_true", help="correct the fingers only, not the recorded wrist pose"
     )
     _add_guidance_options(parser, default)
-    parser.add_argument(
-        "--threads", type=positive_int, default=None, metavar="N",
-        help="rollout threads (default: $HANDSIM_THREADS, else every core); the result does not depend on it",
-    )  # fmt: skip
+    _add_rollout_options(parser)
     parser.add_argument(
         "--json",
         type=output_file,
@@ -354,6 +361,20 @@ def register(commands: Commands) -> None:
     add_arctic_options(parser)
     _add_dataset_options(parser)
     parser.set_defaults(func=_correct, simulates=True, command_parser=parser)
+
+
+def _add_rollout_options(parser: argparse.ArgumentParser) -> None:
+    """Where one trial's candidates are simulated: the backend and its threads."""
+    parser.add_argument(
+        "--threads", type=positive_int, default=None, metavar="N",
+        help="rollout threads (default: $HANDSIM_THREADS, else every core); the result does not depend on it",
+    )  # fmt: skip
+    parser.add_argument(
+        "--rollouts", choices=("cpu", "warp"), default=None,
+        help="where the candidates are simulated: cpu (default: mujoco.rollout on --threads threads, bitwise "
+        "deterministic) or warp (MuJoCo Warp on a GPU, pip install 'handsim[warp]'; float32, so the plan may "
+        "differ from run to run; the corrected file still replays bit for bit)",
+    )  # fmt: skip
 
 
 def _output(text: str) -> Path:

@@ -7,7 +7,8 @@
 * :class:`CorrectionConfig` — every parameter with its reason; :data:`BUDGETS` — named search efforts.
 * The method: annealed MPPI / predictive sampling in receding horizon (:mod:`handsim.correct.sampler`,
   :mod:`handsim.correct.planner`) on batched rollouts from a pluggable backend
-  (:mod:`handsim.correct.backend`: ``mujoco.rollout`` on CPU threads).
+  (:mod:`handsim.correct.rollouts`: ``mujoco.rollout`` on CPU threads, :mod:`handsim.correct.backend`; or
+  MuJoCo Warp, :mod:`handsim.correct.warp_backend`, with ``handsim[warp]``).
 
 Names are bound on first use, so that the command line reads the budgets (:mod:`handsim.correct.config`,
 no MuJoCo) without importing the simulation.

@@ -71,7 +71,8 @@ class RolloutBackend(Protocol):
     """Simulates open-loop control sequences from one state (see the module docstring).
 
     Attributes:
-        name: The backend's name (:data:`BACKENDS`), written into a corrected file's provenance.
+        name: The backend's name (:data:`~handsim.correct.rollouts.BACKENDS`), written into a corrected
+            file's provenance.
         threads: Threads (or devices' worlds) it runs at once, for people; results never depend on it.
     """
 
@@ -156,18 +157,3 @@ class CpuRollout:
         self._pool.close()
         self._data = []
         self._model = None
-
-
-BACKENDS = {"cpu": CpuRollout}
-"""Rollout backends by name (``handsim correct --backend``)."""
-
-
-def rollout_backend(name: str = "cpu", threads: int | None = None) -> RolloutBackend:
-    """The backend called ``name``.
-
-    Raises:
-        CorrectionError: No backend has that name (the message lists them).
-    """
-    if name not in BACKENDS:
-        raise CorrectionError(f"unknown rollout backend {name!r}; backends are {sorted(BACKENDS)}")
-    return BACKENDS[name](threads)

@@ -15,10 +15,10 @@ from pathlib import Path
 
 import numpy as np
 
-from handsim.correct.backend import rollout_backend
 from handsim.correct.config import CorrectionConfig, CorrectionError
 from handsim.correct.planner import Plan, optimise
 from handsim.correct.reference import Reference, build_reference
+from handsim.correct.rollouts import rollout_backend
 from handsim.correct.score import CorrectionScore, score
 from handsim.sim.replay import ReplayConfig, ReplayResult, replay
 from handsim.trials import LoadedTrial, load_trial
@@ -65,7 +65,7 @@ def correct(
         loaded: The trial (:func:`handsim.trials.load_trial`): a scene whose objects follow recorded tracks,
             or a glove scene whose placed object the hand must hold (:mod:`handsim.correct.hold`).
         config: The parameters (default :class:`CorrectionConfig`).
-        backend: The rollout backend (:data:`~handsim.correct.backend.BACKENDS`).
+        backend: The rollout backend (:data:`~handsim.correct.rollouts.BACKENDS`).
         threads: Its threads; None: ``$HANDSIM_THREADS``, else every core. The result does not depend on it.
         progress: Called with (frames committed, frames) after each planning step.
 

@@ -53,7 +53,12 @@ def corrected_header(correction: Correction) -> dict:
             "rollout_steps": correction.plan.steps,
         },
         "backend": correction.backend,
-        "versions": {"handsim": __version__, "mujoco": mujoco.__version__, "numpy": np.__version__},
+        "versions": {
+            "handsim": __version__,
+            "mujoco": mujoco.__version__,
+            "numpy": np.__version__,
+            **_backend_versions(correction.backend),
+        },
         "score": _finite(correction.score.to_dict()),
     }
 
@@ -166,3 +171,12 @@ def _finite(value):
     if isinstance(value, float) and not math.isfinite(value):
         return None
     return value
+
+
+def _backend_versions(backend: str) -> dict[str, str]:
+    """The versions of an optional rollout backend's packages (MuJoCo Warp's), for the provenance."""
+    if backend != "warp":
+        return {}
+    from importlib.metadata import version
+
+    return {"mujoco_warp": version("mujoco-warp"), "warp": version("warp-lang")}
