@@ -106,6 +106,10 @@ def test_the_report_ranks_the_trials_and_says_implausible_with_the_numbers(local
     page = correction_html([records[BALL_ID], large], plots=False)
     assert page.index(">large<") < page.index(f">{BALL_ID}<")  # ranked by size, largest first
     assert "implausible: the recording needs a large X" in page
+    assert records[BALL_ID]["correction"]["unsupported"] == []  # a glove grasp has no recorded track
+    large["correction"]["unsupported"] = [{"text": "the recording holds the cube in the air from 5.26 s"}]
+    page = correction_html([large], plots=False)
+    assert "<b>in the air</b>: the recording holds the cube in the air from 5.26 s" in page
 
 
 def test_the_cli_corrects_a_dataset_and_writes_the_report(dataset, tmp_path, capsys):

@@ -77,6 +77,8 @@ def print_score(score: CorrectionScore) -> None:
         )
     _line("before", _tracking_text(score.before, score.objective))
     _line("after", _tracking_text(score.after, score.objective))
+    for stretch in score.unsupported:
+        _line("recording", stretch.describe())
     wrist = score.wrist_position_rms_mm is not None
     for i, m in enumerate(score.largest):
         _line(

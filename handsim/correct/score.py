@@ -32,6 +32,7 @@ import numpy as np
 from handsim.correct.config import CorrectionConfig
 from handsim.correct.hold import HELD, NOT_HELD, hold_measures
 from handsim.correct.reference import Reference
+from handsim.correct.support import Unsupported, unsupported_stretches
 from handsim.sim.replay import ReplayResult
 from handsim.sim.track import FOLLOWED, LOST
 
@@ -116,6 +117,9 @@ class CorrectionScore:
         objective: ``"track"`` (the objects follow their recorded tracks) or ``"hold"`` (a glove scene's
             object stays in the hand through the hold window; ``before``/``after`` then measure its
             displacement from where the grasp placed it, and their ``track`` is the hold verdict).
+        unsupported: The stretches in which the recording holds an object in the air, no hand link touching
+            it and no surface under it (:mod:`handsim.correct.support`): a property of the recording, the
+            same before and after.
     """
 
     status: str
@@ -133,10 +137,13 @@ class CorrectionScore:
     after: Tracking
     largest: tuple[Moment, ...]
     objective: str = "track"
+    unsupported: tuple[Unsupported, ...] = ()
 
     def to_dict(self) -> dict:
-        """JSON-ready fields."""
-        return asdict(self)
+        """JSON-ready fields (each stretch in the air with its sentence, ``text``)."""
+        result = asdict(self)
+        result["unsupported"] = [u.to_dict() for u in self.unsupported]
+        return result
 
 
 @dataclass(frozen=True)
@@ -242,11 +249,13 @@ def score(
         large.append(f"wrist moved {wp_rms:.1f} mm RMS (small is ≤ {PLAUSIBLE_WRIST_MM:g} mm)")
     if wr_rms is not None and wr_rms > PLAUSIBLE_WRIST_DEG:
         large.append(f"wrist turned {wr_rms:.1f}° RMS (small is ≤ {PLAUSIBLE_WRIST_DEG:g}°)")
-    status, reason = (
-        _verdict(now, config, wrist)
-        if reference.goal is None
-        else hold_verdict(was, now, config, gripped=after.grip is not None)
-    )
+    stretches = unsupported_stretches(reference)
+    if reference.goal is None:
+        status, reason = _verdict(now, config, wrist)
+        if status == "not corrected":
+            reason += _in_the_air(stretches, after.summary.get("track_lost_at_s"))
+    else:
+        status, reason = hold_verdict(was, now, config, gripped=after.grip is not None)
     return CorrectionScore(
         status=status,
         reason=reason,
@@ -263,7 +272,20 @@ def score(
         after=now,
         largest=_largest(reference, config, sizes),
         objective="track" if reference.goal is None else "hold",
+        unsupported=stretches,
     )
+
+
+def _in_the_air(stretches: tuple[Unsupported, ...], lost_at: float | None) -> str:
+    """The clause a lost track's reason gets where the recording holds the object in the air after the loss.
+
+    Following the track there would take a force nothing in the recording applies: the correction cannot
+    be blamed for what no motion near the recording can do.
+    """
+    later = [s for s in stretches if lost_at is not None and s.stop_s >= lost_at]
+    if not later:
+        return ""
+    return f"; {later[0].describe()}: no motion near the recording carries it there"
 
 
 def _verdict(after: Tracking, config: CorrectionConfig, wrist: bool) -> tuple[str, str]:

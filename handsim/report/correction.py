@@ -107,6 +107,7 @@ def _trial_section(rank: int, record: dict, plot: str) -> str:
     ]
     if c.get("implausible"):
         lines.append(f"<p><b>implausible</b>: {esc(c['implausible'])}</p>")
+    lines.extend(f"<p><b>in the air</b>: {esc(u['text'])}</p>" for u in c.get("unsupported") or ())
     lines.append(plot)
     return "\n".join(lines)
 

@@ -1,0 +1,192 @@
+"""Where a recording holds an object up with nothing: no hand link touches it and it rests on no surface.
+
+A correction makes a simulated object follow its recorded track by changing the hand's motion a little. Where
+the *recording itself* has the object hanging in the air — no recorded hand link within
+:data:`TOUCH_DISTANCE` of it, its lowest point clear of every surface by more than that — for longer than
+:data:`MIN_STRETCH` (a free fall drops 4.9 cm in 0.1 s), gravity takes it down in any physical motion near the
+recording: the track there is not physically true, and no small correction can make it so. A correction
+that loses the object in such a stretch says so, with the numbers (:mod:`handsim.correct.score`).
+
+The test is kinematic, on the scene as the replay builds it: every control frame's recorded hand pose (the
+root where one is recorded, the joint targets clipped to their ranges) and recorded object pose, MuJoCo's
+collision detection with the objects' collision geoms given a margin of :data:`REACH` in a copy of the model,
+and each contact's signed distance: to a hand link (the hand's distance), to anything else that is not the
+object itself (a surface or another object: the support's distance).
+"""
+
+from __future__ import annotations
+
+import copy
+from dataclasses import asdict, dataclass
+
+import mujoco
+import numpy as np
+
+from handsim.correct.reference import Reference
+
+TOUCH_DISTANCE = 0.005
+"""A hand link or a surface within this of the object (m) touches or supports it: the fitted hands' own
+surface error and a contact pad's few millimetres (the replay's pad compresses 1.5 mm at 1 N)."""
+REACH = 0.03
+"""Distances are measured up to this, m (beyond: "over 30 mm")."""
+MIN_STRETCH = 0.1
+"""A shorter unsupported stretch (s) is left out: capture noise across a contact, and too short to fall far
+(4.9 cm in 0.1 s)."""
+
+
+@dataclass(frozen=True)
+class Unsupported:
+    """A stretch of the recording in which an object hangs in the air with nothing holding it.
+
+    Attributes:
+        object: The object's track name.
+        start_s: Its first frame's trajectory time, s.
+        stop_s: Its last frame's, s.
+        frames: Control frames in it.
+        share: Its share of the object's frames with a recorded pose.
+        hand_mm: The nearest hand link's distance from the object, least and largest over the stretch, mm
+            (:data:`REACH` where none is within it).
+        height_mm: The least distance from the object to any surface over the stretch, mm (:data:`REACH`
+            where none is within it).
+        fall_mm: How far the object falls in the recording over the stretch (down along gravity), mm;
+            free fall over the stretch would take it ``g t² / 2``.
+    """
+
+    object: str
+    start_s: float
+    stop_s: float
+    frames: int
+    share: float
+    hand_mm: tuple[float, float]
+    height_mm: float
+    fall_mm: float
+
+    def describe(self) -> str:
+        """One clause for people: when, how long, how high and how far the hand is."""
+        near = " to ".join(_mm(v) for v in dict.fromkeys(self.hand_mm))
+        seconds = self.stop_s - self.start_s
+        when = f"from {self.start_s:.2f} s to {self.stop_s:.2f} s"
+        return (
+            f"the recording holds the {self.object or 'object'} in the air {when} ({self.frames} frames, "
+            f"{self.share * 100:.0f} % of its track): no hand link within {TOUCH_DISTANCE * 1000:g} mm of it "
+            f"(nearest {near}), {_mm(self.height_mm)} above any surface, falling {self.fall_mm:.1f} mm in "
+            f"{seconds:.2f} s (free fall: {_free_fall_mm(seconds):.0f} mm)"
+        )
+
+    def to_dict(self) -> dict:
+        """JSON-ready fields, and the sentence of :meth:`describe` as ``text``."""
+        result = asdict(self)
+        result["hand_mm"] = list(self.hand_mm)
+        result["text"] = self.describe()
+        return result
+
+
+def _mm(value: float) -> str:
+    return f"over {REACH * 1000:g} mm" if value >= REACH * 1000 else f"{value:.1f} mm"
+
+
+def _free_fall_mm(seconds: float) -> float:
+    return 0.5 * 9.81 * seconds**2 * 1000.0
+
+
+def unsupported_stretches(reference: Reference) -> tuple[Unsupported, ...]:
+    """The stretches in which the recording holds an object in the air (module docstring), in time order.
+
+    A glove scene (its object placed into the hand, no recorded track) has none: ().
+    """
+    if reference.goal is not None or not reference.objects:
+        return ()
+    hand, surface = _distances(reference)
+    stretches = []
+    times = reference.schedule.times
+    for i, obj in enumerate(reference.objects):
+        free = obj.valid & (hand[:, i] > TOUCH_DISTANCE) & (surface[:, i] > TOUCH_DISTANCE)
+        for start, stop in _runs(free):
+            if times[stop] - times[start] < MIN_STRETCH - 1e-9:
+                continue
+            stretches.append(_stretch(reference, i, start, stop, hand[:, i], surface[:, i]))
+    return tuple(sorted(stretches, key=lambda s: s.start_s))
+
+
+def _stretch(
+    reference: Reference, index: int, start: int, stop: int, hand: np.ndarray, surface: np.ndarray
+) -> Unsupported:
+    obj = reference.objects[index]
+    gravity = np.asarray(reference.scene.model.opt.gravity, dtype=float)
+    down = gravity / max(float(np.linalg.norm(gravity)), 1e-12)
+    times = reference.schedule.times
+    part = slice(start, stop + 1)
+    return Unsupported(
+        object=obj.name,
+        start_s=float(times[start]),
+        stop_s=float(times[stop]),
+        frames=stop - start + 1,
+        share=(stop - start + 1) / max(int(obj.valid.sum()), 1),
+        hand_mm=(float(hand[part].min() * 1000), float(hand[part].max() * 1000)),
+        height_mm=float(surface[part].min() * 1000),
+        fall_mm=float((obj.pose[stop, :3] - obj.pose[start, :3]) @ down * 1000),
+    )
+
+
+def _runs(mask: np.ndarray) -> list[tuple[int, int]]:
+    """First and last index of each run of True."""
+    edges = np.diff(np.concatenate([[0], mask.astype(np.int8), [0]]))
+    starts, stops = np.flatnonzero(edges == 1), np.flatnonzero(edges == -1) - 1
+    return [(int(a), int(b)) for a, b in zip(starts, stops, strict=True)]
+
+
+def _distances(reference: Reference) -> tuple[np.ndarray, np.ndarray]:
+    """Per control frame and recorded object: the nearest hand link's and the nearest surface's distance, m.
+
+    Both are capped at :data:`REACH` (nothing within it).
+    """
+    scene = reference.scene
+    layout = scene.layout
+    model = copy.deepcopy(scene.model)
+    data = mujoco.MjData(model)
+    objects = [next(o for o in layout.objects if o.free_qpos == ref.qpos) for ref in reference.objects]
+    owner = np.full(model.nbody, -1)
+    for i, obj in enumerate(objects):
+        owner[list(obj.part_bodies)] = i
+        model.geom_margin[list(obj.collision_geoms)] = REACH
+        model.geom_gap[list(obj.collision_geoms)] = 0.0
+    hand_bodies = np.zeros(model.nbody, bool)
+    hand_bodies[np.asarray(layout.link_bodies, dtype=np.int64)] = True
+    schedule = reference.schedule
+    low, high = np.asarray(layout.ctrl_range, dtype=float).T
+    roots = [h.root_free_qpos for h in layout.hands if h.mocap >= 0]
+    frames = schedule.frames
+    hand = np.full((frames, len(objects)), REACH)
+    surface = np.full((frames, len(objects)), REACH)
+    for f in range(frames):
+        data.qpos[:] = model.qpos0
+        data.qpos[np.asarray(layout.dof_qpos)] = np.clip(schedule.ctrl[f], low, high)
+        for k, adr in enumerate(roots):
+            if adr >= 0 and schedule.root_poses is not None:
+                data.qpos[adr : adr + 7] = schedule.root_poses[f, k]
+        for ref in reference.objects:
+            data.qpos[ref.qpos : ref.qpos + 7] = ref.pose[f]
+            if ref.hinge >= 0 and ref.articulation is not None:
+                data.qpos[ref.hinge] = ref.articulation[f]
+        mujoco.mj_fwdPosition(model, data)
+        _nearest(model, data, owner, hand_bodies, hand[f], surface[f])
+    return hand, surface
+
+
+def _nearest(
+    model: mujoco.MjModel,
+    data: mujoco.MjData,
+    owner: np.ndarray,
+    hand_bodies: np.ndarray,
+    hand: np.ndarray,
+    surface: np.ndarray,
+) -> None:
+    """Lower ``hand`` and ``surface`` (per object) to the distances of this pose's contacts."""
+    for contact in data.contact[: data.ncon]:
+        bodies = model.geom_bodyid[contact.geom1], model.geom_bodyid[contact.geom2]
+        for mine, other in (bodies, bodies[::-1]):
+            i = owner[mine]
+            if i < 0 or owner[other] == i:
+                continue
+            target = hand if hand_bodies[other] else surface
+            target[i] = min(target[i], max(float(contact.dist), 0.0))
