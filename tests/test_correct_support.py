@@ -4,7 +4,9 @@ Pinned on the bundled Tzionas sequence 20, whose recording ends with the cube 27
 the hand moving away from it: one stretch, from about 5.3 s to the last frame, checked against MuJoCo's own
 geom distances computed here independently (no collision margins); the cube resting on the table at the
 start is supported; a recorded object lifted off its support by hand in a copy of the reference makes a
-stretch only when it stays up for :data:`~handsim.correct.support.MIN_STRETCH`; a glove scene has none.
+stretch only when it stays up for :data:`~handsim.correct.support.MIN_STRETCH`; a glove scene has none. On the
+ARCTIC-shaped benchmark scene, whose hands perform its recording, nothing is said, until its lid is turned
+by hand in a copy of the reference while no hand is near it, beyond the track verdict's 30° hinge tolerance.
 """
 
 from __future__ import annotations
@@ -18,7 +20,7 @@ import pytest
 from handsim.assets import ASSETS_DIR, TZIONAS_DIR
 from handsim.correct.config import CorrectionConfig
 from handsim.correct.reference import build_reference
-from handsim.correct.support import MIN_STRETCH, TOUCH_DISTANCE, unsupported_stretches
+from handsim.correct.support import MIN_STRETCH, TOUCH_DISTANCE, UntouchedTurn, unsupported_stretches
 from handsim.trials import load_trial
 
 SEQ20 = TZIONAS_DIR / "Models" / "20" / "Model_Hand_R.MOTION"
@@ -97,3 +99,34 @@ def test_a_glove_scene_has_no_recorded_track_to_judge():
     loaded = load_trial(ASSETS_DIR / "demo" / "tennis_ball.grasp.json")
     reference = build_reference(loaded.scene, loaded.trajectory, CorrectionConfig())
     assert unsupported_stretches(reference) == ()
+
+
+@pytest.fixture(scope="module")
+def arctic_reference():
+    from benchmarks.arctic_recording import arctic_case_scene
+
+    case = arctic_case_scene()
+    return build_reference(case.scene, case.trajectory, CorrectionConfig())
+
+
+def test_the_arctic_benchmark_recording_is_performed_by_its_hands(arctic_reference):
+    assert unsupported_stretches(arctic_reference) == ()
+
+
+@pytest.mark.parametrize("degrees, found", [(25.0, False), (40.0, True)])
+def test_a_lid_the_recording_turns_with_no_hand_on_it_is_said_beyond_the_hinge_tolerance(
+    arctic_reference, degrees, found
+):
+    box = arctic_reference.objects[0]
+    angle = np.array(box.articulation)
+    angle[550:600] += np.radians(np.linspace(0.0, degrees, 50))  # 5.5–6.0 s: both hands away from the lid
+    angle[600:700] += np.radians(degrees)
+    turned = dataclasses.replace(arctic_reference, objects=(dataclasses.replace(box, articulation=angle),))
+    turns = [s for s in unsupported_stretches(turned) if isinstance(s, UntouchedTurn)]
+    assert bool(turns) is found  # the track verdict's hinge tolerance is 30°
+    if found:
+        (turn,) = turns
+        assert (turn.object, turn.part) == ("box", "top") and turn.turn_deg == pytest.approx(degrees)
+        assert (turn.start_s, turn.stop_s) == pytest.approx((5.50, 5.99))
+        assert turn.hand_mm[0] > TOUCH_DISTANCE * 1000
+        assert turn.describe().startswith("the recording turns the box's top by 40° from 5.50 s to 5.99 s")

@@ -32,7 +32,7 @@ import numpy as np
 from handsim.correct.config import CorrectionConfig
 from handsim.correct.hold import HELD, NOT_HELD, hold_measures
 from handsim.correct.reference import Reference
-from handsim.correct.support import Unsupported, unsupported_stretches
+from handsim.correct.support import Unsupported, UntouchedTurn, unsupported_stretches
 from handsim.sim.replay import ReplayResult
 from handsim.sim.track import FOLLOWED, LOST
 
@@ -117,9 +117,9 @@ class CorrectionScore:
         objective: ``"track"`` (the objects follow their recorded tracks) or ``"hold"`` (a glove scene's
             object stays in the hand through the hold window; ``before``/``after`` then measure its
             displacement from where the grasp placed it, and their ``track`` is the hold verdict).
-        unsupported: The stretches in which the recording holds an object in the air, no hand link touching
-            it and no surface under it (:mod:`handsim.correct.support`): a property of the recording, the
-            same before and after.
+        unsupported: Where the recording holds an object in the air (no hand link touching it, no surface
+            under it) or turns a hinged part no hand link touches (:mod:`handsim.correct.support`): a
+            property of the recording, the same before and after.
     """
 
     status: str
@@ -137,7 +137,7 @@ class CorrectionScore:
     after: Tracking
     largest: tuple[Moment, ...]
     objective: str = "track"
-    unsupported: tuple[Unsupported, ...] = ()
+    unsupported: tuple[Unsupported | UntouchedTurn, ...] = ()
 
     def to_dict(self) -> dict:
         """JSON-ready fields (each stretch in the air with its sentence, ``text``)."""
@@ -276,16 +276,14 @@ def score(
     )
 
 
-def _in_the_air(stretches: tuple[Unsupported, ...], lost_at: float | None) -> str:
-    """The clause a lost track's reason gets where the recording holds the object in the air after the loss.
+def _in_the_air(stretches: tuple[Unsupported | UntouchedTurn, ...], lost_at: float | None) -> str:
+    """The clause for a lost track where the recording, after the loss, moves the object as nothing can.
 
-    Following the track there would take a force nothing in the recording applies: the correction cannot
-    be blamed for what no motion near the recording can do.
+    Held in the air or a part turned untouched (:mod:`handsim.correct.support`): what no motion near the
+    recording can follow, so the correction cannot be blamed for it.
     """
     later = [s for s in stretches if lost_at is not None and s.stop_s >= lost_at]
-    if not later:
-        return ""
-    return f"; {later[0].describe()}: no motion near the recording carries it there"
+    return f"; {later[0].describe()}" if later else ""
 
 
 def _verdict(after: Tracking, config: CorrectionConfig, wrist: bool) -> tuple[str, str]:

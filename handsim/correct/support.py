@@ -5,13 +5,16 @@ the *recording itself* has the object hanging in the air — no recorded hand li
 :data:`TOUCH_DISTANCE` of it, its lowest point clear of every surface by more than that — for longer than
 :data:`MIN_STRETCH` (a free fall drops 4.9 cm in 0.1 s), gravity takes it down in any physical motion near the
 recording: the track there is not physically true, and no small correction can make it so. A correction
-that loses the object in such a stretch says so, with the numbers (:mod:`handsim.correct.score`).
+that loses the object in such a stretch says so, with the numbers (:mod:`handsim.correct.score`). Likewise
+where the recording turns an articulated object's hinged part (a lid) by more than the track verdict's
+hinge tolerance while no hand link touches that part (:class:`UntouchedTurn`): the scene's hinge holds its
+part by dry friction (docs/physics.md), so nothing near the recording turns it.
 
 The test is kinematic, on the scene as the replay builds it: every control frame's recorded hand pose (the
 root where one is recorded, the joint targets clipped to their ranges) and recorded object pose, MuJoCo's
 collision detection with the objects' collision geoms given a margin of :data:`REACH` in a copy of the model,
-and each contact's signed distance: to a hand link (the hand's distance), to anything else that is not the
-object itself (a surface or another object: the support's distance).
+and each contact's signed distance: to a hand link (the hand's distance; for a hinged part, the part's own),
+to anything else that is not the object itself (a surface or another object: the support's distance).
 """
 
 from __future__ import annotations
@@ -23,6 +26,7 @@ import mujoco
 import numpy as np
 
 from handsim.correct.reference import Reference
+from handsim.sim.specs import TrackSpec
 
 TOUCH_DISTANCE = 0.005
 """A hand link or a surface within this of the object (m) touches or supports it: the fitted hands' own
@@ -70,7 +74,46 @@ class Unsupported:
             f"the recording holds the {self.object or 'object'} in the air {when} ({self.frames} frames, "
             f"{self.share * 100:.0f} % of its track): no hand link within {TOUCH_DISTANCE * 1000:g} mm of it "
             f"(nearest {near}), {_mm(self.height_mm)} above any surface, falling {self.fall_mm:.1f} mm in "
-            f"{seconds:.2f} s (free fall: {_free_fall_mm(seconds):.0f} mm)"
+            f"{seconds:.2f} s (free fall: {_free_fall_mm(seconds):.0f} mm): no motion near the recording "
+            "carries it there"
+        )
+
+    def to_dict(self) -> dict:
+        """JSON-ready fields, and the sentence of :meth:`describe` as ``text``."""
+        result = asdict(self)
+        result["hand_mm"] = list(self.hand_mm)
+        result["text"] = self.describe()
+        return result
+
+
+@dataclass(frozen=True)
+class UntouchedTurn:
+    """A stretch in which the recording turns a hinged part that no hand link touches.
+
+    Attributes:
+        object: The object's track name.
+        part: The hinged part's name.
+        start_s: Trajectory time of the turn's first frame (the hinge at its least or largest angle), s.
+        stop_s: Of its last frame, s.
+        turn_deg: How far the recording turns the part between them, degrees.
+        hand_mm: The nearest hand link's distance from the part, least and largest over the turn, mm.
+    """
+
+    object: str
+    part: str
+    start_s: float
+    stop_s: float
+    turn_deg: float
+    hand_mm: tuple[float, float]
+
+    def describe(self) -> str:
+        """One clause for people: what turns, when, how far, how far the hand is."""
+        near = " to ".join(_mm(v) for v in dict.fromkeys(self.hand_mm))
+        when = f"from {self.start_s:.2f} s to {self.stop_s:.2f} s"
+        return (
+            f"the recording turns the {self.object or 'object'}'s {self.part} by {self.turn_deg:.0f}° {when} "
+            f"with no hand link within {TOUCH_DISTANCE * 1000:g} mm of it (nearest {near}): its hinge holds "
+            "it by friction, so no motion near the recording turns it"
         )
 
     def to_dict(self) -> dict:
@@ -89,23 +132,55 @@ def _free_fall_mm(seconds: float) -> float:
     return 0.5 * 9.81 * seconds**2 * 1000.0
 
 
-def unsupported_stretches(reference: Reference) -> tuple[Unsupported, ...]:
-    """The stretches in which the recording holds an object in the air (module docstring), in time order.
+def unsupported_stretches(reference: Reference) -> tuple[Unsupported | UntouchedTurn, ...]:
+    """Where the recording holds an object in the air or turns a part nobody touches (module docstring).
 
-    A glove scene (its object placed into the hand, no recorded track) has none: ().
+    In time order. A glove scene (its object placed into the hand, no recorded track) has none: ().
     """
     if reference.goal is not None or not reference.objects:
         return ()
-    hand, surface = _distances(reference)
-    stretches = []
+    near = _distances(reference)
+    found: list[Unsupported | UntouchedTurn] = []
     times = reference.schedule.times
     for i, obj in enumerate(reference.objects):
-        free = obj.valid & (hand[:, i] > TOUCH_DISTANCE) & (surface[:, i] > TOUCH_DISTANCE)
+        free = obj.valid & (near.hand[:, i] > TOUCH_DISTANCE) & (near.surface[:, i] > TOUCH_DISTANCE)
         for start, stop in _runs(free):
-            if times[stop] - times[start] < MIN_STRETCH - 1e-9:
-                continue
-            stretches.append(_stretch(reference, i, start, stop, hand[:, i], surface[:, i]))
-    return tuple(sorted(stretches, key=lambda s: s.start_s))
+            if times[stop] - times[start] >= MIN_STRETCH - 1e-9:
+                found.append(_stretch(reference, i, start, stop, near.hand[:, i], near.surface[:, i]))
+        if obj.hinge >= 0 and obj.articulation is not None:
+            found.extend(_turns(reference, i, near.part[:, i]))
+    return tuple(sorted(found, key=lambda s: s.start_s))
+
+
+def _turns(reference: Reference, index: int, part: np.ndarray) -> list[UntouchedTurn]:
+    """The untouched turns of an object's hinged part beyond the track verdict's hinge tolerance."""
+    obj = reference.objects[index]
+    layout = next(o for o in reference.scene.layout.objects if o.free_qpos == obj.qpos)
+    limit = np.radians(TrackSpec().articulation_deg)
+    times = reference.schedule.times
+    turns = []
+    for start, stop in _runs(obj.valid & (part > TOUCH_DISTANCE)):
+        angle = obj.articulation[start : stop + 1]
+        low, high = int(np.argmin(angle)), int(np.argmax(angle))
+        if angle[high] - angle[low] <= limit:
+            continue
+        if low < high:  # from the last frame at the least angle before the largest, and vice versa
+            low = int(np.flatnonzero(angle[: high + 1] == angle[low])[-1])
+        else:
+            high = int(np.flatnonzero(angle[: low + 1] == angle[high])[-1])
+        first, last = start + min(low, high), start + max(low, high)
+        span = part[first : last + 1] * 1000
+        turns.append(
+            UntouchedTurn(
+                object=obj.name,
+                part=layout.part_names[1] if len(layout.part_names) > 1 else "part",
+                start_s=float(times[first]),
+                stop_s=float(times[last]),
+                turn_deg=float(np.degrees(angle[high] - angle[low])),
+                hand_mm=(float(span.min()), float(span.max())),
+            )
+        )
+    return turns
 
 
 def _stretch(
@@ -135,19 +210,31 @@ def _runs(mask: np.ndarray) -> list[tuple[int, int]]:
     return [(int(a), int(b)) for a, b in zip(starts, stops, strict=True)]
 
 
-def _distances(reference: Reference) -> tuple[np.ndarray, np.ndarray]:
-    """Per control frame and recorded object: the nearest hand link's and the nearest surface's distance, m.
+@dataclass
+class _Near:
+    """Distances per control frame and recorded object (F, objects), m, capped at :data:`REACH`.
 
-    Both are capped at :data:`REACH` (nothing within it).
+    ``hand``: the nearest hand link to the object; ``surface``: the nearest anything else but the object;
+    ``part``: the nearest hand link to its hinged part.
     """
+
+    hand: np.ndarray
+    surface: np.ndarray
+    part: np.ndarray
+
+
+def _distances(reference: Reference) -> _Near:
+    """The distances of :class:`_Near` at every control frame's recorded pose."""
     scene = reference.scene
     layout = scene.layout
     model = copy.deepcopy(scene.model)
     data = mujoco.MjData(model)
     objects = [next(o for o in layout.objects if o.free_qpos == ref.qpos) for ref in reference.objects]
     owner = np.full(model.nbody, -1)
+    hinged = np.zeros(model.nbody, bool)
     for i, obj in enumerate(objects):
         owner[list(obj.part_bodies)] = i
+        hinged[list(obj.part_bodies[1:])] = obj.hinge_qpos >= 0
         model.geom_margin[list(obj.collision_geoms)] = REACH
         model.geom_gap[list(obj.collision_geoms)] = 0.0
     hand_bodies = np.zeros(model.nbody, bool)
@@ -155,10 +242,8 @@ def _distances(reference: Reference) -> tuple[np.ndarray, np.ndarray]:
     schedule = reference.schedule
     low, high = np.asarray(layout.ctrl_range, dtype=float).T
     roots = [h.root_free_qpos for h in layout.hands if h.mocap >= 0]
-    frames = schedule.frames
-    hand = np.full((frames, len(objects)), REACH)
-    surface = np.full((frames, len(objects)), REACH)
-    for f in range(frames):
+    near = _Near(*(np.full((schedule.frames, len(objects)), REACH) for _ in range(3)))
+    for f in range(schedule.frames):
         data.qpos[:] = model.qpos0
         data.qpos[np.asarray(layout.dof_qpos)] = np.clip(schedule.ctrl[f], low, high)
         for k, adr in enumerate(roots):
@@ -169,24 +254,27 @@ def _distances(reference: Reference) -> tuple[np.ndarray, np.ndarray]:
             if ref.hinge >= 0 and ref.articulation is not None:
                 data.qpos[ref.hinge] = ref.articulation[f]
         mujoco.mj_fwdPosition(model, data)
-        _nearest(model, data, owner, hand_bodies, hand[f], surface[f])
-    return hand, surface
+        _nearest(model, data, (owner, hinged, hand_bodies), near, f)
+    return near
 
 
 def _nearest(
-    model: mujoco.MjModel,
-    data: mujoco.MjData,
-    owner: np.ndarray,
-    hand_bodies: np.ndarray,
-    hand: np.ndarray,
-    surface: np.ndarray,
+    model: mujoco.MjModel, data: mujoco.MjData, bodies: tuple[np.ndarray, ...], near: _Near, frame: int
 ) -> None:
-    """Lower ``hand`` and ``surface`` (per object) to the distances of this pose's contacts."""
+    """Lower ``near``'s row ``frame`` to the distances of this pose's contacts.
+
+    ``bodies``: per body, the recorded object it belongs to (-1: none), whether it is a hinged part, whether
+    it is a hand link.
+    """
+    owner, hinged, hand_bodies = bodies
     for contact in data.contact[: data.ncon]:
-        bodies = model.geom_bodyid[contact.geom1], model.geom_bodyid[contact.geom2]
-        for mine, other in (bodies, bodies[::-1]):
+        pair = model.geom_bodyid[contact.geom1], model.geom_bodyid[contact.geom2]
+        for mine, other in (pair, pair[::-1]):
             i = owner[mine]
             if i < 0 or owner[other] == i:
                 continue
-            target = hand if hand_bodies[other] else surface
-            target[i] = min(target[i], max(float(contact.dist), 0.0))
+            dist = max(float(contact.dist), 0.0)
+            target = near.hand if hand_bodies[other] else near.surface
+            target[frame, i] = min(target[frame, i], dist)
+            if hand_bodies[other] and hinged[mine]:
+                near.part[frame, i] = min(near.part[frame, i], dist)
