@@ -1,7 +1,9 @@
 """Benchmark: the replay and the stability batch on MuJoCo Warp (a GPU), against MuJoCo on the CPU.
 
-Measurement only: handsim does not depend on a GPU or on ``mujoco-warp``. Two steps, because the GPU
-machine has neither handsim's dependencies nor the recordings:
+Measurement only: handsim does not depend on a GPU or on ``mujoco-warp`` (the correction's optional Warp
+rollouts, ``handsim correct --rollouts warp``, are measured by ``benchmarks/correct.py --warp``, on a machine
+with handsim installed). Two steps, because the GPU machine has neither handsim's dependencies nor the
+recordings:
 
 1. ``python benchmarks/warp_gpu.py export DIR`` (here, with ``../shared``): builds the scenes of
    ``benchmarks/replay.py`` (glove + ball on the GraspDB14 power-sphere trial, Tzionas hand + cube,

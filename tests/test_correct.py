@@ -262,10 +262,6 @@ def test_the_cli_corrects_a_trial_and_handsim_replay_reproduces_it(tmp_path, cap
     # the recording's last 0.9 s holds the cube in the air (tests/test_correct_support.py): said and recorded
     (stretch,) = header["score"]["unsupported"]
     assert any(line == f"recording     {stretch['text']}" for line in printed.splitlines())
-    lines = printed.splitlines()
-    verdict = next(line for line in lines if line.startswith(("corrected", "not corrected")))
-    carried = "no motion near the recording carries it there"
-    assert verdict.startswith("corrected") or verdict.endswith(carried)
     assert main(["replay", str(out)]) == 0
     replayed = capsys.readouterr().out
     assert "trial       corrected" in replayed

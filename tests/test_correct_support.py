@@ -20,6 +20,7 @@ import pytest
 from handsim.assets import ASSETS_DIR, TZIONAS_DIR
 from handsim.correct.config import CorrectionConfig
 from handsim.correct.reference import build_reference
+from handsim.correct.score import EXPLAINS_WITHIN, unfollowable_clause
 from handsim.correct.support import MIN_STRETCH, TOUCH_DISTANCE, UntouchedTurn, unsupported_stretches
 from handsim.trials import load_trial
 
@@ -130,3 +131,14 @@ def test_a_lid_the_recording_turns_with_no_hand_on_it_is_said_beyond_the_hinge_t
         assert (turn.start_s, turn.stop_s) == pytest.approx((5.50, 5.99))
         assert turn.hand_mm[0] > TOUCH_DISTANCE * 1000
         assert turn.describe().startswith("the recording turns the box's top by 40° from 5.50 s to 5.99 s")
+
+
+def test_a_lost_tracks_reason_names_the_stretch_the_loss_runs_into(reference):
+    (stretch,) = unsupported_stretches(reference)
+    clause = f"; {stretch.brief()}"
+    assert clause.endswith("nothing within 5 mm of it: no motion near the recording carries it there")
+    assert unfollowable_clause((stretch,), stretch.start_s + 0.2) == clause  # lost within it
+    assert unfollowable_clause((stretch,), stretch.start_s - EXPLAINS_WITHIN + 0.01) == clause  # just before
+    assert unfollowable_clause((stretch,), stretch.start_s - EXPLAINS_WITHIN - 0.1) == ""  # long before it
+    assert unfollowable_clause((stretch,), stretch.stop_s + 0.1) == ""  # after it
+    assert unfollowable_clause((stretch,), None) == ""  # not lost

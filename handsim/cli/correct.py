@@ -13,6 +13,7 @@ from __future__ import annotations
 import argparse
 import dataclasses
 import math
+import os
 import sys
 import time
 from pathlib import Path
@@ -155,9 +156,7 @@ def _correct(args: argparse.Namespace) -> int:
     from handsim.trials import TrialError, find_with_options, load_trial
 
     if args.rollouts == "warp":  # before the trial loads: a missing MuJoCo Warp is said at once
-        from handsim.correct.warp_backend import import_warp
-
-        import_warp()
+        _warp_notes(args.threads)
     options = dataclasses.replace(trial_options_from_args(args), grasp=args.grasp)
     try:
         loaded = load_trial(find_with_options(args.trial, options), progress=True)
@@ -363,6 +362,18 @@ def register(commands: Commands) -> None:
     add_arctic_options(parser)
     _add_dataset_options(parser)
     parser.set_defaults(func=_correct, simulates=True, command_parser=parser)
+
+
+def _warp_notes(threads: int | None) -> None:
+    """Check that MuJoCo Warp is there (else a handsim error), and say what it ignores or where it runs."""
+    # lazy: MuJoCo Warp (an optional dependency), only with --rollouts warp
+    from handsim.correct.warp_backend import DEVICE_ENV, import_warp
+
+    warp, _ = import_warp()
+    if threads is not None:
+        _line("note", "--threads does not apply to --rollouts warp: every candidate is a world of one batch")
+    if not os.environ.get(DEVICE_ENV) and not warp.is_cuda_available():
+        _line("note", "no CUDA device: MuJoCo Warp runs on its CPU device, far slower than --rollouts cpu")
 
 
 def _add_rollout_options(parser: argparse.ArgumentParser) -> None:

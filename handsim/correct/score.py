@@ -44,6 +44,10 @@ PLAUSIBLE_WRIST_MM = 10.0
 glove-mounted capture is of this order)."""
 PLAUSIBLE_WRIST_DEG = 5.0
 """A wrist rotation correction RMS up to this is small, degrees."""
+EXPLAINS_WITHIN = 0.5
+"""A stretch the recording cannot be followed in (:mod:`handsim.correct.support`) is named in a lost track's
+reason when it starts at most this long after the loss, s, and has not ended before it: the fingers let go
+over the frames before the recorded hand withdraws."""
 LARGEST_FRAMES = 5
 """How many moments of largest correction the score lists."""
 LARGEST_SEPARATION = 0.1
@@ -253,7 +257,7 @@ def score(
     if reference.goal is None:
         status, reason = _verdict(now, config, wrist)
         if status == "not corrected":
-            reason += _in_the_air(stretches, after.summary.get("track_lost_at_s"))
+            reason += unfollowable_clause(stretches, after.summary.get("track_lost_at_s"))
     else:
         status, reason = hold_verdict(was, now, config, gripped=after.grip is not None)
     return CorrectionScore(
@@ -276,14 +280,16 @@ def score(
     )
 
 
-def _in_the_air(stretches: tuple[Unsupported | UntouchedTurn, ...], lost_at: float | None) -> str:
+def unfollowable_clause(stretches: tuple[Unsupported | UntouchedTurn, ...], lost_at: float | None) -> str:
     """The clause for a lost track where the recording, after the loss, moves the object as nothing can.
 
-    Held in the air or a part turned untouched (:mod:`handsim.correct.support`): what no motion near the
-    recording can follow, so the correction cannot be blamed for it.
+    Held in the air or a part turned untouched (:mod:`handsim.correct.support`), from at most
+    :data:`EXPLAINS_WITHIN` after the loss: what no motion near the recording can follow.
     """
-    later = [s for s in stretches if lost_at is not None and s.stop_s >= lost_at]
-    return f"; {later[0].describe()}" if later else ""
+    if lost_at is None:
+        return ""
+    near = [s for s in stretches if s.stop_s >= lost_at and s.start_s <= lost_at + EXPLAINS_WITHIN]
+    return f"; {near[0].brief()}" if near else ""
 
 
 def _verdict(after: Tracking, config: CorrectionConfig, wrist: bool) -> tuple[str, str]:

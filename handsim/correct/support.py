@@ -7,8 +7,8 @@ the *recording itself* has the object hanging in the air — no recorded hand li
 recording: the track there is not physically true, and no small correction can make it so. A correction
 that loses the object in such a stretch says so, with the numbers (:mod:`handsim.correct.score`). Likewise
 where the recording turns an articulated object's hinged part (a lid) by more than the track verdict's
-hinge tolerance while no hand link touches that part (:class:`UntouchedTurn`): the scene's hinge holds its
-part by dry friction (docs/physics.md), so nothing near the recording turns it.
+hinge tolerance while no hand link touches that part and no surface holds it (:class:`UntouchedTurn`): the
+scene's hinge holds its part by dry friction (docs/physics.md), so nothing near the recording turns it.
 
 The test is kinematic, on the scene as the replay builds it: every control frame's recorded hand pose (the
 root where one is recorded, the joint targets clipped to their ranges) and recorded object pose, MuJoCo's
@@ -73,9 +73,17 @@ class Unsupported:
         return (
             f"the recording holds the {self.object or 'object'} in the air {when} ({self.frames} frames, "
             f"{self.share * 100:.0f} % of its track): no hand link within {TOUCH_DISTANCE * 1000:g} mm of it "
-            f"(nearest {near}), {_mm(self.height_mm)} above any surface, falling {self.fall_mm:.1f} mm in "
-            f"{seconds:.2f} s (free fall: {_free_fall_mm(seconds):.0f} mm): no motion near the recording "
-            "carries it there"
+            f"(nearest {near}), {_mm(self.height_mm)} above any surface, "
+            f"{'falling' if self.fall_mm >= 0 else 'rising'} {abs(self.fall_mm):.1f} mm in {seconds:.2f} s "
+            f"(free fall: {_free_fall_mm(seconds):.0f} mm): no motion near the recording carries it there"
+        )
+
+    def brief(self) -> str:
+        """The clause a lost track's reason gets (:meth:`describe` has the numbers)."""
+        return (
+            f"the recording holds the {self.object or 'object'} in the air from {self.start_s:.2f} s to "
+            f"{self.stop_s:.2f} s, nothing within {TOUCH_DISTANCE * 1000:g} mm of it: no motion near the "
+            "recording carries it there"
         )
 
     def to_dict(self) -> dict:
@@ -116,6 +124,14 @@ class UntouchedTurn:
             "it by friction, so no motion near the recording turns it"
         )
 
+    def brief(self) -> str:
+        """The clause a lost track's reason gets (:meth:`describe` has the numbers)."""
+        return (
+            f"the recording turns the {self.object or 'object'}'s {self.part} by {self.turn_deg:.0f}° from "
+            f"{self.start_s:.2f} s to {self.stop_s:.2f} s, no hand link within {TOUCH_DISTANCE * 1000:g} mm "
+            "of it: no motion near the recording turns it"
+        )
+
     def to_dict(self) -> dict:
         """JSON-ready fields, and the sentence of :meth:`describe` as ``text``."""
         result = asdict(self)
@@ -148,18 +164,23 @@ def unsupported_stretches(reference: Reference) -> tuple[Unsupported | Untouched
             if times[stop] - times[start] >= MIN_STRETCH - 1e-9:
                 found.append(_stretch(reference, i, start, stop, near.hand[:, i], near.surface[:, i]))
         if obj.hinge >= 0 and obj.articulation is not None:
-            found.extend(_turns(reference, i, near.part[:, i]))
+            found.extend(_turns(reference, i, near.part[:, i], near.part_surface[:, i]))
     return tuple(sorted(found, key=lambda s: s.start_s))
 
 
-def _turns(reference: Reference, index: int, part: np.ndarray) -> list[UntouchedTurn]:
-    """The untouched turns of an object's hinged part beyond the track verdict's hinge tolerance."""
+def _turns(reference: Reference, index: int, part: np.ndarray, rest: np.ndarray) -> list[UntouchedTurn]:
+    """The untouched turns of an object's hinged part beyond the track verdict's hinge tolerance.
+
+    ``part`` and ``rest``: the nearest hand link's and the nearest surface's distance from the part per
+    frame. A part resting on a surface is held by it: the angle, relative to the other part, may change
+    because a hand turns the other part (or the whole object) while the surface holds this one.
+    """
     obj = reference.objects[index]
     layout = next(o for o in reference.scene.layout.objects if o.free_qpos == obj.qpos)
     limit = np.radians(TrackSpec().articulation_deg)
     times = reference.schedule.times
     turns = []
-    for start, stop in _runs(obj.valid & (part > TOUCH_DISTANCE)):
+    for start, stop in _runs(obj.valid & (part > TOUCH_DISTANCE) & (rest > TOUCH_DISTANCE)):
         angle = obj.articulation[start : stop + 1]
         low, high = int(np.argmin(angle)), int(np.argmax(angle))
         if angle[high] - angle[low] <= limit:
@@ -215,12 +236,13 @@ class _Near:
     """Distances per control frame and recorded object (F, objects), m, capped at :data:`REACH`.
 
     ``hand``: the nearest hand link to the object; ``surface``: the nearest anything else but the object;
-    ``part``: the nearest hand link to its hinged part.
+    ``part``, ``part_surface``: the same two for its hinged part.
     """
 
     hand: np.ndarray
     surface: np.ndarray
     part: np.ndarray
+    part_surface: np.ndarray
 
 
 def _distances(reference: Reference) -> _Near:
@@ -242,20 +264,30 @@ def _distances(reference: Reference) -> _Near:
     schedule = reference.schedule
     low, high = np.asarray(layout.ctrl_range, dtype=float).T
     roots = [h.root_free_qpos for h in layout.hands if h.mocap >= 0]
-    near = _Near(*(np.full((schedule.frames, len(objects)), REACH) for _ in range(3)))
+    near = _Near(*(np.full((schedule.frames, len(objects)), REACH) for _ in range(4)))
+    hinges = [_hinge_range(model, ref.hinge) for ref in reference.objects]
     for f in range(schedule.frames):
         data.qpos[:] = model.qpos0
         data.qpos[np.asarray(layout.dof_qpos)] = np.clip(schedule.ctrl[f], low, high)
         for k, adr in enumerate(roots):
             if adr >= 0 and schedule.root_poses is not None:
                 data.qpos[adr : adr + 7] = schedule.root_poses[f, k]
-        for ref in reference.objects:
+        for ref, (low_angle, high_angle) in zip(reference.objects, hinges, strict=True):
             data.qpos[ref.qpos : ref.qpos + 7] = ref.pose[f]
-            if ref.hinge >= 0 and ref.articulation is not None:
-                data.qpos[ref.hinge] = ref.articulation[f]
+            if ref.hinge >= 0 and ref.articulation is not None:  # within its stops, as the replay sets it
+                data.qpos[ref.hinge] = np.clip(ref.articulation[f], low_angle, high_angle)
         mujoco.mj_fwdPosition(model, data)
         _nearest(model, data, (owner, hinged, hand_bodies), near, f)
     return near
+
+
+def _hinge_range(model: mujoco.MjModel, qpos: int) -> tuple[float, float]:
+    """The stops of the hinge at ``qpos`` (unbounded where it has none, or where there is no hinge)."""
+    joints = np.flatnonzero(model.jnt_qposadr == qpos) if qpos >= 0 else ()
+    if len(joints) == 0 or not model.jnt_limited[joints[0]]:
+        return -np.inf, np.inf
+    low, high = model.jnt_range[joints[0]]
+    return float(low), float(high)
 
 
 def _nearest(
@@ -276,5 +308,6 @@ def _nearest(
             dist = max(float(contact.dist), 0.0)
             target = near.hand if hand_bodies[other] else near.surface
             target[frame, i] = min(target[frame, i], dist)
-            if hand_bodies[other] and hinged[mine]:
-                near.part[frame, i] = min(near.part[frame, i], dist)
+            if hinged[mine]:
+                target = near.part if hand_bodies[other] else near.part_surface
+                target[frame, i] = min(target[frame, i], dist)

@@ -13,9 +13,13 @@ dependency). :class:`WarpRollout` answers :meth:`~handsim.correct.backend.Rollou
 * MuJoCo Warp filters the colliding geom pairs when a model is copied to the device, so a scene whose
   contacts switch on during the run (the planner's private model, :mod:`handsim.correct.planner`) gets a
   device model per contact setting;
+* one batch per model, candidate count and control spec: a rollout shorter than the batch (a planning step
+  near the recording's end) runs in it with its last controls held, and the extra steps are dropped;
 * contact and constraint buffers per world start at 4 contacts per geom pair that may collide; a batch that
-  overflowed them (MuJoCo Warp's overflow flags, less the solver's iteration caps, which cap it as on the
-  CPU) is run again with buffers twice as large, up to :data:`MAX_GROWTH` times, then refused.
+  overflowed them (MuJoCo Warp's flags for the constraint rows, the broad and narrow phase and CCD) is run
+  again with buffers twice as large, up to :data:`MAX_GROWTH` times, then refused; any other overflow (a
+  contact sensor's match limit, EPA, height fields; the solver's iteration caps excepted, which cap it as
+  on the CPU) is refused at once, naming the flags.
 
 MuJoCo Warp computes in float32 and sums some quantities with atomics on a GPU, so a plan found on it may
 differ from the CPU backend's and from run to run: the candidates are *scored* approximately. What the
@@ -61,6 +65,21 @@ _STATE_PARTS = (
 """The parts of :data:`STATE` this backend returns (a model with history or plugin state is refused)."""
 
 
+_BUFFER_FLAGS = ("NEFC", "NJMAX_NNZ", "BROADPHASE", "NARROWPHASE", "CCD")
+"""MuJoCo Warp's overflow flags that larger contact and constraint buffers cure (the others do not)."""
+
+
+def _flags(mjw, names: tuple[str, ...]) -> int:
+    """The overflow bits of the flags named (those this MuJoCo Warp has)."""
+    return sum(int(getattr(mjw.OverflowType, n)) for n in names if hasattr(mjw.OverflowType, n))
+
+
+def _names(mjw, overflow: int) -> str:
+    """The names of the overflow flags set in ``overflow``."""
+    named = [f.name for f in mjw.OverflowType if f.value and f.value & overflow and f.name != "ALL"]
+    return ", ".join(named) or f"{overflow:#x}"
+
+
 def import_warp():
     """``warp`` and ``mujoco_warp``, or a :class:`CorrectionError` that says how to install them."""
     try:
@@ -70,6 +89,8 @@ def import_warp():
         raise CorrectionError(
             f"the warp rollout backend needs MuJoCo Warp ({exc}); install it with pip install 'handsim[warp]'"
         ) from exc
+    warp.config.quiet = True  # no banner; and no line per kernel module compiled or loaded
+    warp.config.log_level = getattr(warp, "LOG_WARNING", warp.config.log_level)
     return warp, mujoco_warp
 
 
@@ -121,8 +142,6 @@ class WarpRollout:
     def __init__(self, threads: int | None = None, device: str | None = None) -> None:
         self._wp, self._mjw = import_warp()
         wp = self._wp
-        wp.config.quiet = True  # no banner; and no line per kernel module compiled or loaded
-        wp.config.log_level = getattr(wp, "LOG_WARNING", wp.config.log_level)
         wp.init()
         chosen = device or os.environ.get(DEVICE_ENV) or ("cuda:0" if wp.is_cuda_available() else "cpu")
         try:
@@ -172,14 +191,16 @@ class WarpRollout:
                 "(history or plugins): use the cpu backend"
             )
         layout = control_layout(model, spec)
+        buffers = _flags(self._mjw, _BUFFER_FLAGS)
         while True:
             states, data, overflow = self._run(model, start, controls, spec, layout, sensors)
             if not overflow:
                 return states, data
-            if self._growth >= MAX_GROWTH:
+            if overflow & ~buffers or self._growth >= MAX_GROWTH:
+                grown = f" with buffers {2**self._growth}× the default" if overflow & buffers else ""
                 raise CorrectionError(
-                    f"MuJoCo Warp dropped contacts or constraints (overflow flags {overflow:#x}) with "
-                    f"buffers {2**self._growth}× the default; use the cpu backend"
+                    f"MuJoCo Warp overflowed ({_names(self._mjw, overflow)}){grown}: its results would be "
+                    "wrong; use the cpu backend"
                 )
             self._growth += 1
             self._batches.clear()
@@ -189,26 +210,36 @@ class WarpRollout:
         count, nstep = controls.shape[:2]
         key, device_model = self._device_model(model)
         with wp.ScopedDevice(self.device):
-            batch = self._batch(key, device_model, model, start, count, nstep, spec, layout)
+            batch, steps = self._batch(key, device_model, model, count, nstep, spec, layout)
             self._set_start(batch.data, model, start, count)
+            # a shorter rollout runs in a longer batch: its last controls held, the extra steps dropped
+            padded = np.concatenate([controls, np.repeat(controls[:, -1:], steps - nstep, axis=1)], axis=1)
             for bit, part in layout.items():
-                batch.inputs[bit].assign(np.ascontiguousarray(controls[:, :, part], dtype=np.float32))
+                batch.inputs[bit].assign(np.ascontiguousarray(padded[:, :, part], dtype=np.float32))
             if batch.graph is not None:
                 wp.capture_launch(batch.graph)
             else:
-                self._steps(device_model, batch, nstep, layout)
+                self._steps(device_model, batch, steps, layout)
             caps = int(mjw.OverflowType.ITERATIONS | mjw.OverflowType.LS_ITERATIONS)
             overflow = int(np.bitwise_or.reduce(batch.data.overflow.numpy())) & ~caps
-            states = batch.states.numpy().astype(np.float64)
-            data = batch.sensors.numpy().astype(np.float64) if sensors else None
+            states = batch.states.numpy()[:, :nstep].astype(np.float64)
+            data = None
+            if sensors:
+                data = batch.sensors.numpy()[:, :nstep, : model.nsensordata].astype(np.float64)
         return states, data, overflow
 
-    def _batch(self, key, device_model, model, start: Start, count: int, nstep: int, spec: int, layout: dict):
-        """The buffers (and graph) of a batch shape, made on first use."""
+    def _batch(self, key, device_model, model, count: int, nstep: int, spec: int, layout: dict):
+        """The buffers (and graph) of a batch of at least ``nstep`` steps, and its steps; made on first use.
+
+        One batch per model, candidates and control spec: a planning step near the recording's end asks for
+        fewer steps and runs in the longer batch (a new batch, and on CUDA a new graph, per length would
+        grow the device's memory with every planning step there).
+        """
         wp, mjw = self._wp, self._mjw
-        shape = (key, count, nstep, spec)
-        if shape in self._batches:
-            return self._batches[shape]
+        shape = (key, count, spec)
+        batch = self._batches.get(shape)
+        if batch is not None and batch.states.shape[1] >= nstep:
+            return batch, batch.states.shape[1]
         host = mujoco.MjData(model)
         nconmax, njmax = self._sizes(device_model, model)
         data = mjw.put_data(model, host, nworld=count, nconmax=nconmax, njmax=njmax)
@@ -224,7 +255,7 @@ class WarpRollout:
                 self._steps(device_model, batch, nstep, layout)
             batch.graph = capture.graph
         self._batches[shape] = batch
-        return batch
+        return batch, nstep
 
     def _set_start(self, data, model: mujoco.MjModel, start: Start, count: int) -> None:
         """Every world at the start: its state, warm start, mocap poses, equality flags; no applied force."""
