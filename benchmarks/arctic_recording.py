@@ -147,10 +147,13 @@ def about_hinge(poses: np.ndarray, angles: np.ndarray) -> np.ndarray:
     return compose(np.column_stack([BOX_ORIGIN - quat_rotate(turn, BOX_ORIGIN), turn]), poses)
 
 
-def _hand_keys(side: str) -> list[Key]:
-    """The wrist's keyframes: in, the carry (holding the box as it moves), out; the right hand to the lid."""
+def _hand_keys(side: str, half_grip: float = GRIP) -> list[Key]:
+    """The wrist's keyframes: in, the carry (holding the box as it moves), out; the right hand to the lid.
+
+    ``half_grip``: the wrists' distance from the box's mid-plane while they carry it, m.
+    """
     sign, flat = (1.0, FLAT_RIGHT) if side == "right" else (-1.0, FLAT_LEFT)
-    grip = np.array([GRIP_X, sign * GRIP, 0.04])
+    grip = np.array([GRIP_X, sign * half_grip, 0.04])
     out = np.array([0.0, sign * 0.02, 0.0])
     keys: list[Key] = [(0.0, grip + out, flat)]
     keys += [(time, grip + np.asarray(moved), flat) for time, moved in CARRIED]
@@ -165,8 +168,12 @@ def _hand_keys(side: str) -> list[Key]:
     return keys
 
 
-def recording() -> tuple[Trajectory, dict[str, mujoco.MjSpec]]:
-    """The synthetic recording and the two mean-shape MANO hands (built with fixed roots) it drives."""
+def recording(half_grip: float = GRIP) -> tuple[Trajectory, dict[str, mujoco.MjSpec]]:
+    """The synthetic recording and the two mean-shape MANO hands (built with fixed roots) it drives.
+
+    ``half_grip``: the wrists' distance from the box's mid-plane in the carry (:data:`GRIP`; 0.102 m, 4 mm
+    out, is a recording the replay does not carry: a capture error of the kind a correction should mend).
+    """
     t = np.arange(FRAMES) / FPS
     opening = OPENING * ramp(t, *LID_LIFT)
     pose = np.tile([*BOX_ORIGIN, *UPRIGHT], (FRAMES, 1))
@@ -177,7 +184,7 @@ def recording() -> tuple[Trajectory, dict[str, mujoco.MjSpec]]:
     for side in ("right", "left"):
         hands[side] = build_mano_hand(side=side, root="fixed")
         columns += [f"{side}/{d}" for d in mano_hand_skeleton(side=side).dof_names]
-        roots[side] = keyframed(t, _hand_keys(side))
+        roots[side] = keyframed(t, _hand_keys(side, half_grip))
     roots["right"] = about_hinge(roots["right"], opening)
     trajectory = Trajectory(
         t,
@@ -190,9 +197,9 @@ def recording() -> tuple[Trajectory, dict[str, mujoco.MjSpec]]:
     return trajectory, hands
 
 
-def arctic_case_scene() -> ArcticCase:
+def arctic_case_scene(half_grip: float = GRIP) -> ArcticCase:
     """The benchmark's ARCTIC-shaped scene, built from :func:`recording` and :func:`box_template`."""
-    trajectory, hands = recording()
+    trajectory, hands = recording(half_grip)
     with tempfile.TemporaryDirectory() as folder:
         model = arctic_object(box_template(Path(folder)), articulation=trajectory.objects[TRACK].articulation)
         box = build_object(model)

@@ -22,7 +22,9 @@ Two numbers, in one run, on the bundled Tzionas sequence 20 (right hand + 53 mm 
 With ``--arctic``, ``arctic_followed_before=`` and ``arctic_followed_after=``: the fraction of the manipulated
 frames in which the ARCTIC-shaped benchmark scene's box follows its recording (the replay's track verdict,
 :func:`handsim.sim.track.track_verdict`) in pure replay and after a correction with the ``quick`` budget
-(two mean-shape MANO hands carry the box and lift its lid: ``benchmarks/arctic_recording.py``).
+(two mean-shape MANO hands carry the box and lift its lid: ``benchmarks/arctic_recording.py``); and
+``arctic_wide_followed_before=`` / ``…_after=``, the same with the wrists 4 mm further out in the carry
+(:data:`WIDE_GRIP`): a capture error of the kind a correction exists for.
 
 With ``--warp`` (``handsim[warp]``; a GPU, or the device ``$HANDSIM_WARP_DEVICE`` names):
 ``warp_rollouts_vs_cpu_threads=``, the same planning step's rollouts on MuJoCo Warp (every sequence a world
@@ -55,6 +57,9 @@ from handsim.trials import LoadedTrial, Trial, load_trial
 
 BEST = min
 """The statistic of the repeats: the least time (other work on a shared machine only adds time)."""
+WIDE_GRIP = 0.102
+"""``--arctic``'s second case: the benchmark scene with its wrists 4 mm further out in the carry (m from the
+box's mid-plane), a recording pure replay does not carry (the box turns out of the palms)."""
 START = 460
 """The frame the rollouts start from: the cube in the hand, just before pure replay lets it slip."""
 
@@ -149,13 +154,17 @@ def warp_comparison(loaded, config: CorrectionConfig, threads: int, repeats: int
     return rates["warp"] / rates["cpu"], seconds / recorded
 
 
-def arctic_correction(threads: int) -> tuple[float, float]:
-    """The ARCTIC-shaped scene's followed fraction in pure replay and after a ``quick`` correction."""
-    from arctic_recording import arctic_case_scene  # benchmarks/arctic_recording.py
+def arctic_correction(threads: int, half_grip: float | None = None) -> tuple[float, float]:
+    """The ARCTIC-shaped scene's followed fraction in pure replay and after a ``quick`` correction.
+
+    ``half_grip``: the wrists' distance from the box's mid-plane in the carry, m (default: the benchmark's).
+    """
+    from arctic_recording import GRIP, arctic_case_scene  # benchmarks/arctic_recording.py
 
     from handsim.correct.config import BUDGETS
 
-    case = arctic_case_scene()
+    half_grip = GRIP if half_grip is None else half_grip
+    case = arctic_case_scene(half_grip)
     trial = Trial("arctic", "benchmarks/arctic_recording.py", None, ())
     loaded = LoadedTrial(trial, case.scene, case.trajectory, "two mean-shape MANO hands", ())
     budget = BUDGETS["quick"]
@@ -167,7 +176,8 @@ def arctic_correction(threads: int) -> tuple[float, float]:
     before, after = (r.summary.get("track_followed_fraction") for r in (correction.before, correction.after))
     score = correction.score
     print(
-        f"ARCTIC-shaped scene: corrected in {seconds:.1f} s on {threads} threads; {score.status}: "
+        f"ARCTIC-shaped scene (wrists {half_grip * 1000:.0f} mm from the box's mid-plane in the carry): "
+        f"corrected in {seconds:.1f} s on {threads} threads; {score.status}: "
         f"{score.reason}; fingers {score.finger_rms_deg:.2f}° RMS, wrist "
         f"{score.wrist_position_rms_mm:.1f} mm and {score.wrist_rotation_rms_deg:.2f}° RMS"
     )
@@ -217,6 +227,10 @@ def main() -> None:
         print(f"  ({_load()})")
         print(f"arctic_followed_before={before:.3f}")
         print(f"arctic_followed_after={after:.3f}")
+        before, after = arctic_correction(args.threads, WIDE_GRIP)
+        print(f"  ({_load()})")
+        print(f"arctic_wide_followed_before={before:.3f}")
+        print(f"arctic_wide_followed_after={after:.3f}")
     if args.warp:
         versus, warp_per_second = warp_comparison(loaded, config, args.threads, args.repeats)
         print(f"  ({_load()})")
