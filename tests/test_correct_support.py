@@ -21,7 +21,13 @@ from handsim.assets import ASSETS_DIR, TZIONAS_DIR
 from handsim.correct.config import CorrectionConfig
 from handsim.correct.reference import build_reference
 from handsim.correct.score import EXPLAINS_WITHIN, unfollowable_clause
-from handsim.correct.support import MIN_STRETCH, TOUCH_DISTANCE, UntouchedTurn, unsupported_stretches
+from handsim.correct.support import (
+    MIN_STRETCH,
+    TOUCH_DISTANCE,
+    Unreachable,
+    UntouchedTurn,
+    unsupported_stretches,
+)
 from handsim.trials import load_trial
 
 SEQ20 = TZIONAS_DIR / "Models" / "20" / "Model_Hand_R.MOTION"
@@ -142,3 +148,15 @@ def test_a_lost_tracks_reason_names_the_stretch_the_loss_runs_into(reference):
     assert unfollowable_clause((stretch,), stretch.start_s - EXPLAINS_WITHIN - 0.1) == ""  # long before it
     assert unfollowable_clause((stretch,), stretch.stop_s + 0.1) == ""  # after it
     assert unfollowable_clause((stretch,), None) == ""  # not lost
+
+
+def test_an_object_no_hand_comes_near_is_unreachable(reference):
+    cube = reference.objects[0]
+    pose = np.array(cube.pose)
+    pose[:, :3] += [0.5, 0.5, 0.0]  # half a metre aside on the table, all through the recording
+    far = dataclasses.replace(reference, objects=(dataclasses.replace(cube, pose=pose),))
+    (finding,) = unsupported_stretches(far)  # the stretch in the air goes: it is untouched all through
+    assert isinstance(finding, Unreachable) and finding.object == "cube"
+    assert (finding.start_s, finding.stop_s) == (reference.schedule.times[0], reference.schedule.times[-1])
+    assert finding.describe().startswith("no contact possible: no recorded hand link comes within 30 mm")
+    assert finding.to_dict()["text"] == finding.brief() == finding.describe()

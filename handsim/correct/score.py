@@ -32,7 +32,7 @@ import numpy as np
 from handsim.correct.config import CorrectionConfig
 from handsim.correct.hold import HELD, NOT_HELD, hold_measures
 from handsim.correct.reference import Reference
-from handsim.correct.support import Unsupported, UntouchedTurn, unsupported_stretches
+from handsim.correct.support import Finding, unsupported_stretches
 from handsim.sim.replay import ReplayResult
 from handsim.sim.track import FOLLOWED, LOST
 
@@ -121,9 +121,10 @@ class CorrectionScore:
         objective: ``"track"`` (the objects follow their recorded tracks) or ``"hold"`` (a glove scene's
             object stays in the hand through the hold window; ``before``/``after`` then measure its
             displacement from where the grasp placed it, and their ``track`` is the hold verdict).
-        unsupported: Where the recording holds an object in the air (no hand link touching it, no surface
-            under it) or turns a hinged part no hand link touches (:mod:`handsim.correct.support`): a
-            property of the recording, the same before and after.
+        unsupported: Where no motion near the recording can follow it (:mod:`handsim.correct.support`): an
+            object no hand link comes near, held in the air (no hand link touching it, no surface under
+            it), or a hinged part turned with no hand link touching it; a property of the recording, the
+            same before and after.
     """
 
     status: str
@@ -141,7 +142,7 @@ class CorrectionScore:
     after: Tracking
     largest: tuple[Moment, ...]
     objective: str = "track"
-    unsupported: tuple[Unsupported | UntouchedTurn, ...] = ()
+    unsupported: tuple[Finding, ...] = ()
 
     def to_dict(self) -> dict:
         """JSON-ready fields (each stretch in the air with its sentence, ``text``)."""
@@ -280,7 +281,7 @@ def score(
     )
 
 
-def unfollowable_clause(stretches: tuple[Unsupported | UntouchedTurn, ...], lost_at: float | None) -> str:
+def unfollowable_clause(stretches: tuple[Finding, ...], lost_at: float | None) -> str:
     """The clause for a lost track where the recording, after the loss, moves the object as nothing can.
 
     Held in the air or a part turned untouched (:mod:`handsim.correct.support`), from at most

@@ -9,6 +9,8 @@ that loses the object in such a stretch says so, with the numbers (:mod:`handsim
 where the recording turns an articulated object's hinged part (a lid) by more than the track verdict's
 hinge tolerance while no hand link touches that part and no surface holds it (:class:`UntouchedTurn`): the
 scene's hinge holds its part by dry friction (docs/physics.md), so nothing near the recording turns it.
+And where no recorded hand link comes within :data:`REACH` of an object at all (:class:`Unreachable`): no
+contact is possible.
 
 The test is kinematic, on the scene as the replay builds it: every control frame's recorded hand pose (the
 root where one is recorded, the joint targets clipped to their ranges) and recorded object pose, MuJoCo's
@@ -25,6 +27,7 @@ from dataclasses import asdict, dataclass
 import mujoco
 import numpy as np
 
+from handsim.correct.config import CorrectionConfig
 from handsim.correct.reference import Reference
 from handsim.sim.specs import TrackSpec
 
@@ -140,6 +143,37 @@ class UntouchedTurn:
         return result
 
 
+@dataclass(frozen=True)
+class Unreachable:
+    """An object that no recorded hand link comes within :data:`REACH` of, in any frame.
+
+    Attributes:
+        object: The object's track name.
+        start_s: Its first frame with a recorded pose, s.
+        stop_s: Its last, s.
+    """
+
+    object: str
+    start_s: float
+    stop_s: float
+
+    def describe(self) -> str:
+        """One clause for people."""
+        return (
+            f"no contact possible: no recorded hand link comes within {REACH * 1000:g} mm of the "
+            f"{self.object or 'object'} in any frame, more than the correction can bridge (its wrist moves "
+            f"at most {CorrectionConfig().wrist_position_bound * 1000:g} mm by default)"
+        )
+
+    def brief(self) -> str:
+        """The clause a lost track's reason gets (the same: it has no numbers to leave out)."""
+        return self.describe()
+
+    def to_dict(self) -> dict:
+        """JSON-ready fields, and the sentence of :meth:`describe` as ``text``."""
+        return {**asdict(self), "text": self.describe()}
+
+
 def _mm(value: float) -> str:
     return f"over {REACH * 1000:g} mm" if value >= REACH * 1000 else f"{value:.1f} mm"
 
@@ -148,24 +182,34 @@ def _free_fall_mm(seconds: float) -> float:
     return 0.5 * 9.81 * seconds**2 * 1000.0
 
 
-def unsupported_stretches(reference: Reference) -> tuple[Unsupported | UntouchedTurn, ...]:
-    """Where the recording holds an object in the air or turns a part nobody touches (module docstring).
+Finding = Unsupported | UntouchedTurn | Unreachable
+"""What :func:`unsupported_stretches` finds."""
 
-    In time order. A glove scene (its object placed into the hand, no recorded track) has none: ().
+
+def unsupported_stretches(reference: Reference) -> tuple[Finding, ...]:
+    """Where no motion near the recording can follow it (module docstring), in time order.
+
+    An object no recorded hand link comes within :data:`REACH` of (:class:`Unreachable`) comes first; then
+    the stretches in which the recording holds an object in the air and the turns of hinged parts nobody
+    touches. A glove scene (its object placed into the hand, no recorded track) has none: ().
     """
     if reference.goal is not None or not reference.objects:
         return ()
     near = _distances(reference)
-    found: list[Unsupported | UntouchedTurn] = []
+    found: list[Finding] = []
     times = reference.schedule.times
     for i, obj in enumerate(reference.objects):
+        if obj.valid.any() and near.hand[obj.valid, i].min() >= REACH:
+            valid = np.flatnonzero(obj.valid)
+            found.append(Unreachable(obj.name, float(times[valid[0]]), float(times[valid[-1]])))
+            continue  # untouched all through: the stretches below would only say it again
         free = obj.valid & (near.hand[:, i] > TOUCH_DISTANCE) & (near.surface[:, i] > TOUCH_DISTANCE)
         for start, stop in _runs(free):
             if times[stop] - times[start] >= MIN_STRETCH - 1e-9:
                 found.append(_stretch(reference, i, start, stop, near.hand[:, i], near.surface[:, i]))
         if obj.hinge >= 0 and obj.articulation is not None:
             found.extend(_turns(reference, i, near.part[:, i], near.part_surface[:, i]))
-    return tuple(sorted(found, key=lambda s: s.start_s))
+    return tuple(sorted(found, key=lambda s: (s.start_s, not isinstance(s, Unreachable))))
 
 
 def _turns(reference: Reference, index: int, part: np.ndarray, rest: np.ndarray) -> list[UntouchedTurn]:
