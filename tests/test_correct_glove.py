@@ -123,3 +123,12 @@ def test_a_hold_the_grip_check_rejects_is_not_corrected_and_a_short_window_not_j
     short = _hold_tracking(NOT_JUDGED, "not judged: the hold window lasts 0.10 s after the release")
     status, reason = hold_verdict(short, short, config, gripped=False)
     assert status == "not judged" and reason.endswith("lasts 0.10 s after the release")
+
+
+def test_a_link_too_deep_before_planning_starts_leaves_the_correction_not_judged(graspdb_dir):
+    """GraspDB14 04_ex01: the thumb's tip is 5.1 mm in the ball at 1.140 s, the first frame planned from."""
+    correction = correct(load_trial(graspdb_dir / "04_ex01-rad-045-grasp-su03.txt"), FAST, threads=1)
+    score = correction.score
+    start = correction.reference.schedule.times[correction.reference.plan_start]
+    assert correction.after.grip.deepest_at <= start + 1e-9
+    assert score.status == "not judged" and "inside the object at 1.140 s" in score.reason

@@ -14,7 +14,8 @@ replay's own verdict, and the moments where the correction is largest. The verdi
 A glove hold's verdict reads the replay's hold the same way: **corrected** when the corrected replay holds
 the object through the window, **not corrected** when it loses it or when its grip check does not accept the
 hold (no opposing grip, a wedge, a link through the object: the correction did not make the grasp hold),
-**not judged** only when no motion of the fingers could be judged (a window too short after the release).
+**not judged** only when no motion of the fingers could be judged (a window too short after the release, a
+link too deep in the object before planning starts).
 
 A correction is **large** (the recording implausible) beyond the acceptance's bounds
 (:data:`PLAUSIBLE_FINGER_RATIO` times pure replay's own joint tracking error, or the wrist's
@@ -33,6 +34,7 @@ from handsim.correct.config import CorrectionConfig
 from handsim.correct.hold import HELD, NOT_HELD, hold_measures
 from handsim.correct.reference import Reference
 from handsim.correct.support import Finding, unsupported_stretches
+from handsim.sim.grip_check import GripCheck
 from handsim.sim.replay import ReplayResult
 from handsim.sim.track import FOLLOWED, LOST
 
@@ -260,7 +262,8 @@ def score(
         if status == "not corrected":
             reason += unfollowable_clause(stretches, after.summary.get("track_lost_at_s"))
     else:
-        status, reason = hold_verdict(was, now, config, gripped=after.grip is not None)
+        gripped = after.grip is not None and not _deep_before_planning(after.grip, reference)
+        status, reason = hold_verdict(was, now, config, gripped=gripped)
     return CorrectionScore(
         status=status,
         reason=reason,
@@ -279,6 +282,17 @@ def score(
         objective="track" if reference.goal is None else "hold",
         unsupported=stretches,
     )
+
+
+def _deep_before_planning(grip: GripCheck, reference: Reference) -> bool:
+    """Whether the grip check's deepest link is too deep at a frame the correction does not plan.
+
+    The frames up to the first planned one are the recording's own (contacts switch on there): a link too
+    deep in the object then is the recording's, which no correction changes, so the hold stays not judged.
+    """
+    at = grip.deepest_at
+    start = float(reference.schedule.times[reference.plan_start])
+    return at is not None and grip.max_depth > grip.depth_limit and at <= start + 1e-9
 
 
 def unfollowable_clause(stretches: tuple[Finding, ...], lost_at: float | None) -> str:
@@ -341,7 +355,8 @@ def hold_verdict(
     examined for a grip). A hold it turned into "not judged" (no opposing grip, a wedge, a link through the
     object) is a correction that did not make the grasp hold: **not corrected**, with the check's reason.
     Only a hold the replay cannot judge whatever the fingers do (its window too short after the release, a
-    placement that penetrates the hand) leaves the correction **not judged**.
+    placement that penetrates the hand, a link too deep in the object already at a frame the correction does
+    not plan: ``gripped`` False) leaves the correction **not judged**.
     """
     bounds = f"fingers ≤ {math.degrees(config.finger_bound):.1f}° per joint"
     best = (
