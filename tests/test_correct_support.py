@@ -160,3 +160,14 @@ def test_an_object_no_hand_comes_near_is_unreachable(reference):
     assert (finding.start_s, finding.stop_s) == (reference.schedule.times[0], reference.schedule.times[-1])
     assert finding.describe().startswith("no contact possible: no recorded hand link comes within 30 mm")
     assert finding.to_dict()["text"] == finding.brief() == finding.describe()
+
+
+def test_frames_without_a_recorded_pose_are_neither_simulated_nor_judged(reference):
+    cube = reference.objects[0]
+    pose, valid = np.array(cube.pose), np.array(cube.valid)
+    pose[550:600], valid[550:600] = np.nan, False  # a capture gap inside the stretch in the air
+    gapped = dataclasses.replace(reference, objects=(dataclasses.replace(cube, pose=pose, valid=valid),))
+    first, second = unsupported_stretches(gapped)
+    times = reference.schedule.times
+    assert (first.start_s, first.stop_s) == pytest.approx((5.26, times[549]))
+    assert (second.start_s, second.stop_s) == pytest.approx((times[600], times[-1]))

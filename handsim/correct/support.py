@@ -317,6 +317,8 @@ def _distances(reference: Reference) -> _Near:
             if adr >= 0 and schedule.root_poses is not None:
                 data.qpos[adr : adr + 7] = schedule.root_poses[f, k]
         for ref, (low_angle, high_angle) in zip(reference.objects, hinges, strict=True):
+            if not ref.valid[f]:  # no recorded pose (its distances are not read): left where the model has it
+                continue
             data.qpos[ref.qpos : ref.qpos + 7] = ref.pose[f]
             if ref.hinge >= 0 and ref.articulation is not None:  # within its stops, as the replay sets it
                 data.qpos[ref.hinge] = np.clip(ref.articulation[f], low_angle, high_angle)
