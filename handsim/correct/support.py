@@ -41,8 +41,20 @@ MIN_STRETCH = 0.1
 (4.9 cm in 0.1 s)."""
 
 
+class _Said:
+    """What the findings share: the sentence for people (``describe``) and the record's form."""
+
+    def describe(self) -> str:
+        raise NotImplementedError
+
+    def to_dict(self) -> dict:
+        """JSON-ready fields (pairs as lists), and the sentence of :meth:`describe` as ``text``."""
+        fields = {k: list(v) if isinstance(v, tuple) else v for k, v in asdict(self).items()}
+        return {**fields, "text": self.describe()}
+
+
 @dataclass(frozen=True)
-class Unsupported:
+class Unsupported(_Said):
     """A stretch of the recording in which an object hangs in the air with nothing holding it.
 
     Attributes:
@@ -70,7 +82,7 @@ class Unsupported:
 
     def describe(self) -> str:
         """One clause for people: when, how long, how high and how far the hand is."""
-        near = " to ".join(_mm(v) for v in dict.fromkeys(self.hand_mm))
+        near = _span(self.hand_mm)
         seconds = self.stop_s - self.start_s
         when = f"from {self.start_s:.2f} s to {self.stop_s:.2f} s"
         return (
@@ -89,16 +101,9 @@ class Unsupported:
             "recording carries it there"
         )
 
-    def to_dict(self) -> dict:
-        """JSON-ready fields, and the sentence of :meth:`describe` as ``text``."""
-        result = asdict(self)
-        result["hand_mm"] = list(self.hand_mm)
-        result["text"] = self.describe()
-        return result
-
 
 @dataclass(frozen=True)
-class UntouchedTurn:
+class UntouchedTurn(_Said):
     """A stretch in which the recording turns a hinged part that no hand link touches.
 
     Attributes:
@@ -119,7 +124,7 @@ class UntouchedTurn:
 
     def describe(self) -> str:
         """One clause for people: what turns, when, how far, how far the hand is."""
-        near = " to ".join(_mm(v) for v in dict.fromkeys(self.hand_mm))
+        near = _span(self.hand_mm)
         when = f"from {self.start_s:.2f} s to {self.stop_s:.2f} s"
         return (
             f"the recording turns the {self.object or 'object'}'s {self.part} by {self.turn_deg:.0f}° {when} "
@@ -135,16 +140,9 @@ class UntouchedTurn:
             "of it: no motion near the recording turns it"
         )
 
-    def to_dict(self) -> dict:
-        """JSON-ready fields, and the sentence of :meth:`describe` as ``text``."""
-        result = asdict(self)
-        result["hand_mm"] = list(self.hand_mm)
-        result["text"] = self.describe()
-        return result
-
 
 @dataclass(frozen=True)
-class Unreachable:
+class Unreachable(_Said):
     """An object that no recorded hand link comes within :data:`REACH` of, in any frame.
 
     Attributes:
@@ -169,9 +167,10 @@ class Unreachable:
         """The clause a lost track's reason gets (the same: it has no numbers to leave out)."""
         return self.describe()
 
-    def to_dict(self) -> dict:
-        """JSON-ready fields, and the sentence of :meth:`describe` as ``text``."""
-        return {**asdict(self), "text": self.describe()}
+
+def _span(values: tuple[float, float]) -> str:
+    """A least-to-largest pair of distances, mm, for people ("5.2 mm to 25.3 mm"; one value when equal)."""
+    return " to ".join(_mm(v) for v in dict.fromkeys(values))
 
 
 def _mm(value: float) -> str:
@@ -309,10 +308,11 @@ def _distances(reference: Reference) -> _Near:
     low, high = np.asarray(layout.ctrl_range, dtype=float).T
     roots = [h.root_free_qpos for h in layout.hands if h.mocap >= 0]
     near = _Near(*(np.full((schedule.frames, len(objects)), REACH) for _ in range(4)))
+    joints = np.asarray(layout.dof_qpos)
     hinges = [_hinge_range(model, ref.hinge) for ref in reference.objects]
     for f in range(schedule.frames):
         data.qpos[:] = model.qpos0
-        data.qpos[np.asarray(layout.dof_qpos)] = np.clip(schedule.ctrl[f], low, high)
+        data.qpos[joints] = np.clip(schedule.ctrl[f], low, high)
         for k, adr in enumerate(roots):
             if adr >= 0 and schedule.root_poses is not None:
                 data.qpos[adr : adr + 7] = schedule.root_poses[f, k]
