@@ -290,9 +290,8 @@ def _deep_before_planning(grip: GripCheck, reference: Reference) -> bool:
     The frames up to the first planned one are the recording's own (contacts switch on there): a link too
     deep in the object then is the recording's, which no correction changes, so the hold stays not judged.
     """
-    at = grip.deepest_at
     start = float(reference.schedule.times[reference.plan_start])
-    return at is not None and grip.max_depth > grip.depth_limit and at <= start + 1e-9
+    return grip.too_deep and grip.deepest_at <= start + 1e-9
 
 
 def unfollowable_clause(stretches: tuple[Finding, ...], lost_at: float | None) -> str:

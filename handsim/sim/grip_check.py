@@ -97,13 +97,18 @@ class GripCheck:
     torque_limit: float
     weight: float
 
+    @property
+    def too_deep(self) -> bool:
+        """A hand link went deeper into the object than its limit (at ``deepest_at``)."""
+        return self.deepest_link is not None and self.max_depth > self.depth_limit
+
     def depth_failure(self, spec: GripSpec) -> str | None:
         """Why no hold outcome over this window can stand (a link through the object), or None.
 
         Args:
             spec: The limits.
         """
-        if self.deepest_link is None or self.max_depth <= self.depth_limit:
+        if not self.too_deep:
             return None
         if self.wall is not None and self.wall < spec.max_depth:
             why = f"the object's wall there is {self.wall * 1000:.1f} mm thick: it may have passed through"
