@@ -181,8 +181,9 @@ class WarpRollout:
         """States (and sensor data) after every step of every sequence (:meth:`RolloutBackend.rollout`).
 
         Raises:
-            CorrectionError: The model has state this backend does not simulate (history, plugins), or the
-                batch still overflowed its contact buffers after :data:`MAX_GROWTH` enlargements.
+            CorrectionError: The model has state this backend does not simulate (history, plugins), the
+                batch still overflowed its contact buffers after :data:`MAX_GROWTH` enlargements, or it
+                overflowed something larger buffers do not cure (the flags are named).
         """
         parts = sum(mujoco.mj_stateSize(model, p) for p in _STATE_PARTS)
         if parts != mujoco.mj_stateSize(model, STATE):
@@ -278,10 +279,10 @@ class WarpRollout:
         if model.na:
             data.act.assign(tile(host.act))
         if model.nmocap:
-            data.mocap_pos.assign(tile(start.mocap[:, :3]))
-            data.mocap_quat.assign(tile(start.mocap[:, 3:]))
+            data.mocap_pos.assign(tile(host.mocap_pos))
+            data.mocap_quat.assign(tile(host.mocap_quat))
         if model.neq:
-            data.eq_active.assign(np.broadcast_to(start.eq_active != 0, (count, model.neq)).copy())
+            data.eq_active.assign(np.broadcast_to(host.eq_active != 0, (count, model.neq)).copy())
         data.ctrl.zero_()
         data.qfrc_applied.zero_()
         data.xfrc_applied.zero_()
